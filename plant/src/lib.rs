@@ -1,0 +1,43 @@
+//! # plant — the torsional model of a powertrain HIL rig
+//!
+//! After Hübner & Prokop, *Modelling and Parametrisation Approach for an Electric Powertrain in a
+//! Hardware-in-the-Loop Environment*, Vehicles 2026, 8, 12.
+//!
+//! - **Geometry → chain** ([`segment`], [`chain`]): a hollow cylinder has J = ρ l π(d1⁴ − d2⁴)/32
+//!   (eq. 1) and c = G π(d1⁴ − d2⁴)/(32 l) (eq. 2); neighbours couple through their half
+//!   lengths, c_T = 2 c_i c_{i+1}/(c_i + c_{i+1}) (eq. 3); diameter steps lengthen the thin
+//!   segment by Δl (eqs. 4–6).
+//! - **Modal analysis** ([`modal`]): J q̈ + C q = 0 → natural frequencies and mode shapes; the
+//!   poles, damped frequencies and damping ratios of a damped system (`damp`).
+//! - **Reduction** ([`reduce`]) after Rivin/Di (eqs. 7–12): the paper's 15-mass chain becomes
+//!   J1 = 0.9148, J9 = 3.5003, J17 = 0.9148 kg m², c_T1 = 13,093, c_T14 = 10,211 Nm/rad.
+//! - **The rig** ([`rig`]): the three-mass smooth strand (eq. 14) and its variants V1–V4 with
+//!   the additional spring c_TΔ in series (eqs. 16–18, 44, 45); the open differential
+//!   (eqs. 27–34, A1) with C = c_l c_r/(c_l + c_r) a aᵀ, a = [−1, 2, −1].
+//! - **State space** ([`statespace`]): x = [qᵀ q̇ᵀ]ᵀ, u = [M_m2, M_drive, M_m3] (eqs. 35–38).
+//! - **Shuffle mode** ([`shuffle`]): drive against both outputs, outputs in phase, side shafts
+//!   as nodes.
+//!
+//! No I/O: file formats live in the `rigtwin` package.
+#![warn(missing_docs)]
+
+pub mod chain;
+pub mod error;
+pub mod mechanical;
+pub mod modal;
+pub mod paper;
+pub mod reduce;
+pub mod rig;
+pub mod segment;
+pub mod shuffle;
+pub mod statespace;
+
+pub use chain::{Body, Chain};
+pub use error::{PlantError, Result};
+pub use mechanical::{Layout, MechanicalModel, Output, Spring};
+pub use modal::{damp, modes, Modes, Pole};
+pub use reduce::{reduce, Reduction, ReductionStep};
+pub use rig::{AdditionalSpring, Effective, Rig, RigChain, RigParams, Variant};
+pub use segment::{bodies_from_segments, step_length_correction_m, Segment};
+pub use shuffle::{classify, ModeKind};
+pub use statespace::StateSpace;

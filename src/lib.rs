@@ -1,0 +1,2 @@
+//! rigtwin: the command-line tool's library side — file formats and reports.
+pub mod rigfile;
