@@ -1,2 +1,4 @@
-//! rigtwin: the command-line tool's library side — file formats and reports.
+//! rigtwin: the command-line tool's library side — the rig file format and the reports the
+//! commands print. The physics is in the `plant` crate.
+pub mod report;
 pub mod rigfile;

@@ -115,7 +115,9 @@ fn table_5_only_v1_v4_2_places_the_measurement_off_the_shuffle_mode() {
         let modes = model.modes().unwrap();
         let nearest = (0..3)
             .min_by(|&a, &b| {
-                (modes.frequencies_hz[a] - MEASURED_HZ[0]).abs().total_cmp(&(modes.frequencies_hz[b] - MEASURED_HZ[0]).abs())
+                (modes.frequencies_hz[a] - MEASURED_HZ[0])
+                    .abs()
+                    .total_cmp(&(modes.frequencies_hz[b] - MEASURED_HZ[0]).abs())
             })
             .unwrap();
         let kind = modes.kinds(&model.layout.unwrap())[nearest];

@@ -71,13 +71,7 @@ impl Chain {
         for (i, &d) in dampings_nms_per_rad.iter().enumerate() {
             non_negative(format!("dampings_Nms_per_rad[{}]", i + 1), d, "Nm s/rad")?;
         }
-        Ok(Chain {
-            names,
-            inertias_kgm2,
-            stiffnesses_nm_per_rad,
-            dampings_nms_per_rad,
-            origins: (0..n).collect(),
-        })
+        Ok(Chain { names, inertias_kgm2, stiffnesses_nm_per_rad, dampings_nms_per_rad, origins: (0..n).collect() })
     }
 
     /// Eq. (3): couples neighbouring bodies through their half lengths, i.e. the doubled partial

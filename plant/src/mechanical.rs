@@ -135,7 +135,11 @@ impl MechanicalModel {
                         let mut r = DVector::zeros(2 * n);
                         r[offset + i] = 1.0;
                         rows.push(r);
-                        output_names.push(if *o == Output::Angles { format!("phi_{name}") } else { format!("w_{name}") });
+                        output_names.push(if *o == Output::Angles {
+                            format!("phi_{name}")
+                        } else {
+                            format!("w_{name}")
+                        });
                     }
                 }
                 Output::SpringTorques => {

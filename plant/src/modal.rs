@@ -34,10 +34,7 @@ pub fn modes(inertia: &DMatrix<f64>, stiffness: &DMatrix<f64>) -> Result<Modes> 
         .cholesky()
         .ok_or_else(|| PlantError::Numerical("inertia matrix is not positive definite".into()))?;
     let l = chol.l();
-    let linv = l
-        .clone()
-        .try_inverse()
-        .ok_or_else(|| PlantError::Numerical("inertia matrix is singular".into()))?;
+    let linv = l.clone().try_inverse().ok_or_else(|| PlantError::Numerical("inertia matrix is singular".into()))?;
     let mut sym = &linv * stiffness * linv.transpose();
     sym = (&sym + sym.transpose()) * 0.5; // remove round-off asymmetry
     let eig = SymmetricEigen::new(sym);
@@ -87,10 +84,10 @@ fn normalise(phi: DVector<f64>) -> DVector<f64> {
     let k = phi.iamax();
     let m = phi[k];
     if m == 0.0 {
-        phi
-    } else {
-        phi / m
+        return phi;
     }
+    // components at round-off level of the largest one are zero (e.g. a node of a symmetric mode)
+    (phi / m).map(|v| if v.abs() < 1e-12 { 0.0 } else { v })
 }
 
 /// One pole of a linear system, as python-control's `damp` reports it.

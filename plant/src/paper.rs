@@ -55,7 +55,8 @@ pub const J_M2_DELTA_KGM2: f64 = 0.9222;
 pub const J_M3_DELTA_KGM2: f64 = 0.9225;
 
 /// A parameter set of Table 4: (name, j_drive in kg m², c_short in Nm/rad).
-pub const PARAMETER_SETS: [(&str, f64, f64); 3] = [("V1/V2", 0.529, 1479.0), ("V1/V4-1", 0.736, 1888.0), ("V1/V4-2", 7.570, 7073.0)];
+pub const PARAMETER_SETS: [(&str, f64, f64); 3] =
+    [("V1/V2", 0.529, 1479.0), ("V1/V4-1", 0.736, 1888.0), ("V1/V4-2", 7.570, 7073.0)];
 
 /// The reduced rig with a drive inertia and short-shaft stiffness, the paper's load inertias and
 /// spring, c_long = 7/9 c_short, undamped.

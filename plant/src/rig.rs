@@ -383,7 +383,8 @@ impl RigChain {
     /// mass on one side of a side shaft.
     pub fn reduced_layout(&self, full: &Layout, reduced: &Chain) -> Option<Layout> {
         // short shaft body sits between the bracket's ends: recover it as bracket.0 + 1
-        let roles = Roles { drive: full.drive?, short_shaft: full.short_shaft.0 + 1, long_shaft: full.long_shaft.0 + 1 };
+        let roles =
+            Roles { drive: full.drive?, short_shaft: full.short_shaft.0 + 1, long_shaft: full.long_shaft.0 + 1 };
         locate(&reduced.origins, roles)
     }
 }
@@ -447,20 +448,39 @@ mod tests {
         let s = c2 + c3;
         // Diagonal of eq. (A1), typed from the paper (sums of squares: no sign lost in print).
         assert_relative_eq!(k[(0, 0)], c2 * (c2 / s - 1.0).powi(2) + c2 * c2 * c3 / (s * s), max_relative = 1e-12);
-        assert_relative_eq!(k[(1, 1)], c2 * (2.0 * c2 / s - 2.0).powi(2) + 4.0 * c2 * c2 * c3 / (s * s), max_relative = 1e-12);
+        assert_relative_eq!(
+            k[(1, 1)],
+            c2 * (2.0 * c2 / s - 2.0).powi(2) + 4.0 * c2 * c2 * c3 / (s * s),
+            max_relative = 1e-12
+        );
         assert_relative_eq!(k[(2, 2)], c3 * (c3 / s - 1.0).powi(2) + c2 * c3 * c3 / (s * s), max_relative = 1e-12);
         // Whole matrix: static condensation of eq. (29) (q = [φm2, φdrive, φd3, φm3]) on the
         // massless φd3, the step eq. (30) takes; independent of the spring-vector assembly.
-        let v = DMatrix::from_row_slice(4, 4, &[
-            c2, -2.0 * c2, c2, 0.0,
-            -2.0 * c2, 4.0 * c2, -2.0 * c2, 0.0,
-            c2, -2.0 * c2, c2 + c3, -c3,
-            0.0, 0.0, -c3, c3,
-        ]);
+        let v = DMatrix::from_row_slice(
+            4,
+            4,
+            &[
+                c2,
+                -2.0 * c2,
+                c2,
+                0.0,
+                -2.0 * c2,
+                4.0 * c2,
+                -2.0 * c2,
+                0.0,
+                c2,
+                -2.0 * c2,
+                c2 + c3,
+                -c3,
+                0.0,
+                0.0,
+                -c3,
+                c3,
+            ],
+        );
         let keep = [0, 1, 3];
-        let schur = DMatrix::from_fn(3, 3, |i, j| {
-            v[(keep[i], keep[j])] - v[(keep[i], 2)] * v[(2, keep[j])] / v[(2, 2)]
-        });
+        let schur =
+            DMatrix::from_fn(3, 3, |i, j| v[(keep[i], keep[j])] - v[(keep[i], 2)] * v[(2, keep[j])] / v[(2, 2)]);
         assert_relative_eq!(k, schur, max_relative = 1e-12, epsilon = 1e-9);
     }
 
@@ -479,7 +499,7 @@ mod tests {
         let p = params().with_shaft_damping_ratio(0.05, Variant::V2).unwrap();
         let ss = p.open_differential(Variant::V2).unwrap().state_space(&[]).unwrap();
         let poles = ss.damp().unwrap();
-        let shuffle = poles.iter().filter(|p| p.natural_hz > 1.0).next().unwrap();
+        let shuffle = poles.iter().find(|p| p.natural_hz > 1.0).unwrap();
         assert_relative_eq!(shuffle.damping_ratio.unwrap(), 0.05, max_relative = 1e-9);
     }
 

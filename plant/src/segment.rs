@@ -93,10 +93,11 @@ pub fn step_length_correction_m(d_small: f64, d_big: f64) -> f64 {
 
 /// Bodies of a stepped shaft: inertia from eq. (1) on the drawn lengths, partial stiffness from
 /// eq. (2) on lengths corrected at every diameter step (eqs. (4)–(6): the smaller segment gets
-/// Δl longer, the larger Δl shorter). `names[i]` names segment i.
-pub fn bodies_from_segments(segments: &[Segment], names: &[String], field: &str) -> Result<Vec<Body>> {
+/// Δl longer, the larger Δl shorter). `names[i]` names segment i; errors call segment i
+/// `{field}[first + i]`, so a caller can number them as its own list does.
+pub fn bodies_from_segments(segments: &[Segment], names: &[String], field: &str, first: usize) -> Result<Vec<Body>> {
     for (i, s) in segments.iter().enumerate() {
-        s.validate(&format!("{field}[{}]", i + 1))?;
+        s.validate(&format!("{field}[{}]", first + i))?;
     }
     let mut effective: Vec<f64> = segments.iter().map(|s| s.length_m).collect();
     for i in 0..segments.len().saturating_sub(1) {
@@ -118,7 +119,7 @@ pub fn bodies_from_segments(segments: &[Segment], names: &[String], field: &str)
                 return Err(PlantError::Invalid(format!(
                     "`{field}[{}].length_m` = {} m is shorter than the diameter-step corrections of eq. (6) \
                      that act on it ({:.4} m in all)",
-                    i + 1,
+                    first + i,
                     s.length_m,
                     s.length_m - l
                 )));
@@ -166,18 +167,26 @@ mod tests {
     #[test]
     fn step_softens_the_chain_and_keeps_inertia() {
         let segs = [Segment::steel(0.06, 0.0, 0.1), Segment::steel(0.03, 0.0, 0.2)];
-        let bodies = bodies_from_segments(&segs, &[], "chain.segments").unwrap();
+        let bodies = bodies_from_segments(&segs, &[], "chain.segments", 1).unwrap();
         // d/D = 0.5 → Δl = 0.132 d = 3.96 mm
         let dl = 0.132 * 0.03;
-        assert_relative_eq!(bodies[1].stiffness_nm_per_rad, 81e9 * segs[1].polar_moment_m4() / (0.2 + dl), max_relative = 1e-9);
-        assert_relative_eq!(bodies[0].stiffness_nm_per_rad, 81e9 * segs[0].polar_moment_m4() / (0.1 - dl), max_relative = 1e-9);
+        assert_relative_eq!(
+            bodies[1].stiffness_nm_per_rad,
+            81e9 * segs[1].polar_moment_m4() / (0.2 + dl),
+            max_relative = 1e-9
+        );
+        assert_relative_eq!(
+            bodies[0].stiffness_nm_per_rad,
+            81e9 * segs[0].polar_moment_m4() / (0.1 - dl),
+            max_relative = 1e-9
+        );
         assert_relative_eq!(bodies[0].inertia_kgm2, segs[0].inertia_kgm2());
     }
 
     #[test]
     fn bad_geometry_names_the_key() {
         let segs = [Segment::steel(0.02, 0.03, 0.1)];
-        let e = bodies_from_segments(&segs, &[], "chain.segments").unwrap_err().to_string();
+        let e = bodies_from_segments(&segs, &[], "chain.segments", 1).unwrap_err().to_string();
         assert!(e.contains("chain.segments[1].inner_diameter_m"), "{e}");
     }
 }

@@ -1,0 +1,325 @@
+//! What the commands report: serialisable views of `plant` results (JSON keys carry units) and
+//! their human-readable form.
+
+use serde::Serialize;
+use std::fmt::Write as _;
+
+use plant::{reduce, MechanicalModel, ModeKind, Rig, Variant};
+
+/// Which torsional model a command works on.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum ModelKind {
+    /// The full chain of bodies (Table A1, with Table A2 for V2–V4).
+    Chain,
+    /// The reduced three-mass smooth strand (eqs. 14, 18, 44, 45).
+    Reduced,
+    /// The three-mass model with the open differential (section 2.4).
+    Differential,
+}
+
+/// A pole as `damp` reports it.
+#[derive(Debug, Clone, Serialize)]
+pub struct PoleReport {
+    /// Real part of the eigenvalue, 1/s.
+    pub re_per_s: f64,
+    /// Imaginary part of the eigenvalue, rad/s.
+    pub im_rad_per_s: f64,
+    /// |λ|/2π, Hz.
+    pub natural_hz: f64,
+    /// |Im λ|/2π, Hz.
+    pub damped_hz: f64,
+    /// −Re λ/|λ| (null at the origin).
+    pub damping_ratio: Option<f64>,
+}
+
+/// `rigtwin modal`.
+#[derive(Debug, Clone, Serialize)]
+pub struct ModalReport {
+    /// Rig name.
+    pub rig: String,
+    /// Model analysed.
+    pub model: ModelKind,
+    /// Variant analysed.
+    pub variant: Variant,
+    /// Coordinate names, the order of every mode shape.
+    pub dof_names: Vec<String>,
+    /// Undamped natural frequencies, Hz, ascending.
+    pub frequencies_hz: Vec<f64>,
+    /// 0-based index of the shuffle mode in `frequencies_hz`, or null.
+    pub shuffle_mode: Option<usize>,
+    /// Character of each mode.
+    pub mode_kinds: Vec<ModeKind>,
+    /// Mode shapes (largest component +1), one per frequency.
+    pub modes: Vec<Vec<f64>>,
+    /// Poles of the damped system, when the model has damping.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub poles: Option<Vec<PoleReport>>,
+}
+
+/// `rigtwin reduce`.
+#[derive(Debug, Clone, Serialize)]
+pub struct ReduceReport {
+    /// Rig name.
+    pub rig: String,
+    /// Variant reduced.
+    pub variant: Variant,
+    /// Masses before reduction.
+    pub masses_before: usize,
+    /// Names of the bodies the reduced masses stand for.
+    pub names: Vec<String>,
+    /// Reduced inertias, kg m².
+    pub inertias_kgm2: Vec<f64>,
+    /// Reduced coupling stiffnesses, Nm/rad.
+    #[serde(rename = "stiffnesses_Nm_per_rad")]
+    pub stiffnesses_nm_per_rad: Vec<f64>,
+    /// Natural frequencies of the reduced chain, Hz.
+    pub frequencies_hz: Vec<f64>,
+    /// Natural frequencies of the full chain, Hz (the first as many as the reduced chain has).
+    pub full_chain_frequencies_hz: Vec<f64>,
+    /// Sum of inertias before = after, kg m².
+    pub total_inertia_kgm2: f64,
+    /// 0-based index of the shuffle mode of the reduced chain, or null.
+    pub shuffle_mode: Option<usize>,
+}
+
+/// The model `kind` of `rig` in `variant`.
+pub fn model(rig: &Rig, kind: ModelKind, variant: Variant) -> anyhow::Result<MechanicalModel> {
+    Ok(match kind {
+        ModelKind::Reduced => rig.model.three_mass(variant)?,
+        ModelKind::Differential => rig.model.open_differential(variant)?,
+        ModelKind::Chain => {
+            let chain = rig.chain.as_ref().ok_or_else(|| {
+                anyhow::anyhow!("rig `{}` has no [chain] section: the chain model needs the full chain", rig.name)
+            })?;
+            let (c, layout) = chain.chain(variant)?;
+            MechanicalModel { layout: Some(layout), ..c.mechanical() }
+        }
+    })
+}
+
+/// Modal analysis of one model of the rig.
+pub fn modal(rig: &Rig, kind: ModelKind, variant: Variant) -> anyhow::Result<ModalReport> {
+    let m = model(rig, kind, variant)?;
+    let modes = m.modes()?;
+    let kinds = m.layout.map(|l| modes.kinds(&l)).unwrap_or_else(|| vec![ModeKind::Other; modes.frequencies_hz.len()]);
+    let poles = if m.is_damped() {
+        let ss = m.state_space(&[])?;
+        Some(
+            ss.damp()?
+                .into_iter()
+                .map(|p| PoleReport {
+                    re_per_s: p.eigenvalue.re,
+                    im_rad_per_s: p.eigenvalue.im,
+                    natural_hz: p.natural_hz,
+                    damped_hz: p.damped_hz,
+                    damping_ratio: p.damping_ratio,
+                })
+                .collect(),
+        )
+    } else {
+        None
+    };
+    Ok(ModalReport {
+        rig: rig.name.clone(),
+        model: kind,
+        variant,
+        dof_names: m.dof_names.clone(),
+        shuffle_mode: kinds.iter().position(|&k| k == ModeKind::Shuffle),
+        mode_kinds: kinds,
+        frequencies_hz: modes.frequencies_hz,
+        modes: modes.shapes.iter().map(|s| s.iter().copied().collect()).collect(),
+        poles,
+    })
+}
+
+/// Rivin/Di reduction of the rig's chain.
+pub fn reduction(rig: &Rig, variant: Variant, masses: usize) -> anyhow::Result<ReduceReport> {
+    let rc = rig
+        .chain
+        .as_ref()
+        .ok_or_else(|| anyhow::anyhow!("rig `{}` has no [chain] section: reduce needs the full chain", rig.name))?;
+    let (full, layout) = rc.chain(variant)?;
+    let r = reduce(&full, masses)?;
+    let modes = r.chain.mechanical().modes()?;
+    let full_f = full.mechanical().modes()?.frequencies_hz;
+    let shuffle_mode = rc.reduced_layout(&layout, &r.chain).and_then(|l| modes.shuffle_mode(&l));
+    Ok(ReduceReport {
+        rig: rig.name.clone(),
+        variant,
+        masses_before: full.len(),
+        names: r.chain.names.clone(),
+        total_inertia_kgm2: r.chain.total_inertia_kgm2(),
+        inertias_kgm2: r.chain.inertias_kgm2,
+        stiffnesses_nm_per_rad: r.chain.stiffnesses_nm_per_rad,
+        frequencies_hz: modes.frequencies_hz,
+        full_chain_frequencies_hz: full_f.into_iter().take(masses).collect(),
+        shuffle_mode,
+    })
+}
+
+fn kind_word(k: ModeKind) -> &'static str {
+    match k {
+        ModeKind::RigidBody => "rigid body",
+        ModeKind::OutputsAntiphase => "outputs in antiphase",
+        ModeKind::Shuffle => "SHUFFLE: drive against both outputs, side shafts as nodes",
+        ModeKind::Other => "",
+    }
+}
+
+impl ModalReport {
+    /// Human-readable form; `max_modes` limits the table (long chains have modes in the kHz).
+    pub fn human(&self, max_modes: usize) -> String {
+        let mut s = String::new();
+        let _ = writeln!(s, "{} — {:?} model, variant {}", self.rig, self.model, self.variant);
+        let shown = self.frequencies_hz.len().min(max_modes);
+        let dofs = self.dof_names.len();
+        let show_shape = dofs <= 6;
+        if show_shape {
+            let _ = writeln!(s, "  mode   f [Hz]      shape [{}]", self.dof_names.join(", "));
+        } else {
+            let _ = writeln!(s, "  mode   f [Hz]");
+        }
+        for i in 0..shown {
+            let shape = if show_shape {
+                format!("[{}]", self.modes[i].iter().map(|v| format!("{v:+.3}")).collect::<Vec<_>>().join(", "))
+            } else {
+                String::new()
+            };
+            let _ = writeln!(
+                s,
+                "  f{:<4} {:>9.3}   {shape}  {}",
+                i + 1,
+                self.frequencies_hz[i],
+                kind_word(self.mode_kinds[i])
+            );
+        }
+        if shown < self.frequencies_hz.len() {
+            let _ = writeln!(
+                s,
+                "  ... {} more modes up to {:.1} Hz",
+                self.frequencies_hz.len() - shown,
+                self.frequencies_hz.last().unwrap()
+            );
+        }
+        match self.shuffle_mode {
+            Some(i) => {
+                let _ = writeln!(s, "  shuffle mode: f{} = {:.3} Hz", i + 1, self.frequencies_hz[i]);
+            }
+            None => {
+                let _ = writeln!(s, "  shuffle mode: none found");
+            }
+        }
+        if let Some(poles) = &self.poles {
+            let _ = writeln!(s, "  poles (damped):   natural [Hz]   damped [Hz]   damping ratio");
+            for p in poles {
+                let z = p.damping_ratio.map(|z| format!("{z:.4}")).unwrap_or_else(|| "-".into());
+                let _ = writeln!(
+                    s,
+                    "    {:>+10.3}{:>+10.3}i {:>12.3} {:>13.3} {:>15}",
+                    p.re_per_s, p.im_rad_per_s, p.natural_hz, p.damped_hz, z
+                );
+            }
+        }
+        s
+    }
+}
+
+impl ReduceReport {
+    /// Human-readable form.
+    pub fn human(&self) -> String {
+        let mut s = String::new();
+        let _ = writeln!(
+            s,
+            "{} — variant {}: {} masses reduced to {} (Rivin/Di)",
+            self.rig,
+            self.variant,
+            self.masses_before,
+            self.inertias_kgm2.len()
+        );
+        let _ = writeln!(s, "  mass  J [kg m^2]   stands for");
+        for (i, (j, n)) in self.inertias_kgm2.iter().zip(&self.names).enumerate() {
+            let _ = writeln!(s, "  {:<4}  {:>10.4}   {n}", i + 1, j);
+        }
+        let _ = writeln!(s, "  spring  c [Nm/rad]");
+        for (i, c) in self.stiffnesses_nm_per_rad.iter().enumerate() {
+            let _ = writeln!(s, "  {:<6}  {:>10.0}", i + 1, c);
+        }
+        let _ = writeln!(s, "  total inertia {:.4} kg m^2 (kept)", self.total_inertia_kgm2);
+        let _ = writeln!(s, "  mode   reduced f [Hz]   full chain f [Hz]");
+        for (i, (a, b)) in self.frequencies_hz.iter().zip(&self.full_chain_frequencies_hz).enumerate() {
+            let tag = if Some(i) == self.shuffle_mode { "  shuffle" } else { "" };
+            let _ = writeln!(s, "  f{:<4} {:>14.3} {:>19.3}{tag}", i + 1, a, b);
+        }
+        s
+    }
+}
+
+/// `rigtwin run`: everything the rig's model says about its modes.
+#[derive(Debug, Clone, Serialize)]
+pub struct Summary {
+    /// Rig name.
+    pub rig: String,
+    /// Variant of the chain, reduction and differential model.
+    pub variant: Variant,
+    /// Modal analysis of the full chain, when the rig has one.
+    pub chain: Option<ModalReport>,
+    /// The chain reduced to three masses, when the rig has one.
+    pub reduction: Option<ReduceReport>,
+    /// The three-mass smooth strand in every variant the rig can build.
+    pub reduced_variants: Vec<ModalReport>,
+    /// The open-differential model, the one FMU and MPC use.
+    pub differential: ModalReport,
+}
+
+/// The main job's modal summary.
+pub fn summary(rig: &Rig, variant: Variant) -> anyhow::Result<Summary> {
+    let chain = match rig.chain {
+        Some(_) => Some(modal(rig, ModelKind::Chain, variant)?),
+        None => None,
+    };
+    let reduction = match rig.chain {
+        Some(_) => Some(reduction(rig, variant, 3)?),
+        None => None,
+    };
+    let variants: Vec<Variant> = if rig.model.c_delta > 0.0 { Variant::ALL.to_vec() } else { vec![Variant::V1] };
+    let reduced_variants =
+        variants.into_iter().map(|v| modal(rig, ModelKind::Reduced, v)).collect::<anyhow::Result<_>>()?;
+    Ok(Summary {
+        rig: rig.name.clone(),
+        variant,
+        chain,
+        reduction,
+        reduced_variants,
+        differential: modal(rig, ModelKind::Differential, variant)?,
+    })
+}
+
+impl Summary {
+    /// Human-readable form.
+    pub fn human(&self) -> String {
+        let mut s = String::new();
+        let _ = writeln!(s, "rigtwin modal summary — {}\n", self.rig);
+        if let Some(c) = &self.chain {
+            let _ = writeln!(s, "1. Full chain ({} masses, variant {})", c.dof_names.len(), c.variant);
+            s += &c.human(4).lines().skip(1).map(|l| format!("{l}\n")).collect::<String>();
+            s.push('\n');
+        }
+        if let Some(r) = &self.reduction {
+            let _ = writeln!(s, "2. Reduction after Rivin/Di");
+            s += &r.human().lines().skip(1).map(|l| format!("{l}\n")).collect::<String>();
+            s.push('\n');
+        }
+        let _ = writeln!(s, "3. Three-mass smooth strand (eq. 14), shuffle frequency by variant");
+        let _ = writeln!(s, "  variant   f2 [Hz]   f3 [Hz]   shuffle");
+        for m in &self.reduced_variants {
+            let f = &m.frequencies_hz;
+            let sh = m.shuffle_mode.map(|i| format!("f{} = {:.3} Hz", i + 1, f[i])).unwrap_or_else(|| "none".into());
+            let _ = writeln!(s, "  {:<8} {:>8.3}  {:>8.3}   {sh}", m.variant.to_string(), f[1], f[2]);
+        }
+        s.push('\n');
+        let _ = writeln!(s, "4. Open differential (section 2.4), variant {}", self.differential.variant);
+        s += &self.differential.human(3).lines().skip(1).map(|l| format!("{l}\n")).collect::<String>();
+        s
+    }
+}

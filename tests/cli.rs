@@ -1,0 +1,194 @@
+//! The command line: JSON contracts, the shipped rig file, and errors for bad rig files.
+
+use std::path::Path;
+use std::process::{Command, Output};
+
+use approx::assert_abs_diff_eq;
+use serde_json::Value;
+
+fn rigtwin(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_rigtwin")).args(args).output().expect("run rigtwin")
+}
+
+fn json(args: &[&str]) -> Value {
+    let out = rigtwin(args);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    serde_json::from_slice(&out.stdout).expect("valid JSON")
+}
+
+fn floats(v: &Value) -> Vec<f64> {
+    v.as_array().unwrap().iter().map(|x| x.as_f64().unwrap()).collect()
+}
+
+#[test]
+fn modal_json_contract_on_the_default_rig_is_figure_14() {
+    let v = json(&["modal", "--json"]);
+    let f = floats(&v["frequencies_hz"]);
+    assert_eq!(f[..2], [0.0, 0.0]);
+    assert_abs_diff_eq!(f[2], 12.64, epsilon = 0.005); // Figure 14, two decimals
+    assert_eq!(v["shuffle_mode"], 2);
+    let modes = v["modes"].as_array().unwrap();
+    assert_eq!(modes.len(), 3);
+    assert_eq!(modes[2].as_array().unwrap().len(), 3);
+}
+
+#[test]
+fn modal_json_of_the_reduced_model_is_table_5() {
+    let v = json(&["modal", "--model", "reduced", "--variant", "V2", "--json"]);
+    let f = floats(&v["frequencies_hz"]);
+    assert_abs_diff_eq!(f[1], 5.89, epsilon = 0.01);
+    assert_abs_diff_eq!(f[2], 12.62, epsilon = 0.01);
+    assert_eq!(v["shuffle_mode"], 2);
+}
+
+#[test]
+fn modal_json_of_the_chain_is_table_a1() {
+    let v = json(&["modal", "--model", "chain", "--json"]);
+    let f = floats(&v["frequencies_hz"]);
+    assert_eq!(f.len(), 15);
+    assert_abs_diff_eq!(f[1], 17.59, epsilon = 0.005);
+    assert_abs_diff_eq!(f[2], 22.47, epsilon = 0.005);
+    assert_eq!(v["shuffle_mode"], 2);
+}
+
+#[test]
+fn reduce_json_contract_is_table_1() {
+    let v = json(&["reduce", "--json"]);
+    let j = floats(&v["inertias_kgm2"]);
+    let c = floats(&v["stiffnesses_Nm_per_rad"]);
+    let f = floats(&v["frequencies_hz"]);
+    assert_abs_diff_eq!(j[1], 3.5003, epsilon = 1e-4);
+    assert_abs_diff_eq!(c[0], 13_093.0, epsilon = 1.4);
+    assert_abs_diff_eq!(f[2], 22.46, epsilon = 0.005);
+    let v5 = json(&["reduce", "--masses", "5", "--json"]);
+    assert_eq!(floats(&v5["inertias_kgm2"]).len(), 5);
+    assert_eq!(floats(&v5["stiffnesses_Nm_per_rad"]).len(), 4);
+}
+
+#[test]
+fn shipped_rig_file_is_the_embedded_default() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("rigs/paper.toml");
+    let rig = rigtwin::rigfile::load_rig(&path).unwrap();
+    let default = plant::paper::rig();
+    assert_eq!(rig.name, default.name);
+    assert_eq!(rig.variant, default.variant);
+    // same bodies; the file writes 1.69e6 where the code multiplies 0.0169 × 1e8 (1 ulp apart)
+    let (a, b) = (rig.chain.unwrap(), default.chain.unwrap());
+    let (sa, sb) = (a.additional_spring.clone().unwrap(), b.additional_spring.clone().unwrap());
+    assert_eq!((a.drive, a.short_shaft, a.long_shaft), (b.drive, b.short_shaft, b.long_shaft));
+    assert_eq!((sa.left_after, sa.right_after), (sb.left_after, sb.right_after));
+    for (x, y) in a.bodies.iter().chain(&sa.bodies).zip(b.bodies.iter().chain(&sb.bodies)) {
+        assert_eq!(x.name, y.name);
+        approx::assert_relative_eq!(x.inertia_kgm2, y.inertia_kgm2, max_relative = 1e-12);
+        approx::assert_relative_eq!(x.stiffness_nm_per_rad, y.stiffness_nm_per_rad, max_relative = 1e-12);
+    }
+    assert_eq!(a.bodies.len() + sa.bodies.len(), b.bodies.len() + sb.bodies.len());
+    // c_long_ratio is written with 16 digits in the file
+    assert_abs_diff_eq!(rig.model.c_long(), default.model.c_long(), epsilon = 1e-9);
+    let a = json(&["run", "--json", "--rig", path.to_str().unwrap()]);
+    let b = json(&["run", "--json"]);
+    assert_abs_diff_eq!(
+        a["differential"]["frequencies_hz"][2].as_f64().unwrap(),
+        b["differential"]["frequencies_hz"][2].as_f64().unwrap(),
+        epsilon = 1e-9
+    );
+}
+
+#[test]
+fn damped_rig_reports_poles() {
+    let dir = tempdir();
+    let f = dir.join("damped.toml");
+    std::fs::write(&f, "[model]\nj_m2 = 0.9148\nj_drive = 0.529\nj_m3 = 0.9148\nc_short = 1479.0\nc_long = 1150.33\nd_short = 1.12\nd_long = 0.87\nload_drag = 0.5\n").unwrap();
+    let v = json(&["modal", "--rig", f.to_str().unwrap(), "--json"]);
+    let poles = v["poles"].as_array().unwrap();
+    let shuffle = poles
+        .iter()
+        .max_by(|a, b| a["natural_hz"].as_f64().unwrap().total_cmp(&b["natural_hz"].as_f64().unwrap()))
+        .unwrap();
+    // Independent: the shuffle of the rank-one differential with D ∝ a aᵀ plus load drag is
+    // close to the undamped 12.64 Hz; its damping ratio is of the order d ω / (2 c).
+    assert_abs_diff_eq!(shuffle["natural_hz"].as_f64().unwrap(), 12.64, epsilon = 0.05);
+    let z = shuffle["damping_ratio"].as_f64().unwrap();
+    assert!(z > 0.001 && z < 0.05, "{z}");
+}
+
+fn tempdir() -> std::path::PathBuf {
+    let d = std::env::temp_dir().join(format!("rigtwin-cli-{}-{:?}", std::process::id(), std::thread::current().id()));
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+/// Writes `text` as a rig file, runs `modal` (or `reduce`) on it and returns stderr; asserts failure and no stdout.
+fn rejected(text: &str, command: &str) -> String {
+    let dir = tempdir();
+    let f = dir.join(format!("{command}-{}.toml", text.len()));
+    std::fs::write(&f, text).unwrap();
+    let out = rigtwin(&[command, "--rig", f.to_str().unwrap(), "--json"]);
+    assert!(!out.status.success());
+    assert!(out.stdout.is_empty(), "nothing half-written on stdout");
+    let err = String::from_utf8_lossy(&out.stderr).to_string();
+    assert!(err.contains(f.to_str().unwrap()), "error names the file: {err}");
+    err
+}
+
+const MODEL: &str = "[model]\nj_m2 = 0.9\nj_drive = 0.5\nj_m3 = 0.9\nc_short = 1500.0\nc_delta = 6e4\n";
+
+#[test]
+fn bad_rig_files_get_errors_that_name_the_key() {
+    let e = rejected(&MODEL.replace("j_m2 = 0.9", "j_m2 = 0.0"), "modal");
+    assert!(e.contains("model.j_m2") && e.contains("positive"), "{e}");
+    let e = rejected(&MODEL.replace("j_drive = 0.5", "j_drive = -0.5"), "modal");
+    assert!(e.contains("model.j_drive"), "{e}");
+    let e = rejected(&format!("{MODEL}c_shrot = 3.0\n"), "modal");
+    assert!(e.contains("unknown field `c_shrot`") && e.contains("line 7"), "{e}");
+    let e = rejected(&MODEL.replace("j_drive = 0.5\n", ""), "modal");
+    assert!(e.contains("missing field `j_drive`"), "{e}");
+    let e = rejected(&MODEL.replace("c_short = 1500.0", "c_short = \"stiff\""), "modal");
+    assert!(e.contains("line 5") && e.contains("c_short"), "{e}");
+    let e = rejected("[model\nj_m2 = 1\n", "modal");
+    assert!(e.contains("line 1"), "{e}");
+}
+
+#[test]
+fn bad_chains_get_errors_that_name_the_key() {
+    let paper = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("rigs/paper.toml")).unwrap();
+    let e = rejected(&paper.replace("right_after = 10 ", "right_after = 15 "), "reduce");
+    assert!(e.contains("chain.additional_spring.right_after") && e.contains("15"), "{e}");
+    let e = rejected(&paper.replace("drive = 8 ", "drive = 40 "), "reduce");
+    assert!(e.contains("chain.drive"), "{e}");
+    let e = rejected(&paper.replace("j_kgm2 = 0.0003,", "j_kgm2 = 0.0,"), "reduce");
+    assert!(e.contains("chain.bodies[7].j_kgm2"), "{e}");
+    let e = rejected(
+        &paper.replace(
+            "{ name = \"J4 adapter segment 2\", j_kgm2 = 0.0007, c_Nm_per_rad = 1.69e6 }",
+            "{ name = \"J4\", j_kgm2 = 0.0007 }",
+        ),
+        "reduce",
+    );
+    assert!(e.contains("chain.bodies[4].c_Nm_per_rad") && e.contains("missing"), "{e}");
+    let e = rejected(
+        &paper.replace(
+            "{ name = \"J4 adapter segment 2\", j_kgm2 = 0.0007, c_Nm_per_rad = 1.69e6 }",
+            "{ name = \"J4\", outer_diameter_m = 0.02, inner_diameter_m = 0.03, length_m = 0.1 }",
+        ),
+        "reduce",
+    );
+    assert!(e.contains("chain.bodies[4].inner_diameter_m"), "{e}");
+    // a model-only rig cannot be reduced, and says why
+    let e = rejected(MODEL, "reduce");
+    assert!(e.contains("[chain]"), "{e}");
+}
+
+#[test]
+fn chain_variant_without_spring_description_is_an_error() {
+    let paper = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("rigs/paper.toml")).unwrap();
+    let cut = &paper[..paper.find("[chain.additional_spring]").unwrap()];
+    let dir = tempdir();
+    let f = dir.join("nospring.toml");
+    std::fs::write(&f, cut).unwrap();
+    let ok = rigtwin(&["reduce", "--rig", f.to_str().unwrap()]);
+    assert!(ok.status.success());
+    let out = rigtwin(&["reduce", "--rig", f.to_str().unwrap(), "--variant", "V2"]);
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("chain.additional_spring"));
+}
