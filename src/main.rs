@@ -27,6 +27,11 @@ struct RigArgs {
     /// Rig variant; default: the rig file's `variant`.
     #[arg(long, value_parser = parse_variant)]
     variant: Option<Variant>,
+    /// Give the side shafts stiffness-proportional damping so that the open differential's
+    /// shuffle mode has this damping ratio (the generic damping of section 4.3); replaces the
+    /// rig's d_short and d_long.
+    #[arg(long, value_name = "ZETA", allow_negative_numbers = true)]
+    damping_ratio: Option<f64>,
     /// Print JSON instead of text.
     #[arg(long)]
     json: bool,
@@ -63,11 +68,15 @@ fn parse_variant(s: &str) -> Result<Variant, String> {
 }
 
 fn load(args: &RigArgs) -> anyhow::Result<(Rig, Variant)> {
-    let rig = match &args.rig {
+    let mut rig = match &args.rig {
         Some(f) => load_rig(f)?,
         None => paper::rig(),
     };
     let variant = args.variant.unwrap_or(rig.variant);
+    if let Some(zeta) = args.damping_ratio {
+        rig.model =
+            rig.model.with_shaft_damping_ratio(zeta, variant).map_err(|e| anyhow::anyhow!("--damping-ratio: {e}"))?;
+    }
     Ok((rig, variant))
 }
 

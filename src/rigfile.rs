@@ -1,5 +1,6 @@
 //! The rig description file (TOML): the reduced model under `[model]` — the same keys as a
-//! measurement bundle's `[model]` section — and optionally the full chain under `[chain]`, as
+//! measurement bundle's `[model]` section, so a `torsional_sweep` bundle's TOML is itself a rig
+//! file (its `kind` and `data` keys are accepted and the data not read) — and optionally the full chain under `[chain]`, as
 //! J/c tables or shaft-segment geometry, with the additional spring and where it goes.
 //!
 //! ```toml
@@ -56,6 +57,12 @@ pub struct RigFileError {
 #[serde(deny_unknown_fields)]
 struct RigFile {
     name: Option<String>,
+    /// Present when the file is a measurement bundle (checked before).
+    #[allow(dead_code)]
+    kind: Option<String>,
+    /// A bundle's data file; not read here.
+    #[allow(dead_code)]
+    data: Option<String>,
     #[serde(default)]
     variant: Variant,
     model: RigParams,
@@ -171,7 +178,17 @@ fn bodies(list: Vec<BodyFile>, key: &str) -> Result<Vec<Body>, String> {
 /// Parses a rig description; `file` only names the source in errors.
 pub fn parse_rig(text: &str, file: &Path) -> Result<Rig, RigFileError> {
     let err = |message: String| RigFileError { file: file.to_path_buf(), message };
-    let raw: RigFile = toml::from_str(text).map_err(|e| err(e.to_string().trim_end().to_string()))?;
+    let toml_err = |e: toml::de::Error| err(e.to_string().trim_end().to_string());
+    // A bundle of another kind would fail on its first foreign key; say what it is instead.
+    #[derive(Deserialize)]
+    struct Kind {
+        kind: Option<String>,
+    }
+    let kind: Kind = toml::from_str(text).map_err(toml_err)?;
+    if let Some(kind) = kind.kind.filter(|k| k != "torsional_sweep") {
+        return Err(err(format!("`kind` = \"{kind}\": only a `torsional_sweep` bundle describes a torsional rig")));
+    }
+    let raw: RigFile = toml::from_str(text).map_err(toml_err)?;
     let chain = match raw.chain {
         None => None,
         Some(c) => Some(RigChain {

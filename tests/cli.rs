@@ -192,3 +192,44 @@ fn chain_variant_without_spring_description_is_an_error() {
     assert!(!out.status.success());
     assert!(String::from_utf8_lossy(&out.stderr).contains("chain.additional_spring"));
 }
+
+#[test]
+fn a_torsional_bundle_is_a_rig_file() {
+    // The example bundles sit in ../shared/data beside the repository (DATA.md).
+    let data = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/data");
+    let v2 = data.join("variant_V2.toml");
+    assert!(v2.exists(), "{} is missing: the example bundles belong beside the repository", v2.display());
+    let v = json(&["modal", "--model", "reduced", "--rig", v2.to_str().unwrap(), "--json"]);
+    assert_eq!(v["variant"], "V2");
+    // Independent: the declared V2 model (j 0.9148/3.5003/0.9148, c 13,093 and 10,183 in series
+    // with 64,330 Nm/rad) is a three-mass chain whose frequencies follow from the cubic
+    // det(C − ω² J) = 0 — here solved in closed form for the two non-zero roots.
+    let (j1, j2, j3) = (0.9148_f64, 3.5003_f64, 0.9148_f64);
+    let s = |a: f64, b: f64| a * b / (a + b);
+    let (k1, k2) = (s(13_093.0, 64_330.0), s(10_183.444444444445, 64_330.0));
+    // ω⁴ − ω² (k1/j1 + k1/j2 + k2/j2 + k2/j3) + k1 k2 (j1 + j2 + j3)/(j1 j2 j3) = 0
+    let b = k1 / j1 + k1 / j2 + k2 / j2 + k2 / j3;
+    let c = k1 * k2 * (j1 + j2 + j3) / (j1 * j2 * j3);
+    let disc = (b * b - 4.0 * c).sqrt();
+    let f = floats(&v["frequencies_hz"]);
+    let tau = 2.0 * std::f64::consts::PI;
+    assert_abs_diff_eq!(f[1], ((b - disc) / 2.0).sqrt() / tau, epsilon = 1e-9);
+    assert_abs_diff_eq!(f[2], ((b + disc) / 2.0).sqrt() / tau, epsilon = 1e-9);
+    // a bearing bundle is not a rig
+    let out = rigtwin(&["modal", "--rig", data.join("sfd_shake.toml").to_str().unwrap()]);
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("torsional_sweep"));
+}
+
+#[test]
+fn damping_ratio_option_damps_the_shuffle_mode() {
+    let v = json(&["modal", "--damping-ratio", "0.04", "--json"]);
+    let poles = v["poles"].as_array().unwrap();
+    let top = poles.last().unwrap();
+    assert_abs_diff_eq!(top["damping_ratio"].as_f64().unwrap(), 0.04, epsilon = 1e-9);
+    // natural frequency unchanged by damping: 12.64 Hz (Figure 14)
+    assert_abs_diff_eq!(top["natural_hz"].as_f64().unwrap(), 12.64, epsilon = 0.005);
+    let out = rigtwin(&["modal", "--damping-ratio", "-1"]);
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("damping"));
+}
