@@ -40,4 +40,4 @@ pub use reduce::{reduce, Reduction, ReductionStep};
 pub use rig::{AdditionalSpring, Effective, Rig, RigChain, RigParams, Variant};
 pub use segment::{bodies_from_segments, step_length_correction_m, Segment};
 pub use shuffle::{classify, ModeKind};
-pub use statespace::StateSpace;
+pub use statespace::{DiscreteStateSpace, StateSpace};
