@@ -21,6 +21,7 @@
 //! No I/O: file formats live in the `rigtwin` package.
 #![warn(missing_docs)]
 
+pub mod bending;
 pub mod chain;
 pub mod error;
 pub mod mechanical;
@@ -32,6 +33,7 @@ pub mod segment;
 pub mod shuffle;
 pub mod statespace;
 
+pub use bending::{Beam, BeamSegment, Deflection};
 pub use chain::{Body, Chain};
 pub use error::{PlantError, Result};
 pub use mechanical::{Layout, MechanicalModel, Output, Spring};
