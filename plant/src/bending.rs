@@ -138,7 +138,8 @@ impl Beam {
         let mut moment_load = vec![0.0; n + 1]; // ∫ q (z − ζ)
         for i in 1..=n {
             shear_load[i] = shear_load[i - 1] + 0.5 * (q[i] + q[i - 1]) * h;
-            moment_load[i] = moment_load[i - 1] + shear_load[i - 1] * h + (q[i - 1] / 2.0 + (q[i] - q[i - 1]) / 6.0) * h * h;
+            moment_load[i] =
+                moment_load[i - 1] + shear_load[i - 1] * h + (q[i - 1] / 2.0 + (q[i] - q[i - 1]) / 6.0) * h * h;
         }
         let m: Vec<f64> = (0..=n)
             .map(|i| {
@@ -176,7 +177,8 @@ impl Beam {
         let b = (yb - ya) / (self.bearing_b_m - self.bearing_a_m);
         let a = ya - b * self.bearing_a_m;
         let line: Vec<(f64, f64)> = z.iter().zip(&y).map(|(&x, &yi)| (x, -(yi - a - b * x))).collect();
-        let (at_m, max_m) = line.iter().fold((0.0, 0.0), |best, &(x, d)| if d.abs() > best.1 { (x, d.abs()) } else { best });
+        let (at_m, max_m) =
+            line.iter().fold((0.0, 0.0), |best, &(x, d)| if d.abs() > best.1 { (x, d.abs()) } else { best });
         Ok(Deflection { max_m, at_m, bearing_forces_n: [fa, fb], line })
     }
 }
@@ -187,7 +189,13 @@ mod tests {
     use approx::assert_relative_eq;
 
     fn uniform(l: f64) -> BeamSegment {
-        BeamSegment { length_m: l, outer_diameter_m: 0.04, inner_diameter_m: 0.0, density_kg_per_m3: 7850.0, youngs_modulus_pa: 210e9 }
+        BeamSegment {
+            length_m: l,
+            outer_diameter_m: 0.04,
+            inner_diameter_m: 0.0,
+            density_kg_per_m3: 7850.0,
+            youngs_modulus_pa: 210e9,
+        }
     }
 
     #[test]
@@ -212,7 +220,8 @@ mod tests {
         let beam = Beam { segments: vec![uniform(span), uniform(a)], bearing_a_m: 0.0, bearing_b_m: span };
         let d = beam.deflection(GRAVITY_M_PER_S2, 10000).unwrap();
         let tip = d.line.last().unwrap().1;
-        let want = w * a * (4.0 * a * a * span - span.powi(3) + 3.0 * a.powi(3)) / (24.0 * 210e9 * s.second_moment_m4());
+        let want =
+            w * a * (4.0 * a * a * span - span.powi(3) + 3.0 * a.powi(3)) / (24.0 * 210e9 * s.second_moment_m4());
         assert_relative_eq!(tip, want, max_relative = 1e-4);
     }
 

@@ -1,0 +1,164 @@
+//! Spectral helpers on uniformly sampled real signals (rustfft).
+
+use num_complex::Complex64;
+use rustfft::FftPlanner;
+
+/// The one-sided spectrum X_k, k = 0..=n/2, of a real signal (unscaled DFT).
+pub fn rfft(x: &[f64]) -> Vec<Complex64> {
+    let n = x.len();
+    let mut buf: Vec<Complex64> = x.iter().map(|&v| Complex64::new(v, 0.0)).collect();
+    FftPlanner::new().plan_fft_forward(n).process(&mut buf);
+    buf.truncate(n / 2 + 1);
+    buf
+}
+
+/// Removes the least-squares straight line (offset and drift).
+pub fn detrend(x: &[f64]) -> Vec<f64> {
+    let n = x.len() as f64;
+    let tm = (n - 1.0) / 2.0;
+    let xm = x.iter().sum::<f64>() / n;
+    let (mut sxy, mut sxx) = (0.0, 0.0);
+    for (i, &v) in x.iter().enumerate() {
+        let t = i as f64 - tm;
+        sxy += t * (v - xm);
+        sxx += t * t;
+    }
+    let slope = if sxx > 0.0 { sxy / sxx } else { 0.0 };
+    x.iter().enumerate().map(|(i, &v)| v - xm - slope * (i as f64 - tm)).collect()
+}
+
+/// Zero-phase high-pass: the DFT lines below `cutoff_hz` removed (section 3's 1 Hz filter).
+pub fn high_pass(x: &[f64], dt_s: f64, cutoff_hz: f64) -> Vec<f64> {
+    let n = x.len();
+    let mut buf: Vec<Complex64> = x.iter().map(|&v| Complex64::new(v, 0.0)).collect();
+    let mut planner = FftPlanner::new();
+    planner.plan_fft_forward(n).process(&mut buf);
+    let df = 1.0 / (n as f64 * dt_s);
+    for k in 0..n {
+        let f = k.min(n - k) as f64 * df;
+        if f < cutoff_hz {
+            buf[k] = Complex64::new(0.0, 0.0);
+        }
+    }
+    planner.plan_fft_inverse(n).process(&mut buf);
+    buf.iter().map(|c| c.re / n as f64).collect()
+}
+
+/// Power of `x` in `[f_lo, f_hi]` over time: Hann-windowed frames of `window` samples every
+/// `hop` samples; returns (frame centre times in s, band power).
+pub fn band_power_over_time(
+    x: &[f64],
+    dt_s: f64,
+    window: usize,
+    hop: usize,
+    f_lo: f64,
+    f_hi: f64,
+) -> (Vec<f64>, Vec<f64>) {
+    let mut planner = FftPlanner::new();
+    let fft = planner.plan_fft_forward(window);
+    let hann: Vec<f64> =
+        (0..window).map(|i| 0.5 - 0.5 * (2.0 * std::f64::consts::PI * i as f64 / window as f64).cos()).collect();
+    let df = 1.0 / (window as f64 * dt_s);
+    let (k_lo, k_hi) = ((f_lo / df).ceil() as usize, ((f_hi / df).floor() as usize).min(window / 2));
+    let mut times = Vec::new();
+    let mut power = Vec::new();
+    let mut buf = vec![Complex64::new(0.0, 0.0); window];
+    let mut start = 0;
+    while start + window <= x.len() {
+        for i in 0..window {
+            buf[i] = Complex64::new(x[start + i] * hann[i], 0.0);
+        }
+        fft.process(&mut buf);
+        power.push(buf[k_lo..=k_hi].iter().map(|c| c.norm_sqr()).sum());
+        times.push((start as f64 + window as f64 / 2.0) * dt_s);
+        start += hop;
+    }
+    (times, power)
+}
+
+/// Instantaneous frequency of an oscillating signal from its upward zero crossings: one
+/// (time in s, frequency in Hz) point per period, at the period's middle. A crossing counts
+/// only after the signal has been below −0.2·RMS (hysteresis), so noise near zero adds none.
+pub fn zero_crossing_frequency(x: &[f64], dt_s: f64) -> Vec<(f64, f64)> {
+    let rms = (x.iter().map(|v| v * v).sum::<f64>() / x.len().max(1) as f64).sqrt();
+    let h = 0.2 * rms;
+    let mut armed = false;
+    let mut crossings = Vec::new();
+    for i in 1..x.len() {
+        if x[i] < -h {
+            armed = true;
+        }
+        if armed && x[i - 1] < 0.0 && x[i] >= 0.0 {
+            let frac = -x[i - 1] / (x[i] - x[i - 1]);
+            crossings.push((i as f64 - 1.0 + frac) * dt_s);
+            armed = false;
+        }
+    }
+    crossings.windows(2).map(|w| (0.5 * (w[0] + w[1]), 1.0 / (w[1] - w[0]))).collect()
+}
+
+/// Linear interpolation in a table sorted by its first column (clamped at the ends).
+pub fn interpolate(table: &[(f64, f64)], x: f64) -> Option<f64> {
+    let first = table.first()?;
+    let last = table.last()?;
+    if x <= first.0 {
+        return Some(first.1);
+    }
+    if x >= last.0 {
+        return Some(last.1);
+    }
+    let i = table.partition_point(|p| p.0 <= x);
+    let (a, b) = (table[i - 1], table[i]);
+    Some(a.1 + (b.1 - a.1) * (x - a.0) / (b.0 - a.0))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use approx::assert_relative_eq;
+    use std::f64::consts::PI;
+
+    #[test]
+    fn rfft_of_a_cosine_has_one_line() {
+        let n = 1000;
+        let x: Vec<f64> = (0..n).map(|i| (2.0 * PI * 50.0 * i as f64 / n as f64).cos()).collect();
+        let s = rfft(&x);
+        assert_eq!(s.len(), 501);
+        assert_relative_eq!(s[50].re, n as f64 / 2.0, epsilon = 1e-8);
+        assert!(s[49].norm() < 1e-8);
+    }
+
+    #[test]
+    fn detrend_and_high_pass_remove_offset_drift_and_low_lines() {
+        let dt = 1e-3;
+        let x: Vec<f64> = (0..4000)
+            .map(|i| {
+                3.0 + 0.5 * i as f64 * dt
+                    + (2.0 * PI * 0.5 * i as f64 * dt).sin()
+                    + (2.0 * PI * 10.0 * i as f64 * dt).sin()
+            })
+            .collect();
+        let d = detrend(&x);
+        assert!(d.iter().sum::<f64>().abs() < 1e-6);
+        let h = high_pass(&x, dt, 1.0);
+        for (i, v) in h.iter().enumerate().skip(500).take(3000) {
+            let want = (2.0 * PI * 10.0 * i as f64 * dt).sin();
+            assert!((v - want).abs() < 0.05, "{i}: {v} vs {want}");
+        }
+    }
+
+    #[test]
+    fn zero_crossings_track_a_linear_chirp() {
+        // f(t) = 1 + 2t Hz → phase 2π(t + t²)
+        let dt = 1e-4;
+        let x: Vec<f64> = (0..100_000)
+            .map(|i| {
+                let t = i as f64 * dt;
+                (2.0 * PI * (t + t * t)).sin()
+            })
+            .collect();
+        let f = zero_crossing_frequency(&x, dt);
+        let at = interpolate(&f, 5.0).unwrap();
+        assert_relative_eq!(at, 11.0, max_relative = 1e-3);
+    }
+}
