@@ -3,11 +3,21 @@
 //! - [`sweep`]: the natural frequency of a torsional rig from a sine sweep — the paper's
 //!   procedure (section 3) and a modal fit of the frequency response — with uncertainties, and
 //!   which mode was seen (section 4.4).
+//! - [`parametrise`]: j_drive and c_short from the natural frequencies of two or more variants
+//!   (sections 2.3, 3; Tables 4, 5), every real positive solution of every pair, the
+//!   least-squares estimate, linearised and Monte Carlo confidence intervals.
+//! - [`design`]: which additional spring and which variants make the two identifiable.
 #![warn(missing_docs)]
 
+pub mod design;
 pub mod error;
+pub mod parametrise;
 pub mod signal;
 pub mod sweep;
 
+pub use design::{design_spring, Design, DesignRow, DesignSettings};
 pub use error::{IdentError, Result};
+pub use parametrise::{
+    Confidence, Estimate, Measurement, ModelChoice, MonteCarlo, PairSolution, Parametrisation, ParametriseSettings,
+};
 pub use sweep::{FrequencyEstimate, SeenMode, Sweep, SweepAnalysis, SweepSettings};

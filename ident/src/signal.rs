@@ -134,13 +134,13 @@ mod tests {
         let x: Vec<f64> = (0..4000)
             .map(|i| {
                 3.0 + 0.5 * i as f64 * dt
-                    + (2.0 * PI * 0.5 * i as f64 * dt).sin()
+                    + (2.0 * PI * 0.5 * i as f64 * dt).cos()
                     + (2.0 * PI * 10.0 * i as f64 * dt).sin()
             })
             .collect();
         let d = detrend(&x);
         assert!(d.iter().sum::<f64>().abs() < 1e-6);
-        let h = high_pass(&x, dt, 1.0);
+        let h = high_pass(&d, dt, 1.0);
         for (i, v) in h.iter().enumerate().skip(500).take(3000) {
             let want = (2.0 * PI * 10.0 * i as f64 * dt).sin();
             assert!((v - want).abs() < 0.05, "{i}: {v} vs {want}");
