@@ -4,7 +4,9 @@ use clap::{Parser, Subcommand};
 use std::path::PathBuf;
 use std::process::ExitCode;
 
+use ident::{DesignSettings, ModelChoice, ParametriseSettings};
 use plant::{paper, Rig, Variant};
+use rigtwin::identification::{self, FrequencyMethod, Source};
 use rigtwin::report::{self, ModelKind};
 use rigtwin::rigfile::load_rig;
 
@@ -61,6 +63,78 @@ enum Command {
         #[arg(long, default_value_t = 3)]
         masses: usize,
     },
+    /// Drive inertia and side-shaft stiffness from the natural frequencies of two or more rig
+    /// variants (sections 2.3, 3), with 95 % intervals.
+    Parametrise {
+        /// torsional_sweep bundles, one per variant run.
+        #[arg(value_name = "BUNDLE.toml")]
+        bundles: Vec<PathBuf>,
+        /// Frequencies instead of bundles, e.g. `--measured V1=12.77 --measured V2=12.62`.
+        #[arg(long, value_name = "VARIANT=HZ", value_parser = parse_measured)]
+        measured: Vec<(Variant, f64)>,
+        /// Rig supplying the known parameters with --measured (default: the paper's).
+        #[arg(long, value_name = "FILE")]
+        rig: Option<PathBuf>,
+        /// Standard uncertainty of every frequency, Hz; with --measured default 0.005
+        /// (half the last digit of two-decimal values); with bundles it replaces the estimate.
+        #[arg(long, value_name = "HZ")]
+        sigma_hz: Option<f64>,
+        /// Model the frequencies are explained with.
+        #[arg(long, value_enum, default_value_t = ModelArg::Differential)]
+        model: ModelArg,
+        /// Which sweep estimate to use.
+        #[arg(long, value_enum, default_value_t = FrequencyMethod::ModalFit)]
+        method: FrequencyMethod,
+        /// Monte Carlo draws for the intervals (0: linearised only).
+        #[arg(long, default_value_t = 2000)]
+        samples: usize,
+        /// Print JSON instead of text.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Which additional spring and variants make j_drive and c_short identifiable.
+    DesignSpring {
+        /// Rig description (default: the paper's); its j_drive and c_short are the expected values.
+        #[arg(long, value_name = "FILE")]
+        rig: Option<PathBuf>,
+        /// Standard uncertainty of each measured frequency, Hz.
+        #[arg(long, default_value_t = 0.05)]
+        sigma_hz: f64,
+        /// Required relative 95 % half-width of both parameters.
+        #[arg(long, default_value_t = 0.05)]
+        target: f64,
+        /// Model.
+        #[arg(long, value_enum, default_value_t = ModelArg::Differential)]
+        model: ModelArg,
+        /// Print JSON instead of text.
+        #[arg(long)]
+        json: bool,
+    },
+}
+
+#[derive(Clone, Copy, clap::ValueEnum)]
+enum ModelArg {
+    Differential,
+    Smooth,
+}
+
+impl From<ModelArg> for ModelChoice {
+    fn from(m: ModelArg) -> Self {
+        match m {
+            ModelArg::Differential => ModelChoice::Differential,
+            ModelArg::Smooth => ModelChoice::Smooth,
+        }
+    }
+}
+
+fn parse_measured(s: &str) -> Result<(Variant, f64), String> {
+    let (v, f) = s.split_once('=').ok_or_else(|| format!("`{s}`: expected VARIANT=HZ, e.g. V1=12.77"))?;
+    let variant = parse_variant(v)?;
+    let hz: f64 = f.trim().parse().map_err(|_| format!("`{f}`: expected a frequency in Hz"))?;
+    if !(hz > 0.0 && hz.is_finite()) {
+        return Err(format!("`{f}`: a frequency must be positive"));
+    }
+    Ok((variant, hz))
 }
 
 fn parse_variant(s: &str) -> Result<Variant, String> {
@@ -100,6 +174,41 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             let (r, variant) = load(&rig)?;
             let rep = report::reduction(&r, variant, masses)?;
             if rig.json {
+                print_json(&rep)?;
+            } else {
+                print!("{}", rep.human());
+            }
+        }
+        Command::Parametrise { bundles, measured, rig, sigma_hz, model, method, samples, json } => {
+            let source = match (bundles.is_empty(), measured.is_empty()) {
+                (false, true) => Source::Bundles(bundles),
+                (true, false) => Source::Measured {
+                    rig: match &rig {
+                        Some(f) => load_rig(f)?,
+                        None => paper::rig(),
+                    },
+                    values: measured,
+                    sigma_hz: sigma_hz.unwrap_or(0.005),
+                },
+                (true, true) => anyhow::bail!("give torsional_sweep bundles, or frequencies with --measured"),
+                (false, false) => anyhow::bail!("give either bundles or --measured frequencies, not both"),
+            };
+            let settings = ParametriseSettings { monte_carlo_samples: samples, ..Default::default() };
+            let rep = identification::parametrise(source, model.into(), method, sigma_hz, &settings)?;
+            if json {
+                print_json(&rep)?;
+            } else {
+                print!("{}", rep.human());
+            }
+        }
+        Command::DesignSpring { rig, sigma_hz, target, model, json } => {
+            let r = match &rig {
+                Some(f) => load_rig(f)?,
+                None => paper::rig(),
+            };
+            let settings = DesignSettings { sigma_hz, target, ..Default::default() };
+            let rep = identification::design(&r, model.into(), &settings)?;
+            if json {
                 print_json(&rep)?;
             } else {
                 print!("{}", rep.human());

@@ -35,6 +35,12 @@
 //! left_after = 5                 # inserted between bodies 5 and 6 (M2 side)
 //! right_after = 10               # inserted, mirrored, between bodies 10 and 11 (M3 side)
 //! bodies = [ ... ]
+//!
+//! [bending]                      # optional (section 2.5): the shaft line carrying the spring
+//! bearing_a_m = 0.0              # as a beam on two bearings; beyond them it overhangs
+//! bearing_b_m = 0.08
+//! segments = [ { length_m = 0.08, outer_diameter_m = 0.06 },   # inner_diameter_m (0),
+//!              { length_m = 0.25, outer_diameter_m = 0.02 } ]  # density_kg_per_m3, youngs_modulus_Pa
 //! ```
 
 use serde::Deserialize;
@@ -67,6 +73,27 @@ struct RigFile {
     variant: Variant,
     model: RigParams,
     chain: Option<ChainFile>,
+    bending: Option<BendingFile>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct BendingFile {
+    bearing_a_m: f64,
+    bearing_b_m: f64,
+    segments: Vec<BeamSegmentFile>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct BeamSegmentFile {
+    length_m: f64,
+    outer_diameter_m: f64,
+    #[serde(default)]
+    inner_diameter_m: f64,
+    density_kg_per_m3: Option<f64>,
+    #[serde(rename = "youngs_modulus_Pa")]
+    youngs_modulus_pa: Option<f64>,
 }
 
 #[derive(Deserialize)]
@@ -211,6 +238,21 @@ pub fn parse_rig(text: &str, file: &Path) -> Result<Rig, RigFileError> {
         variant: raw.variant,
         model: raw.model,
         chain,
+        bending: raw.bending.map(|b| plant::Beam {
+            bearing_a_m: b.bearing_a_m,
+            bearing_b_m: b.bearing_b_m,
+            segments: b
+                .segments
+                .into_iter()
+                .map(|s| plant::BeamSegment {
+                    length_m: s.length_m,
+                    outer_diameter_m: s.outer_diameter_m,
+                    inner_diameter_m: s.inner_diameter_m,
+                    density_kg_per_m3: s.density_kg_per_m3.unwrap_or(STEEL_DENSITY_KG_PER_M3),
+                    youngs_modulus_pa: s.youngs_modulus_pa.unwrap_or(plant::bending::STEEL_YOUNGS_MODULUS_PA),
+                })
+                .collect(),
+        }),
     };
     rig.validate().map_err(|e| err(e.to_string()))?;
     Ok(rig)

@@ -11,11 +11,15 @@
 //!   machine's speed, from one DFT of the whole record (a sweep excites every line of its
 //!   band, and no segment window biases it), fitted near its peak with
 //!   H(s) = b0 + b1/s + q s/(s² + 2ζω_n s + ω_n²) — the shuffle mode plus the rigid body and the
-//!   out-of-band modes as a low-order background. b0, b1, q are linear and solved exactly for
-//!   each (ω_n, ζ) (variable projection); (ω_n, ζ) by Levenberg–Marquardt. Output noise that is
-//!   white makes var(H_k) ∝ 1/|U_k|², so lines are weighted by |U_k|; the noise level comes from
-//!   the residual, σ(ω_n) from the covariance. The two machines give two estimates, combined by
-//!   inverse variance; σ is their mean σ (their errors are correlated), widened if they disagree.
+//!   out-of-band modes as a low-order background — in the output domain,
+//!   Y_k = H(s_k) U_k + T(s_k), where the smooth polynomial T takes up the leakage of the
+//!   record's start and end transients (Pintelon & Schoukens' transient term: a polynomial plus
+//!   the resonance's own poles). Then white
+//!   output noise gives every line the same variance. b0, b1, q and T are linear and solved
+//!   exactly for each (ω_n, ζ) (variable projection); (ω_n, ζ) by Levenberg–Marquardt; the
+//!   noise level comes from the residual, σ(ω_n) from the covariance. The two machines give two
+//!   estimates; their errors are as correlated as their residuals, and they are combined by
+//!   generalised least squares with that correlation (σ widened if they disagree).
 //!
 //! Which mode: the residues q of the two machines are in phase for the shuffle (drive against
 //! both outputs) and in antiphase for the outputs' mode.
@@ -153,17 +157,30 @@ impl Sweep {
             self.modal_fit_channel(&self.speed_m2_radps, "speed_m2", settings)?,
             self.modal_fit_channel(&self.speed_m3_radps, "speed_m3", settings)?,
         ];
+        // the two machines' errors are as correlated as their fit residuals (same lines)
+        let rho = {
+            let (a, b) = (&fits[0].residual, &fits[1].residual);
+            if a.len() == b.len() && a.norm() > 0.0 && b.norm() > 0.0 {
+                (a.dot(b) / (a.norm() * b.norm())).clamp(-0.99, 0.99)
+            } else {
+                0.99
+            }
+        };
         let modal_fit = combine(
             "modal_fit",
             &fits.iter().map(|f| f.estimate.clone()).collect::<Vec<_>>(),
+            Some(rho),
             Some(0.5 * (fits[0].zeta + fits[1].zeta)),
         );
+        // the paper's procedure reads both machines at the same moment of one sweep: treat its
+        // two estimates as fully correlated
         let paper = combine(
             "paper",
             &[
                 self.paper_channel(&self.speed_m2_radps, "speed_m2", settings)?,
                 self.paper_channel(&self.speed_m3_radps, "speed_m3", settings)?,
             ],
+            None,
             None,
         );
         let ratio = fits[0].residue / fits[1].residue;
@@ -256,10 +273,13 @@ impl Sweep {
                 lines.len()
             )));
         }
+        let (w_lo, w_hi) = (2.0 * PI * lines[0] as f64 * df, 2.0 * PI * lines[lines.len() - 1] as f64 * df);
         let data = FitData {
             s: lines.iter().map(|&k| Complex64::new(0.0, 2.0 * PI * k as f64 * df)).collect(),
-            h: lines.iter().map(|&k| y[k] / u[k]).collect(),
-            w: lines.iter().map(|&k| u[k].norm()).collect(),
+            u: lines.iter().map(|&k| u[k]).collect(),
+            y: lines.iter().map(|&k| y[k]).collect(),
+            centre: 0.5 * (w_lo + w_hi),
+            half_width: 0.5 * (w_hi - w_lo),
         };
         let fit = fit_resonance(&data, 2.0 * PI * fpk)?;
         Ok(ChannelFit {
@@ -270,6 +290,7 @@ impl Sweep {
             },
             zeta: fit.zeta,
             residue: fit.residue,
+            residual: fit.residual,
         })
     }
 }
@@ -278,64 +299,112 @@ struct ChannelFit {
     estimate: ChannelEstimate,
     zeta: f64,
     residue: Complex64,
+    residual: DVector<f64>,
 }
 
-/// Inverse-variance mean of the channels. The two machines see the same excitation, so their
-/// errors are not independent: σ is the channels' mean σ (not shrunk by √2), widened to half
-/// their spread if they disagree.
-fn combine(method: &'static str, ch: &[ChannelEstimate], damping_ratio: Option<f64>) -> FrequencyEstimate {
-    let weight = |c: &ChannelEstimate| if c.sigma_hz > 0.0 { 1.0 / (c.sigma_hz * c.sigma_hz) } else { 1.0 };
-    let w: f64 = ch.iter().map(weight).sum();
-    let f = ch.iter().map(|c| c.frequency_hz * weight(c)).sum::<f64>() / w;
-    let mean_sigma = ch.iter().map(|c| c.sigma_hz).sum::<f64>() / ch.len() as f64;
+/// Combines two channel estimates. With the correlation `rho` of their errors known, the
+/// generalised least-squares mean (var = 1/(1ᵀΣ⁻¹1)); without it (`None`), the errors are taken
+/// as fully correlated: the inverse-variance mean with the channels' mean σ. Either way σ is
+/// widened to half the channels' spread if they disagree by more.
+fn combine(
+    method: &'static str,
+    ch: &[ChannelEstimate],
+    rho: Option<f64>,
+    damping_ratio: Option<f64>,
+) -> FrequencyEstimate {
     let (lo, hi) = ch
         .iter()
         .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), c| (lo.min(c.frequency_hz), hi.max(c.frequency_hz)));
+    let usable = ch.len() == 2 && ch.iter().all(|c| c.sigma_hz > 0.0 && c.sigma_hz.is_finite());
+    let (f, sigma) = match rho {
+        Some(r) if usable => {
+            let (s1, s2) = (ch[0].sigma_hz, ch[1].sigma_hz);
+            let cov = Matrix2::new(s1 * s1, r * s1 * s2, r * s1 * s2, s2 * s2);
+            let inv = cov.try_inverse().expect("|ρ| < 1 keeps Σ regular");
+            let w = inv * Vector2::new(1.0, 1.0);
+            let total = w.sum();
+            ((w[0] * ch[0].frequency_hz + w[1] * ch[1].frequency_hz) / total, total.recip().sqrt())
+        }
+        _ => {
+            let weight = |c: &ChannelEstimate| if c.sigma_hz > 0.0 { 1.0 / (c.sigma_hz * c.sigma_hz) } else { 1.0 };
+            let w: f64 = ch.iter().map(weight).sum();
+            let f = ch.iter().map(|c| c.frequency_hz * weight(c)).sum::<f64>() / w;
+            (f, ch.iter().map(|c| c.sigma_hz).sum::<f64>() / ch.len() as f64)
+        }
+    };
     FrequencyEstimate {
         method,
         frequency_hz: f,
-        sigma_hz: mean_sigma.max(0.5 * (hi - lo)),
+        sigma_hz: sigma.max(0.5 * (hi - lo)),
         damping_ratio,
         channels: ch.to_vec(),
     }
 }
 
+/// The lines of the fit: Laplace variable, input and output spectra, and the band centre
+/// that scales the transient polynomial.
 struct FitData {
     s: Vec<Complex64>,
-    h: Vec<Complex64>,
-    w: Vec<f64>,
+    u: Vec<Complex64>,
+    y: Vec<Complex64>,
+    centre: f64,
+    half_width: f64,
 }
+
+/// Complex linear coefficients of the fit: b0, b1 and the residue q of H, and the transient
+/// term: the polynomial t0 + t1 x + t2 x² (x the line's position in the band, −1..1) plus the
+/// two terms through the resonance's own poles, (r0 ω_n² + r1 ω_n s)/(s² + 2ζω_n s + ω_n²).
+const LINEAR: usize = 8;
 
 struct Resonance {
     wn: f64,
     zeta: f64,
     sigma_wn: f64,
     residue: Complex64,
+    residual: DVector<f64>,
 }
 
-/// Weighted residual of the best b0, b1, q for given (ω_n, ζ), and those coefficients.
-fn projected(d: &FitData, wn: f64, zeta: f64) -> (DVector<f64>, [Complex64; 3]) {
+/// Residual of Y_k − H(s_k) U_k − T(s_k) for the best linear coefficients at (ω_n, ζ), and the
+/// coefficients. Output noise that is white gives every line the same variance here, so no
+/// weights are needed; T absorbs the leakage of the record's start and end transients — a
+/// rational function with the system's poles, smooth over the band except through the
+/// resonance — which would otherwise pass for noise.
+fn projected(d: &FitData, wn: f64, zeta: f64) -> (DVector<f64>, [Complex64; LINEAR]) {
     let m = d.s.len();
-    let mut a = DMatrix::zeros(2 * m, 6);
+    let mut a = DMatrix::zeros(2 * m, 2 * LINEAR);
     let mut b = DVector::zeros(2 * m);
     for k in 0..m {
         let s = d.s[k];
-        let basis = [Complex64::new(1.0, 0.0), 1.0 / s, s / (s * s + 2.0 * zeta * wn * s + wn * wn)];
-        for (j, phi) in basis.iter().enumerate() {
-            let p = phi * d.w[k];
+        let u = d.u[k];
+        let x = (s.im - d.centre) / d.half_width;
+        let den = s * s + 2.0 * zeta * wn * s + wn * wn;
+        let basis = [
+            u,
+            u / s,
+            u * s / den,
+            Complex64::new(1.0, 0.0),
+            Complex64::new(x, 0.0),
+            Complex64::new(x * x, 0.0),
+            wn * wn / den,
+            wn * s / den,
+        ];
+        for (j, p) in basis.iter().enumerate() {
             // (a + ib)·φ = (a Re φ − b Im φ) + i (a Im φ + b Re φ)
             a[(2 * k, 2 * j)] = p.re;
             a[(2 * k, 2 * j + 1)] = -p.im;
             a[(2 * k + 1, 2 * j)] = p.im;
             a[(2 * k + 1, 2 * j + 1)] = p.re;
         }
-        b[2 * k] = d.h[k].re * d.w[k];
-        b[2 * k + 1] = d.h[k].im * d.w[k];
+        b[2 * k] = d.y[k].re;
+        b[2 * k + 1] = d.y[k].im;
     }
-    let svd = a.clone().svd(true, true);
-    let x = svd.solve(&b, 1e-12).unwrap_or_else(|_| DVector::zeros(6));
+    let x = a.clone().svd(true, true).solve(&b, 1e-12).unwrap_or_else(|_| DVector::zeros(2 * LINEAR));
     let r = &a * &x - b;
-    (r, [Complex64::new(x[0], x[1]), Complex64::new(x[2], x[3]), Complex64::new(x[4], x[5])])
+    let mut coef = [Complex64::new(0.0, 0.0); LINEAR];
+    for (j, c) in coef.iter_mut().enumerate() {
+        *c = Complex64::new(x[2 * j], x[2 * j + 1]);
+    }
+    (r, coef)
 }
 
 fn fit_resonance(d: &FitData, wn0: f64) -> Result<Resonance> {
@@ -391,7 +460,7 @@ fn fit_resonance(d: &FitData, wn0: f64) -> Result<Resonance> {
         }
     }
     let j = jac(&p);
-    let dof = (r.len() as f64 - 8.0).max(1.0);
+    let dof = (r.len() as f64 - 2.0 * LINEAR as f64 - 2.0).max(1.0);
     let s2 = cost / dof;
     let cov =
         (j.transpose() * &j).try_inverse().ok_or_else(|| IdentError::Data("the resonance fit is singular".into()))?
@@ -400,5 +469,5 @@ fn fit_resonance(d: &FitData, wn0: f64) -> Result<Resonance> {
     if !(p[0] > 0.0 && cov[(0, 0)].is_finite()) {
         return Err(IdentError::Data("the resonance fit did not converge".into()));
     }
-    Ok(Resonance { wn: p[0], zeta: p[1], sigma_wn: cov[(0, 0)].sqrt(), residue: coef[2] })
+    Ok(Resonance { wn: p[0], zeta: p[1], sigma_wn: cov[(0, 0)].sqrt(), residue: coef[2], residual: r })
 }

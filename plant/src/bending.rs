@@ -80,11 +80,11 @@ impl Beam {
         }
         for (i, s) in self.segments.iter().enumerate() {
             let k = |n: &str| format!("{section}.segments[{}].{n}", i + 1);
-            positive(k("length_m"), s.length_m, "m")?;
-            positive(k("outer_diameter_m"), s.outer_diameter_m, "m")?;
-            non_negative(k("inner_diameter_m"), s.inner_diameter_m, "m")?;
-            positive(k("density_kg_per_m3"), s.density_kg_per_m3, "kg/m^3")?;
-            positive(k("youngs_modulus_Pa"), s.youngs_modulus_pa, "Pa")?;
+            positive(|| k("length_m"), s.length_m, "m")?;
+            positive(|| k("outer_diameter_m"), s.outer_diameter_m, "m")?;
+            non_negative(|| k("inner_diameter_m"), s.inner_diameter_m, "m")?;
+            positive(|| k("density_kg_per_m3"), s.density_kg_per_m3, "kg/m^3")?;
+            positive(|| k("youngs_modulus_Pa"), s.youngs_modulus_pa, "Pa")?;
             if s.inner_diameter_m >= s.outer_diameter_m {
                 return Err(PlantError::Invalid(format!(
                     "`{}` must be smaller than `{}`",
@@ -94,7 +94,7 @@ impl Beam {
             }
         }
         let l = self.length_m();
-        non_negative(format!("{section}.bearing_a_m"), self.bearing_a_m, "m")?;
+        non_negative(|| format!("{section}.bearing_a_m"), self.bearing_a_m, "m")?;
         if !(self.bearing_b_m > self.bearing_a_m && self.bearing_b_m <= l) {
             return Err(PlantError::Invalid(format!(
                 "`{section}.bearing_b_m` = {} m must lie after `bearing_a_m` = {} m and within the beam's {l} m",

@@ -63,13 +63,13 @@ impl Chain {
             )));
         }
         for (i, &j) in inertias_kgm2.iter().enumerate() {
-            positive(format!("inertias_kgm2[{}]", i + 1), j, "kg m^2")?;
+            positive(|| format!("inertias_kgm2[{}]", i + 1), j, "kg m^2")?;
         }
         for (i, &c) in stiffnesses_nm_per_rad.iter().enumerate() {
-            positive(format!("stiffnesses_Nm_per_rad[{}]", i + 1), c, "Nm/rad")?;
+            positive(|| format!("stiffnesses_Nm_per_rad[{}]", i + 1), c, "Nm/rad")?;
         }
         for (i, &d) in dampings_nms_per_rad.iter().enumerate() {
-            non_negative(format!("dampings_Nms_per_rad[{}]", i + 1), d, "Nm s/rad")?;
+            non_negative(|| format!("dampings_Nms_per_rad[{}]", i + 1), d, "Nm s/rad")?;
         }
         Ok(Chain { names, inertias_kgm2, stiffnesses_nm_per_rad, dampings_nms_per_rad, origins: (0..n).collect() })
     }
@@ -79,8 +79,8 @@ impl Chain {
     /// two free ends are neglected (torque enters through the end faces).
     pub fn from_bodies(bodies: &[Body]) -> Result<Self> {
         for (i, b) in bodies.iter().enumerate() {
-            positive(format!("bodies[{}].j_kgm2", i + 1), b.inertia_kgm2, "kg m^2")?;
-            positive(format!("bodies[{}].c_Nm_per_rad", i + 1), b.stiffness_nm_per_rad, "Nm/rad")?;
+            positive(|| format!("bodies[{}].j_kgm2", i + 1), b.inertia_kgm2, "kg m^2")?;
+            positive(|| format!("bodies[{}].c_Nm_per_rad", i + 1), b.stiffness_nm_per_rad, "Nm/rad")?;
         }
         let couplings = bodies
             .windows(2)

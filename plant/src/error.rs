@@ -51,29 +51,37 @@ pub enum PlantError {
 /// Result alias of the crate.
 pub type Result<T> = std::result::Result<T, PlantError>;
 
+// The key names below are closures: they are formatted only when the check fails, so a hot
+// loop that validates candidate parameters pays nothing for them.
+
 /// `value` must be > 0 and finite.
-pub(crate) fn positive(field: impl Into<String>, value: f64, unit: &'static str) -> Result<f64> {
+pub(crate) fn positive<K: Into<String>>(field: impl FnOnce() -> K, value: f64, unit: &'static str) -> Result<f64> {
     if value.is_finite() && value > 0.0 {
         Ok(value)
     } else {
-        Err(PlantError::NotPositive { field: field.into(), value, unit })
+        Err(PlantError::NotPositive { field: field().into(), value, unit })
     }
 }
 
 /// `value` must be >= 0 and finite.
-pub(crate) fn non_negative(field: impl Into<String>, value: f64, unit: &'static str) -> Result<f64> {
+pub(crate) fn non_negative<K: Into<String>>(field: impl FnOnce() -> K, value: f64, unit: &'static str) -> Result<f64> {
     if value.is_finite() && value >= 0.0 {
         Ok(value)
     } else {
-        Err(PlantError::Negative { field: field.into(), value, unit })
+        Err(PlantError::Negative { field: field().into(), value, unit })
     }
 }
 
 /// A 1-based `index` must lie in `min..=max`.
-pub(crate) fn in_range(field: impl Into<String>, index: usize, min: usize, max: usize) -> Result<usize> {
+pub(crate) fn in_range<K: Into<String>>(
+    field: impl FnOnce() -> K,
+    index: usize,
+    min: usize,
+    max: usize,
+) -> Result<usize> {
     if (min..=max).contains(&index) {
         Ok(index)
     } else {
-        Err(PlantError::OutOfRange { field: field.into(), index, min, max })
+        Err(PlantError::OutOfRange { field: field().into(), index, min, max })
     }
 }

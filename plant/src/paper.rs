@@ -87,5 +87,6 @@ pub fn rig() -> Rig {
         variant: Variant::V1,
         model: params(0.529, 1479.0),
         chain: Some(chain()),
+        bending: None, // the paper gives no geometry of its spring
     }
 }

@@ -154,24 +154,24 @@ impl RigParams {
     /// Checks every parameter; errors name the key (prefixed by `section`, e.g. "model").
     pub fn validate(&self, section: &str) -> Result<()> {
         let k = |name: &str| if section.is_empty() { name.to_string() } else { format!("{section}.{name}") };
-        positive(k("j_m2"), self.j_m2, "kg m^2")?;
-        positive(k("j_drive"), self.j_drive, "kg m^2")?;
-        positive(k("j_m3"), self.j_m3, "kg m^2")?;
-        positive(k("c_short"), self.c_short, "Nm/rad")?;
+        positive(|| k("j_m2"), self.j_m2, "kg m^2")?;
+        positive(|| k("j_drive"), self.j_drive, "kg m^2")?;
+        positive(|| k("j_m3"), self.j_m3, "kg m^2")?;
+        positive(|| k("c_short"), self.c_short, "Nm/rad")?;
         if let Some(c) = self.c_long {
-            positive(k("c_long"), c, "Nm/rad")?;
+            positive(|| k("c_long"), c, "Nm/rad")?;
         }
-        positive(k("c_long_ratio"), self.c_long_ratio, "(ratio)")?;
-        non_negative(k("c_delta"), self.c_delta, "Nm/rad")?;
+        positive(|| k("c_long_ratio"), self.c_long_ratio, "(ratio)")?;
+        non_negative(|| k("c_delta"), self.c_delta, "Nm/rad")?;
         if let Some(j) = self.j_m2_delta {
-            positive(k("j_m2_delta"), j, "kg m^2")?;
+            positive(|| k("j_m2_delta"), j, "kg m^2")?;
         }
         if let Some(j) = self.j_m3_delta {
-            positive(k("j_m3_delta"), j, "kg m^2")?;
+            positive(|| k("j_m3_delta"), j, "kg m^2")?;
         }
-        non_negative(k("d_short"), self.d_short, "Nm s/rad")?;
-        non_negative(k("d_long"), self.d_long, "Nm s/rad")?;
-        non_negative(k("load_drag"), self.load_drag, "Nm s/rad")?;
+        non_negative(|| k("d_short"), self.d_short, "Nm s/rad")?;
+        non_negative(|| k("d_long"), self.d_long, "Nm s/rad")?;
+        non_negative(|| k("load_drag"), self.load_drag, "Nm s/rad")?;
         Ok(())
     }
 
@@ -233,7 +233,7 @@ impl RigParams {
     /// stiffness-proportional, d = β c with β = 2ζ/ω_shuffle, so the shuffle mode stays a
     /// classical normal mode with exactly that ratio.
     pub fn with_shaft_damping_ratio(&self, zeta: f64, variant: Variant) -> Result<RigParams> {
-        non_negative("damping_ratio", zeta, "(ratio)")?;
+        non_negative(|| "damping_ratio", zeta, "(ratio)")?;
         let e = self.effective(variant)?;
         let cs = series(e.c_left, e.c_right);
         let w = (cs * (1.0 / e.j_m2 + 4.0 / e.j_drive + 1.0 / e.j_m3)).sqrt();
@@ -299,26 +299,26 @@ impl RigChain {
             return Err(PlantError::Invalid(format!("`chain.bodies` needs at least 3 bodies, got {n}")));
         }
         for (i, b) in self.bodies.iter().enumerate() {
-            positive(format!("chain.bodies[{}].j_kgm2", i + 1), b.inertia_kgm2, "kg m^2")?;
-            positive(format!("chain.bodies[{}].c_Nm_per_rad", i + 1), b.stiffness_nm_per_rad, "Nm/rad")?;
+            positive(|| format!("chain.bodies[{}].j_kgm2", i + 1), b.inertia_kgm2, "kg m^2")?;
+            positive(|| format!("chain.bodies[{}].c_Nm_per_rad", i + 1), b.stiffness_nm_per_rad, "Nm/rad")?;
         }
-        in_range("chain.drive", self.drive, 3, n - 2)?;
-        in_range("chain.short_shaft", self.short_shaft, 2, self.drive - 1)?;
-        in_range("chain.long_shaft", self.long_shaft, self.drive + 1, n - 1)?;
+        in_range(|| "chain.drive", self.drive, 3, n - 2)?;
+        in_range(|| "chain.short_shaft", self.short_shaft, 2, self.drive - 1)?;
+        in_range(|| "chain.long_shaft", self.long_shaft, self.drive + 1, n - 1)?;
         if let Some(s) = &self.additional_spring {
             if s.bodies.is_empty() {
                 return Err(PlantError::Invalid("`chain.additional_spring.bodies` is empty".into()));
             }
             for (i, b) in s.bodies.iter().enumerate() {
-                positive(format!("chain.additional_spring.bodies[{}].j_kgm2", i + 1), b.inertia_kgm2, "kg m^2")?;
+                positive(|| format!("chain.additional_spring.bodies[{}].j_kgm2", i + 1), b.inertia_kgm2, "kg m^2")?;
                 positive(
-                    format!("chain.additional_spring.bodies[{}].c_Nm_per_rad", i + 1),
+                    || format!("chain.additional_spring.bodies[{}].c_Nm_per_rad", i + 1),
                     b.stiffness_nm_per_rad,
                     "Nm/rad",
                 )?;
             }
-            in_range("chain.additional_spring.left_after", s.left_after, 1, self.drive - 1)?;
-            in_range("chain.additional_spring.right_after", s.right_after, self.drive, n - 1)?;
+            in_range(|| "chain.additional_spring.left_after", s.left_after, 1, self.drive - 1)?;
+            in_range(|| "chain.additional_spring.right_after", s.right_after, self.drive, n - 1)?;
         }
         Ok(())
     }
@@ -417,6 +417,8 @@ pub struct Rig {
     pub model: RigParams,
     /// The full chain, where known.
     pub chain: Option<RigChain>,
+    /// The shaft line with the additional spring as a beam on its bearings (section 2.5).
+    pub bending: Option<crate::bending::Beam>,
 }
 
 impl Rig {
@@ -425,6 +427,9 @@ impl Rig {
         self.model.validate("model")?;
         if let Some(c) = &self.chain {
             c.validate()?;
+        }
+        if let Some(b) = &self.bending {
+            b.validate("bending")?;
         }
         Ok(())
     }

@@ -40,11 +40,11 @@ impl Segment {
 
     /// Checks that the geometry and material describe a real segment; `field` prefixes the key names.
     pub fn validate(&self, field: &str) -> Result<()> {
-        positive(format!("{field}.outer_diameter_m"), self.outer_diameter_m, "m")?;
-        non_negative(format!("{field}.inner_diameter_m"), self.inner_diameter_m, "m")?;
-        positive(format!("{field}.length_m"), self.length_m, "m")?;
-        positive(format!("{field}.shear_modulus_Pa"), self.shear_modulus_pa, "Pa")?;
-        positive(format!("{field}.density_kg_per_m3"), self.density_kg_per_m3, "kg/m^3")?;
+        positive(|| format!("{field}.outer_diameter_m"), self.outer_diameter_m, "m")?;
+        non_negative(|| format!("{field}.inner_diameter_m"), self.inner_diameter_m, "m")?;
+        positive(|| format!("{field}.length_m"), self.length_m, "m")?;
+        positive(|| format!("{field}.shear_modulus_Pa"), self.shear_modulus_pa, "Pa")?;
+        positive(|| format!("{field}.density_kg_per_m3"), self.density_kg_per_m3, "kg/m^3")?;
         if self.inner_diameter_m >= self.outer_diameter_m {
             return Err(PlantError::Invalid(format!(
                 "`{field}.inner_diameter_m` = {} m must be smaller than `{field}.outer_diameter_m` = {} m",

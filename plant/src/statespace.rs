@@ -57,7 +57,7 @@ impl StateSpace {
     /// of the augmented matrix [[A, B], [0, 0]]·dt holds Ad and Bd; exact for inputs held
     /// constant over each step.
     pub fn c2d(&self, dt_s: f64) -> Result<DiscreteStateSpace> {
-        crate::error::positive("dt_s", dt_s, "s")?;
+        crate::error::positive(|| "dt_s", dt_s, "s")?;
         let (n, m) = (self.a.nrows(), self.b.ncols());
         let mut aug = DMatrix::zeros(n + m, n + m);
         aug.view_mut((0, 0), (n, n)).copy_from(&(&self.a * dt_s));

@@ -1,0 +1,137 @@
+//! Measurement bundles (`../shared/DATA.md`): a TOML file naming the data and the declared
+//! model, and the recorded signals as CSV.
+
+use serde::Deserialize;
+use std::path::{Path, PathBuf};
+
+use ident::Sweep;
+use plant::{RigParams, Variant};
+
+use crate::rigfile::parse_rig;
+
+/// A bundle that cannot be used: which file, which line if known, and what is wrong.
+#[derive(Debug, thiserror::Error)]
+#[error("{}{}: {message}", file.display(), line.map(|l| format!(":{l}")).unwrap_or_default())]
+pub struct BundleError {
+    /// The file.
+    pub file: PathBuf,
+    /// 1-based line, where the problem has one.
+    pub line: Option<usize>,
+    /// What is wrong and what was expected.
+    pub message: String,
+}
+
+fn error(file: &Path, line: Option<usize>, message: impl Into<String>) -> BundleError {
+    BundleError { file: file.to_path_buf(), line, message: message.into() }
+}
+
+/// A `torsional_sweep` bundle, loaded.
+#[derive(Debug, Clone)]
+pub struct TorsionalBundle {
+    /// The TOML file.
+    pub file: PathBuf,
+    /// Rig variant of the run.
+    pub variant: Variant,
+    /// The declared model.
+    pub model: RigParams,
+    /// The recorded sweep.
+    pub sweep: Sweep,
+}
+
+#[derive(Deserialize)]
+struct Header {
+    kind: String,
+    data: Option<String>,
+}
+
+/// Reads a `torsional_sweep` bundle and its CSV.
+pub fn load_torsional(file: &Path) -> Result<TorsionalBundle, BundleError> {
+    let text = std::fs::read_to_string(file).map_err(|e| error(file, None, format!("cannot read: {e}")))?;
+    let header: Header = toml::from_str(&text).map_err(|e| error(file, None, e.to_string().trim_end().to_string()))?;
+    if header.kind != "torsional_sweep" {
+        return Err(error(file, None, format!("`kind` = \"{}\": expected \"torsional_sweep\"", header.kind)));
+    }
+    let data = header.data.ok_or_else(|| error(file, None, "missing key `data`: the CSV file of the sweep"))?;
+    // the TOML is a rig description too: [model] and variant, validated with named keys
+    let rig = parse_rig(&text, file).map_err(|e| error(file, None, e.message))?;
+    let csv_path = file.parent().unwrap_or(Path::new(".")).join(&data);
+    let sweep = read_sweep_csv(&csv_path)?;
+    Ok(TorsionalBundle { file: file.to_path_buf(), variant: rig.variant, model: rig.model, sweep })
+}
+
+/// The columns of a sweep CSV.
+pub const SWEEP_COLUMNS: [&str; 4] = ["time_s", "torque_drive_Nm", "speed_m2_radps", "speed_m3_radps"];
+
+/// Reads named columns of a numeric CSV with a header line; returns them in the order asked.
+pub fn read_columns(path: &Path, names: &[&str]) -> Result<Vec<Vec<f64>>, BundleError> {
+    let mut rdr = csv::ReaderBuilder::new()
+        .trim(csv::Trim::All)
+        .from_path(path)
+        .map_err(|e| error(path, None, format!("cannot read: {e}")))?;
+    let headers = rdr.headers().map_err(|e| error(path, Some(1), format!("cannot read the header: {e}")))?.clone();
+    let index: Vec<usize> = names
+        .iter()
+        .map(|n| {
+            headers.iter().position(|h| h == *n).ok_or_else(|| {
+                error(path, Some(1), format!("missing column `{n}`: expected the columns {}", names.join(", ")))
+            })
+        })
+        .collect::<Result<_, _>>()?;
+    let mut cols = vec![Vec::new(); names.len()];
+    for (row, rec) in rdr.records().enumerate() {
+        let line = row + 2;
+        let rec = rec.map_err(|e| error(path, Some(line), e.to_string()))?;
+        for (c, &i) in index.iter().enumerate() {
+            let field =
+                rec.get(i).ok_or_else(|| error(path, Some(line), format!("missing value of `{}`", names[c])))?;
+            let v: f64 = field
+                .parse()
+                .map_err(|_| error(path, Some(line), format!("`{}`: expected a number, got `{field}`", names[c])))?;
+            if !v.is_finite() {
+                return Err(error(
+                    path,
+                    Some(line),
+                    format!("`{}`: expected a finite number, got `{field}`", names[c]),
+                ));
+            }
+            cols[c].push(v);
+        }
+    }
+    if cols[0].len() < 2 {
+        return Err(error(path, None, format!("{} data rows: a recording needs at least two", cols[0].len())));
+    }
+    Ok(cols)
+}
+
+/// Checks `time_s` is strictly increasing and uniform; returns the sample time.
+pub fn uniform_sample_time(path: &Path, t: &[f64]) -> Result<f64, BundleError> {
+    let dt = (t[t.len() - 1] - t[0]) / (t.len() - 1) as f64;
+    for (i, w) in t.windows(2).enumerate() {
+        let d = w[1] - w[0];
+        if d <= 0.0 {
+            return Err(error(
+                path,
+                Some(i + 3),
+                format!("`time_s` = {} is not after the previous {}: time must increase", w[1], w[0]),
+            ));
+        }
+        // CSV values carry a rounding of the printed digits; 1 % of a step is far above that
+        if (d - dt).abs() > 0.01 * dt {
+            return Err(error(
+                path,
+                Some(i + 3),
+                format!("`time_s` step {d} s differs from the mean step {dt} s: sampling must be uniform"),
+            ));
+        }
+    }
+    Ok(dt)
+}
+
+fn read_sweep_csv(path: &Path) -> Result<Sweep, BundleError> {
+    let mut cols = read_columns(path, &SWEEP_COLUMNS)?;
+    let dt_s = uniform_sample_time(path, &cols[0])?;
+    let speed_m3_radps = cols.pop().expect("4 columns");
+    let speed_m2_radps = cols.pop().expect("4 columns");
+    let torque_nm = cols.pop().expect("4 columns");
+    Ok(Sweep { dt_s, torque_nm, speed_m2_radps, speed_m3_radps })
+}

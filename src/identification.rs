@@ -1,0 +1,498 @@
+//! Reports of `rigtwin parametrise` and `rigtwin design-spring`.
+
+use serde::Serialize;
+use std::collections::BTreeMap;
+use std::fmt::Write as _;
+use std::path::PathBuf;
+
+use ident::{
+    design_spring, Confidence, Design, DesignSettings, FrequencyEstimate, Measurement, ModelChoice, MonteCarlo,
+    PairSolution, Parametrisation, ParametriseSettings, SeenMode, SweepSettings,
+};
+use plant::{Deflection, Rig, RigParams, Variant};
+
+use crate::bundle::load_torsional;
+
+/// Which sweep estimate feeds the parametrisation.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum FrequencyMethod {
+    /// Modal fit of the frequency response (default).
+    ModalFit,
+    /// The paper's power-over-time procedure (section 3).
+    Paper,
+}
+
+/// Where the frequencies come from.
+pub enum Source {
+    /// Sweep bundles.
+    Bundles(Vec<PathBuf>),
+    /// Frequencies typed in, with one uncertainty, and the rig that supplies the known values.
+    Measured {
+        /// The rig (its `[model]` gives the load inertias, c_delta, c_long/c_short).
+        rig: Rig,
+        /// (variant, Hz).
+        values: Vec<(Variant, f64)>,
+        /// Standard uncertainty of each, Hz.
+        sigma_hz: f64,
+    },
+}
+
+/// One variant's frequency and where it came from.
+#[derive(Debug, Clone, Serialize)]
+pub struct MeasurementReport {
+    /// Bundle file, if any.
+    pub file: Option<String>,
+    /// Variant.
+    pub variant: Variant,
+    /// The frequency used, Hz.
+    pub frequency_hz: f64,
+    /// Its standard uncertainty, Hz.
+    pub sigma_hz: f64,
+    /// The paper's estimate (bundles only).
+    pub paper: Option<FrequencyEstimate>,
+    /// The modal fit (bundles only).
+    pub modal_fit: Option<FrequencyEstimate>,
+    /// The mode the sweep showed (bundles only).
+    pub mode_seen: Option<SeenMode>,
+    /// Phase of M2 against M3 at the resonance, degrees (bundles only).
+    pub phase_m2_m3_deg: Option<f64>,
+}
+
+/// All solutions of one variant pair.
+#[derive(Debug, Clone, Serialize)]
+pub struct PairReport {
+    /// The two variants.
+    pub variants: [Variant; 2],
+    /// Every real, positive solution.
+    pub solutions: Vec<PairSolution>,
+}
+
+/// The estimate in the contract's shape, with the details beside it.
+#[derive(Debug, Clone, Serialize)]
+pub struct EstimateReport {
+    /// Model used.
+    pub model: ModelChoice,
+    /// kg m².
+    pub j_drive: f64,
+    /// Nm/rad.
+    pub c_short: f64,
+    /// Nm/rad.
+    pub c_long: f64,
+    /// 95 % interval, kg m² (Monte Carlo where it solved, else linearised).
+    pub j_drive_ci95: Option<[f64; 2]>,
+    /// 95 % interval, Nm/rad.
+    pub c_short_ci95: Option<[f64; 2]>,
+    /// "monte_carlo" or "linearised".
+    pub ci_method: &'static str,
+    /// Linearised intervals.
+    pub linearised: Option<Confidence>,
+    /// Monte Carlo intervals and failure rate.
+    pub monte_carlo: Option<MonteCarlo>,
+    /// Correlation of j_drive and c_short (linearised).
+    pub correlation: Option<f64>,
+    /// χ² of the fit.
+    pub chi2: f64,
+    /// Degrees of freedom.
+    pub dof: usize,
+    /// Model − measured shuffle frequency, Hz.
+    pub residuals_hz: BTreeMap<String, f64>,
+}
+
+/// The other model's least-squares estimate, for comparison.
+#[derive(Debug, Clone, Serialize)]
+pub struct Comparison {
+    /// Model.
+    pub model: ModelChoice,
+    /// kg m².
+    pub j_drive: Option<f64>,
+    /// Nm/rad.
+    pub c_short: Option<f64>,
+    /// χ² of its fit.
+    pub chi2: Option<f64>,
+}
+
+/// `rigtwin parametrise`.
+#[derive(Debug, Clone, Serialize)]
+pub struct ParametriseReport {
+    /// Model of the estimate and the pairs.
+    pub model: ModelChoice,
+    /// Sweep estimate used.
+    pub method: FrequencyMethod,
+    /// Frequency per variant (inverse-variance mean of repeats), Hz.
+    pub measured_hz: BTreeMap<String, f64>,
+    /// Every input.
+    pub measurements: Vec<MeasurementReport>,
+    /// Every pair of different variants.
+    pub pairs: Vec<PairReport>,
+    /// Least squares over all.
+    pub estimate: EstimateReport,
+    /// The other model.
+    pub other_model: Comparison,
+    /// Things the user should know.
+    pub warnings: Vec<String>,
+}
+
+/// Runs the whole parametrisation.
+pub fn parametrise(
+    source: Source,
+    model: ModelChoice,
+    method: FrequencyMethod,
+    sigma_override: Option<f64>,
+    settings: &ParametriseSettings,
+) -> anyhow::Result<ParametriseReport> {
+    let mut warnings = Vec::new();
+    let (template, measurements) = match source {
+        Source::Measured { rig, values, sigma_hz } => {
+            let m = values
+                .into_iter()
+                .map(|(variant, f)| MeasurementReport {
+                    file: None,
+                    variant,
+                    frequency_hz: f,
+                    sigma_hz: sigma_override.unwrap_or(sigma_hz),
+                    paper: None,
+                    modal_fit: None,
+                    mode_seen: None,
+                    phase_m2_m3_deg: None,
+                })
+                .collect();
+            (rig.model, m)
+        }
+        Source::Bundles(files) => {
+            let mut template: Option<(PathBuf, RigParams)> = None;
+            let mut m = Vec::new();
+            for f in files {
+                let b = load_torsional(&f)?;
+                if let Some((first, t)) = &template {
+                    let same = |a: f64, b: f64| (a - b).abs() <= 1e-9 * a.abs().max(b.abs());
+                    let ratio = |p: &RigParams| p.c_long() / p.c_short;
+                    if !(same(t.j_m2, b.model.j_m2)
+                        && same(t.j_m3, b.model.j_m3)
+                        && same(t.c_delta, b.model.c_delta)
+                        && same(ratio(t), ratio(&b.model)))
+                    {
+                        anyhow::bail!(
+                            "{} and {} declare different known parameters (j_m2, j_m3, c_delta or c_long/c_short): \
+                             the variants of one parametrisation must come from one rig",
+                            first.display(),
+                            f.display()
+                        );
+                    }
+                } else {
+                    template = Some((f.clone(), b.model.clone()));
+                }
+                let a =
+                    b.sweep.analyse(&SweepSettings::default()).map_err(|e| anyhow::anyhow!("{}: {e}", f.display()))?;
+                if a.mode != SeenMode::Shuffle {
+                    warnings.push(format!(
+                        "{}: the load machines are not in phase at the resonance (phase {:.0}°): the sweep may not show the shuffle mode",
+                        f.display(),
+                        a.phase_m2_m3_deg
+                    ));
+                }
+                let chosen = match method {
+                    FrequencyMethod::ModalFit => &a.modal_fit,
+                    FrequencyMethod::Paper => &a.paper,
+                };
+                m.push(MeasurementReport {
+                    file: Some(f.display().to_string()),
+                    variant: b.variant,
+                    frequency_hz: chosen.frequency_hz,
+                    sigma_hz: sigma_override.unwrap_or(chosen.sigma_hz),
+                    paper: Some(a.paper.clone()),
+                    modal_fit: Some(a.modal_fit.clone()),
+                    mode_seen: Some(a.mode),
+                    phase_m2_m3_deg: Some(a.phase_m2_m3_deg),
+                });
+            }
+            let (_, t) = template.ok_or_else(|| anyhow::anyhow!("no bundle given"))?;
+            (t, m)
+        }
+    };
+    let meas: Vec<Measurement> = measurements
+        .iter()
+        .map(|m| Measurement { variant: m.variant, frequency_hz: m.frequency_hz, sigma_hz: m.sigma_hz })
+        .collect();
+    let mut measured_hz = BTreeMap::new();
+    for v in Variant::ALL {
+        let of: Vec<&Measurement> = meas.iter().filter(|m| m.variant == v).collect();
+        if !of.is_empty() {
+            let w: f64 = of.iter().map(|m| 1.0 / (m.sigma_hz * m.sigma_hz)).sum();
+            measured_hz
+                .insert(v.to_string(), of.iter().map(|m| m.frequency_hz / (m.sigma_hz * m.sigma_hz)).sum::<f64>() / w);
+        }
+    }
+    let problem = Parametrisation::new(&template, model)?;
+    let mut pairs = Vec::new();
+    for (i, a) in meas.iter().enumerate() {
+        for b in &meas[i + 1..] {
+            if a.variant != b.variant {
+                pairs.push(PairReport { variants: [a.variant, b.variant], solutions: problem.pair(a, b, settings)? });
+            }
+        }
+    }
+    let e = problem.estimate(&meas, settings)?;
+    let mc_ci = e.monte_carlo.as_ref().and_then(|m| m.confidence.clone());
+    let (ci, ci_method) = match (&mc_ci, &e.linearised) {
+        (Some(c), _) => (Some(c.clone()), "monte_carlo"),
+        (None, l) => (l.clone(), "linearised"),
+    };
+    if let Some(mc) = &e.monte_carlo {
+        if mc.failed_fraction > 0.05 {
+            warnings.push(format!(
+                "{:.0} % of frequency sets drawn within the uncertainty have no solution on the shuffle mode: \
+                 the variants hardly separate j_drive and c_short (an ill-conditioned rig, section 4.1)",
+                100.0 * mc.failed_fraction
+            ));
+        }
+    }
+    for (name, value, ci, unit) in [
+        ("j_drive", e.j_drive, ci.as_ref().map(|c| c.j_drive_ci95), "kg m^2"),
+        ("c_short", e.c_short, ci.as_ref().map(|c| c.c_short_ci95), "Nm/rad"),
+    ] {
+        match ci {
+            Some([lo, hi]) if (hi - lo) / 2.0 > 0.5 * value => warnings.push(format!(
+                "{name} is not identifiable from these frequencies: its 95 % interval [{lo:.4}, {hi:.4}] {unit} is wider than ±50 % of {value:.4}"
+            )),
+            None => warnings.push(format!("{name} has no confidence interval: the measurements do not bound it")),
+            _ => {}
+        }
+    }
+    let estimate = EstimateReport {
+        model: e.model,
+        j_drive: e.j_drive,
+        c_short: e.c_short,
+        c_long: e.c_long,
+        j_drive_ci95: ci.as_ref().map(|c| c.j_drive_ci95),
+        c_short_ci95: ci.as_ref().map(|c| c.c_short_ci95),
+        ci_method,
+        linearised: e.linearised.clone(),
+        monte_carlo: e.monte_carlo.clone(),
+        correlation: e.correlation,
+        chi2: e.chi2,
+        dof: e.dof,
+        residuals_hz: e.residuals_hz.iter().map(|(v, r)| (v.to_string(), *r)).collect(),
+    };
+    let other = match model {
+        ModelChoice::Differential => ModelChoice::Smooth,
+        ModelChoice::Smooth => ModelChoice::Differential,
+    };
+    let quick = ParametriseSettings { monte_carlo_samples: 0, ..settings.clone() };
+    let other_fit = Parametrisation::new(&template, other)?.estimate(&meas, &quick).ok();
+    let other_model = Comparison {
+        model: other,
+        j_drive: other_fit.as_ref().map(|f| f.j_drive),
+        c_short: other_fit.as_ref().map(|f| f.c_short),
+        chi2: other_fit.as_ref().map(|f| f.chi2),
+    };
+    Ok(ParametriseReport { model, method, measured_hz, measurements, pairs, estimate, other_model, warnings })
+}
+
+fn interval(ci: Option<[f64; 2]>, digits: usize) -> String {
+    ci.map(|[a, b]| format!("[{a:.digits$}, {b:.digits$}]")).unwrap_or_else(|| "not bounded".into())
+}
+
+impl ParametriseReport {
+    /// Human-readable form.
+    pub fn human(&self) -> String {
+        let mut s = String::new();
+        let _ = writeln!(s, "Indirect parametrisation — model: {:?}, frequencies: {:?}", self.model, self.method);
+        let _ = writeln!(s, "  variant  f [Hz]      σ [Hz]    paper's method [Hz]   mode seen       source");
+        for m in &self.measurements {
+            let paper = m
+                .paper
+                .as_ref()
+                .map(|p| format!("{:.3} ± {:.3}", p.frequency_hz, p.sigma_hz))
+                .unwrap_or_else(|| "-".into());
+            let mode = m
+                .mode_seen
+                .map(|k| format!("{k:?} ({:+.0}°)", m.phase_m2_m3_deg.unwrap_or(0.0)))
+                .unwrap_or_else(|| "-".into());
+            let _ = writeln!(
+                s,
+                "  {:<7}  {:<10.4}  {:<8.4}  {:<20}  {:<14}  {}",
+                m.variant.to_string(),
+                m.frequency_hz,
+                m.sigma_hz,
+                paper,
+                mode,
+                m.file.as_deref().unwrap_or("typed in")
+            );
+        }
+        let _ = writeln!(s, "\n  pair    j_drive [kg m^2]  c_short [Nm/rad]  measured on the shuffle mode");
+        for p in &self.pairs {
+            let name = format!("{}/{}", p.variants[0], p.variants[1]);
+            if p.solutions.is_empty() {
+                let _ = writeln!(s, "  {name:<7} no real positive solution");
+            }
+            for sol in &p.solutions {
+                let modes: Vec<String> =
+                    sol.placements.iter().map(|pl| format!("{} at f{}", pl.variant, pl.mode)).collect();
+                let _ = writeln!(
+                    s,
+                    "  {name:<7} {:>16.4}  {:>16.1}  {} ({})",
+                    sol.j_drive,
+                    sol.c_short,
+                    if sol.shuffle { "yes" } else { "no" },
+                    modes.join(", ")
+                );
+            }
+        }
+        let e = &self.estimate;
+        let _ = writeln!(
+            s,
+            "\n  least squares over {} measurements (χ² = {:.3}, dof {}), {} 95 % intervals:",
+            self.measurements.len(),
+            e.chi2,
+            e.dof,
+            e.ci_method.replace('_', " ")
+        );
+        let _ = writeln!(s, "    j_drive = {:.4} kg m^2   {}", e.j_drive, interval(e.j_drive_ci95, 4));
+        let _ = writeln!(s, "    c_short = {:.1} Nm/rad   {}", e.c_short, interval(e.c_short_ci95, 1));
+        let _ = writeln!(s, "    c_long  = {:.1} Nm/rad", e.c_long);
+        if let Some(mc) = &e.monte_carlo {
+            let _ = writeln!(
+                s,
+                "    Monte Carlo: {} draws, {:.1} % without a solution",
+                mc.samples,
+                100.0 * mc.failed_fraction
+            );
+        }
+        if let Some(l) = &e.linearised {
+            let _ = writeln!(
+                s,
+                "    linearised: j_drive {}, c_short {}",
+                interval(Some(l.j_drive_ci95), 4),
+                interval(Some(l.c_short_ci95), 1)
+            );
+        }
+        let o = &self.other_model;
+        match (o.j_drive, o.c_short, o.chi2) {
+            (Some(j), Some(c), Some(x)) => {
+                let _ = writeln!(
+                    s,
+                    "  for comparison, the {:?} model: j_drive {j:.4} kg m^2, c_short {c:.1} Nm/rad, χ² = {x:.3}",
+                    o.model
+                );
+            }
+            _ => {
+                let _ = writeln!(s, "  for comparison, the {:?} model finds no estimate", o.model);
+            }
+        }
+        for w in &self.warnings {
+            let _ = writeln!(s, "  warning: {w}");
+        }
+        s
+    }
+}
+
+/// `rigtwin design-spring`: the design study, and the extra shaft's bending if described.
+#[derive(Debug, Clone, Serialize)]
+pub struct DesignReport {
+    /// Rig name.
+    pub rig: String,
+    /// The study.
+    pub design: Design,
+    /// Deflection of the rig's `[bending]` shaft line under its own weight (section 2.5).
+    pub bending: Option<Deflection>,
+}
+
+/// Runs the design study for a rig.
+pub fn design(rig: &Rig, model: ModelChoice, settings: &DesignSettings) -> anyhow::Result<DesignReport> {
+    let design = design_spring(&rig.model, model, settings)?;
+    let bending = match &rig.bending {
+        Some(beam) => Some(beam.deflection(plant::bending::GRAVITY_M_PER_S2, 4000)?),
+        None => None,
+    };
+    Ok(DesignReport { rig: rig.name.clone(), design, bending })
+}
+
+fn pct(x: f64) -> String {
+    if x >= 1e6 {
+        "not identifiable".into()
+    } else {
+        format!("±{:.1} %", 100.0 * x)
+    }
+}
+
+impl DesignReport {
+    /// Human-readable form.
+    pub fn human(&self) -> String {
+        let d = &self.design;
+        let st = &d.settings;
+        let mut s = String::new();
+        let _ = writeln!(
+            s,
+            "Additional-spring design — {} ({:?} model), σ_f = {} Hz per variant, target ±{:.1} % (95 %)",
+            self.rig,
+            d.model,
+            st.sigma_hz,
+            100.0 * st.target
+        );
+        let sets = |v: &[Variant]| v.iter().map(|x| x.to_string()).collect::<Vec<_>>().join("+");
+        let _ = writeln!(
+            s,
+            "  the rig's spring, c_delta = {:.0} Nm/rad:",
+            d.current.first().map(|r| r.c_delta).unwrap_or(0.0)
+        );
+        for r in &d.current {
+            let _ = writeln!(
+                s,
+                "    {:<12} shift {:.3} Hz   j_drive {:<18} c_short {}",
+                sets(&r.variants),
+                r.shift_hz,
+                pct(r.j_drive_rel_ci95),
+                pct(r.c_short_rel_ci95)
+            );
+        }
+        match &d.recommended {
+            Some(r) => {
+                let _ = writeln!(
+                    s,
+                    "  recommended: c_delta = {:.0} Nm/rad with {} (the stiffest that meets the target): j_drive {}, c_short {}, shift {:.3} Hz",
+                    r.c_delta,
+                    sets(&r.variants),
+                    pct(r.j_drive_rel_ci95),
+                    pct(r.c_short_rel_ci95),
+                    r.shift_hz
+                );
+            }
+            None => {
+                let b = &d.best;
+                let _ = writeln!(
+                    s,
+                    "  no c_delta in the range meets the target; best: c_delta = {:.0} Nm/rad with {}: j_drive {}, c_short {} — a smaller σ_f is needed",
+                    b.c_delta,
+                    sets(&b.variants),
+                    pct(b.j_drive_rel_ci95),
+                    pct(b.c_short_rel_ci95)
+                );
+            }
+        }
+        let _ = writeln!(
+            s,
+            "  c_delta [Nm/rad]   {}",
+            st.variant_sets.iter().map(|v| format!("{:<24}", sets(v))).collect::<String>()
+        );
+        for chunk in d.rows.chunks(st.variant_sets.len()).step_by(3) {
+            let cells: String = chunk
+                .iter()
+                .map(|r| format!("{:<24}", format!("{} / {}", pct(r.j_drive_rel_ci95), pct(r.c_short_rel_ci95))))
+                .collect();
+            let _ = writeln!(s, "  {:>14.0}     {cells}", chunk[0].c_delta);
+        }
+        let _ = writeln!(s, "  (cells: 95 % half-width of j_drive / c_short)");
+        if let Some(b) = &self.bending {
+            let _ = writeln!(
+                s,
+                "  bending under self-weight (section 2.5): max {:.1} µm at {:.3} m; bearing forces {:.1} N, {:.1} N",
+                b.max_m * 1e6,
+                b.at_m,
+                b.bearing_forces_n[0],
+                b.bearing_forces_n[1]
+            );
+        }
+        s
+    }
+}
