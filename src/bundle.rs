@@ -105,7 +105,10 @@ pub fn read_columns(path: &Path, names: &[&str]) -> Result<Vec<Vec<f64>>, Bundle
 
 /// Checks `time_s` is strictly increasing and uniform; returns the sample time.
 pub fn uniform_sample_time(path: &Path, t: &[f64]) -> Result<f64, BundleError> {
-    let dt = (t[t.len() - 1] - t[0]) / (t.len() - 1) as f64;
+    // the median step is the reference: one bad row cannot move it
+    let mut steps: Vec<f64> = t.windows(2).map(|w| w[1] - w[0]).collect();
+    steps.sort_by(|a, b| a.total_cmp(b));
+    let median = steps[steps.len() / 2];
     for (i, w) in t.windows(2).enumerate() {
         let d = w[1] - w[0];
         if d <= 0.0 {
@@ -116,15 +119,15 @@ pub fn uniform_sample_time(path: &Path, t: &[f64]) -> Result<f64, BundleError> {
             ));
         }
         // CSV values carry a rounding of the printed digits; 1 % of a step is far above that
-        if (d - dt).abs() > 0.01 * dt {
+        if (d - median).abs() > 0.01 * median {
             return Err(error(
                 path,
                 Some(i + 3),
-                format!("`time_s` step {d} s differs from the mean step {dt} s: sampling must be uniform"),
+                format!("`time_s` step {d} s differs from the typical step {median} s: sampling must be uniform"),
             ));
         }
     }
-    Ok(dt)
+    Ok((t[t.len() - 1] - t[0]) / (t.len() - 1) as f64)
 }
 
 fn read_sweep_csv(path: &Path) -> Result<Sweep, BundleError> {

@@ -30,7 +30,7 @@ pub enum Source {
     /// Frequencies typed in, with one uncertainty, and the rig that supplies the known values.
     Measured {
         /// The rig (its `[model]` gives the load inertias, c_delta, c_long/c_short).
-        rig: Rig,
+        rig: Box<Rig>,
         /// (variant, Hz).
         values: Vec<(Variant, f64)>,
         /// Standard uncertainty of each, Hz.
@@ -95,6 +95,8 @@ pub struct EstimateReport {
     pub chi2: f64,
     /// Degrees of freedom.
     pub dof: usize,
+    /// √max(1, χ²/dof): the factor by which the intervals' frequency uncertainties were widened.
+    pub sigma_scale: f64,
     /// Model − measured shuffle frequency, Hz.
     pub residuals_hz: BTreeMap<String, f64>,
 }
@@ -259,6 +261,15 @@ pub fn parametrise(
             _ => {}
         }
     }
+    if e.sigma_scale > 3f64.sqrt() {
+        warnings.push(format!(
+            "the {:?} model does not explain all variants within their uncertainties (χ²/dof = {:.1}): \
+             the intervals are widened by √(χ²/dof) = {:.2}; a residual this size points to an effect the model lacks",
+            e.model,
+            e.chi2 / e.dof as f64,
+            e.sigma_scale
+        ));
+    }
     let estimate = EstimateReport {
         model: e.model,
         j_drive: e.j_drive,
@@ -272,6 +283,7 @@ pub fn parametrise(
         correlation: e.correlation,
         chi2: e.chi2,
         dof: e.dof,
+        sigma_scale: e.sigma_scale,
         residuals_hz: e.residuals_hz.iter().map(|(v, r)| (v.to_string(), *r)).collect(),
     };
     let other = match model {

@@ -183,10 +183,10 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             let source = match (bundles.is_empty(), measured.is_empty()) {
                 (false, true) => Source::Bundles(bundles),
                 (true, false) => Source::Measured {
-                    rig: match &rig {
+                    rig: Box::new(match &rig {
                         Some(f) => load_rig(f)?,
                         None => paper::rig(),
-                    },
+                    }),
                     values: measured,
                     sigma_hz: sigma_hz.unwrap_or(0.005),
                 },

@@ -128,6 +128,8 @@ pub struct Estimate {
     pub chi2: f64,
     /// Degrees of freedom, measurements − 2.
     pub dof: usize,
+    /// Factor applied to the frequency uncertainties for the intervals, √max(1, χ²/dof).
+    pub sigma_scale: f64,
     /// Model − measured shuffle frequency per variant, Hz.
     pub residuals_hz: Vec<(Variant, f64)>,
     /// Linearised 95 % intervals (null when the problem is singular at the estimate).
@@ -427,7 +429,12 @@ impl Parametrisation {
             Confidence { j_drive_ci95: [j - 1.96 * sj, j + 1.96 * sj], c_short_ci95: [c - 1.96 * sc, c + 1.96 * sc] }
         });
         let correlation = cov.as_ref().map(|m| m[(0, 1)] / (m[(0, 0)] * m[(1, 1)]).sqrt());
-        let monte_carlo = (settings.monte_carlo_samples > 0).then(|| self.monte_carlo(meas, (j, c), &starts, settings));
+        // a misfit beyond the stated uncertainties (χ²/dof > 1) widens both intervals alike:
+        // the draws use σ·√(χ²/dof) (Birge ratio)
+        let widened: Vec<Measurement> =
+            meas.iter().map(|m| Measurement { sigma_hz: m.sigma_hz * scale.sqrt(), ..*m }).collect();
+        let monte_carlo =
+            (settings.monte_carlo_samples > 0).then(|| self.monte_carlo(&widened, (j, c), &starts, settings));
         let residuals_hz = meas
             .iter()
             .map(|m| {
@@ -441,6 +448,7 @@ impl Parametrisation {
             c_long: self.ratio * c,
             chi2,
             dof,
+            sigma_scale: scale.sqrt(),
             residuals_hz,
             linearised,
             correlation,

@@ -34,10 +34,9 @@ pub fn high_pass(x: &[f64], dt_s: f64, cutoff_hz: f64) -> Vec<f64> {
     let mut planner = FftPlanner::new();
     planner.plan_fft_forward(n).process(&mut buf);
     let df = 1.0 / (n as f64 * dt_s);
-    for k in 0..n {
-        let f = k.min(n - k) as f64 * df;
-        if f < cutoff_hz {
-            buf[k] = Complex64::new(0.0, 0.0);
+    for (k, line) in buf.iter_mut().enumerate() {
+        if (k.min(n - k) as f64) * df < cutoff_hz {
+            *line = Complex64::new(0.0, 0.0);
         }
     }
     planner.plan_fft_inverse(n).process(&mut buf);
