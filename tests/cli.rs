@@ -233,3 +233,30 @@ fn damping_ratio_option_damps_the_shuffle_mode() {
     assert!(!out.status.success());
     assert!(String::from_utf8_lossy(&out.stderr).contains("damping"));
 }
+
+#[test]
+fn design_spring_checks_the_bending_of_a_described_shaft_line() {
+    // A steel shaft, 40 mm solid, on bearings at 0 and 0.6 m, overhanging 0.4 m to a joint
+    // that carries no moment: Roark's tip deflection of a beam with one overhang under its own
+    // weight w, w a (4a²L − L³ + 3a³)/(24 E I), is the largest deflection here.
+    let dir = tempdir();
+    let f = dir.join("bending.toml");
+    let text = format!(
+        "{MODEL}[bending]\nbearing_a_m = 0.0\nbearing_b_m = 0.6\nsegments = [\n  {{ length_m = 0.6, outer_diameter_m = 0.04 }},\n  {{ length_m = 0.4, outer_diameter_m = 0.04 }},\n]\n"
+    );
+    std::fs::write(&f, text).unwrap();
+    let v = json(&["design-spring", "--rig", f.to_str().unwrap(), "--json"]);
+    let (span, a, d) = (0.6_f64, 0.4_f64, 0.04_f64);
+    let area = std::f64::consts::PI * d * d / 4.0;
+    let i = std::f64::consts::PI * d.powi(4) / 64.0;
+    let w = 7850.0 * area * 9.80665;
+    let tip = w * a * (4.0 * a * a * span - span.powi(3) + 3.0 * a.powi(3)) / (24.0 * 210e9 * i);
+    let got = v["bending"]["max_m"].as_f64().unwrap();
+    approx::assert_relative_eq!(got, tip, max_relative = 1e-3);
+    assert_abs_diff_eq!(v["bending"]["at_m"].as_f64().unwrap(), 1.0, epsilon = 1e-3);
+    // a bearing beyond the shaft is refused with the key
+    std::fs::write(&f, format!("{MODEL}[bending]\nbearing_a_m = 0.0\nbearing_b_m = 2.0\nsegments = [ {{ length_m = 0.6, outer_diameter_m = 0.04 }} ]\n")).unwrap();
+    let out = rigtwin(&["design-spring", "--rig", f.to_str().unwrap()]);
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("bending.bearing_b_m"));
+}
