@@ -138,3 +138,87 @@ fn read_sweep_csv(path: &Path) -> Result<Sweep, BundleError> {
     let torque_nm = cols.pop().expect("4 columns");
     Ok(Sweep { dt_s, torque_nm, speed_m2_radps, speed_m3_radps })
 }
+
+/// A `bearing_shake` bundle, loaded.
+#[derive(Debug, Clone)]
+pub struct BearingBundle {
+    /// The TOML file.
+    pub file: PathBuf,
+    /// The two tests (x-excitation, y-excitation).
+    pub tests: [ident::ShakeTest; 2],
+    /// Excited band, Hz.
+    pub band_hz: (f64, f64),
+    /// Dry-system support.
+    pub support: plant::Support,
+    /// Declared element structure.
+    pub structure: ident::Structure,
+    /// Declared coupling.
+    pub coupling: ident::Coupling,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct BearingFile {
+    kind: String,
+    tests: Vec<String>,
+    f_min_hz: f64,
+    f_max_hz: f64,
+    support: plant::Support,
+    model: BearingModelFile,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct BearingModelFile {
+    structure: ident::Structure,
+    coupling: ident::Coupling,
+}
+
+/// The columns of a shake-test CSV.
+pub const SHAKE_COLUMNS: [&str; 5] = ["time_s", "force_x_N", "force_y_N", "disp_x_m", "disp_y_m"];
+
+/// Reads a `bearing_shake` bundle and its two CSVs.
+pub fn load_bearing(file: &Path) -> Result<BearingBundle, BundleError> {
+    let text = std::fs::read_to_string(file).map_err(|e| error(file, None, format!("cannot read: {e}")))?;
+    let header: Header = toml::from_str(&text).map_err(|e| error(file, None, e.to_string().trim_end().to_string()))?;
+    if header.kind != "bearing_shake" {
+        return Err(error(file, None, format!("`kind` = \"{}\": expected \"bearing_shake\"", header.kind)));
+    }
+    let raw: BearingFile =
+        toml::from_str(&text).map_err(|e| error(file, None, e.to_string().trim_end().to_string()))?;
+    debug_assert_eq!(raw.kind, "bearing_shake");
+    if raw.tests.len() != 2 {
+        return Err(error(
+            file,
+            None,
+            format!("`tests` lists {} files: expected two (x then y excitation)", raw.tests.len()),
+        ));
+    }
+    if !(raw.f_min_hz >= 0.0 && raw.f_max_hz > raw.f_min_hz) {
+        return Err(error(
+            file,
+            None,
+            format!("`f_min_hz` = {} and `f_max_hz` = {}: expected 0 ≤ f_min < f_max", raw.f_min_hz, raw.f_max_hz),
+        ));
+    }
+    raw.support.validate("support").map_err(|e| error(file, None, e.to_string()))?;
+    let dir = file.parent().unwrap_or(Path::new("."));
+    let read = |name: &str| -> Result<ident::ShakeTest, BundleError> {
+        let path = dir.join(name);
+        let mut cols = read_columns(&path, &SHAKE_COLUMNS)?;
+        let dt_s = uniform_sample_time(&path, &cols[0])?;
+        let disp_y_m = cols.pop().expect("5 columns");
+        let disp_x_m = cols.pop().expect("5 columns");
+        let force_y_n = cols.pop().expect("5 columns");
+        let force_x_n = cols.pop().expect("5 columns");
+        Ok(ident::ShakeTest { dt_s, force_x_n, force_y_n, disp_x_m, disp_y_m })
+    };
+    Ok(BearingBundle {
+        file: file.to_path_buf(),
+        tests: [read(&raw.tests[0])?, read(&raw.tests[1])?],
+        band_hz: (raw.f_min_hz, raw.f_max_hz),
+        support: raw.support,
+        structure: raw.model.structure,
+        coupling: raw.model.coupling,
+    })
+}

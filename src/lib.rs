@@ -1,5 +1,6 @@
 //! rigtwin: the command-line tool's library side — the rig file format and the reports the
 //! commands print. The physics is in the `plant` crate.
+pub mod bearing;
 pub mod bundle;
 pub mod identification;
 pub mod report;

@@ -92,6 +92,27 @@ enum Command {
         #[arg(long)]
         json: bool,
     },
+    /// Bearing/seal K, C, M from a two-test shake bundle (San Andrés 2011).
+    Bearing {
+        /// bearing_shake bundle.
+        #[arg(value_name = "BUNDLE.toml")]
+        bundle: PathBuf,
+        /// Element structure; default: the bundle's declared one.
+        #[arg(long, value_enum)]
+        structure: Option<StructureArg>,
+        /// Coupling; default: the bundle's declared one.
+        #[arg(long, value_enum)]
+        coupling: Option<CouplingArg>,
+        /// Estimator.
+        #[arg(long, value_enum, default_value_t = MethodArg::Ivfm)]
+        method: MethodArg,
+        /// Write measured and fitted impedances as SVG.
+        #[arg(long, value_name = "FILE.svg")]
+        plot: Option<PathBuf>,
+        /// Print JSON instead of text.
+        #[arg(long)]
+        json: bool,
+    },
     /// Which additional spring and variants make j_drive and c_short identifiable.
     DesignSpring {
         /// Rig description (default: the paper's); its j_drive and c_short are the expected values.
@@ -110,6 +131,27 @@ enum Command {
         #[arg(long)]
         json: bool,
     },
+}
+
+#[derive(Clone, Copy, clap::ValueEnum)]
+enum StructureArg {
+    #[value(name = "KC")]
+    Kc,
+    #[value(name = "KCM")]
+    Kcm,
+}
+
+#[derive(Clone, Copy, clap::ValueEnum)]
+enum CouplingArg {
+    Direct,
+    Full,
+}
+
+#[derive(Clone, Copy, clap::ValueEnum)]
+enum MethodArg {
+    Ivfm,
+    Direct,
+    LeastSquares,
 }
 
 #[derive(Clone, Copy, clap::ValueEnum)]
@@ -195,6 +237,32 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             };
             let settings = ParametriseSettings { monte_carlo_samples: samples, ..Default::default() };
             let rep = identification::parametrise(source, model.into(), method, sigma_hz, &settings)?;
+            if json {
+                print_json(&rep)?;
+            } else {
+                print!("{}", rep.human());
+            }
+        }
+        Command::Bearing { bundle, structure, coupling, method, plot, json } => {
+            let b = rigtwin::bundle::load_bearing(&bundle)?;
+            let structure = structure.map(|s| match s {
+                StructureArg::Kc => ident::Structure::KC,
+                StructureArg::Kcm => ident::Structure::KCM,
+            });
+            let coupling = coupling.map(|c| match c {
+                CouplingArg::Direct => ident::Coupling::Direct,
+                CouplingArg::Full => ident::Coupling::Full,
+            });
+            let method = match method {
+                MethodArg::Ivfm => ident::Method::Ivfm,
+                MethodArg::Direct => ident::Method::Direct,
+                MethodArg::LeastSquares => ident::Method::LeastSquares,
+            };
+            let (rep, imp) = rigtwin::bearing::identify(&b, structure, coupling, method)?;
+            if let Some(p) = &plot {
+                let title = format!("{} — {:?} {:?}/{:?}", bundle.display(), rep.method, rep.structure, rep.coupling);
+                rigtwin::bearing::plot(p, &imp, &b.support, &rep.element, &title)?;
+            }
             if json {
                 print_json(&rep)?;
             } else {

@@ -7,14 +7,18 @@
 //!   (sections 2.3, 3; Tables 4, 5), every real positive solution of every pair, the
 //!   least-squares estimate, linearised and Monte Carlo confidence intervals.
 //! - [`design`]: which additional spring and which variants make the two identifiable.
+//! - [`bearing`]: bearing/seal impedances from two shake tests, the direct curve fit and the
+//!   instrumental variable filter method (San Andrés 2011).
 #![warn(missing_docs)]
 
+pub mod bearing;
 pub mod design;
 pub mod error;
 pub mod parametrise;
 pub mod signal;
 pub mod sweep;
 
+pub use bearing::{BearingFit, Coupling, Impedances, IvfmSettings, Method, ShakeTest, Structure, R2};
 pub use design::{design_spring, Design, DesignRow, DesignSettings};
 pub use error::{IdentError, Result};
 pub use parametrise::{

@@ -17,10 +17,13 @@
 //! - **State space** ([`statespace`]): x = [qᵀ q̇ᵀ]ᵀ, u = [M_m2, M_drive, M_m3] (eqs. 35–38).
 //! - **Shuffle mode** ([`shuffle`]): drive against both outputs, outputs in phase, side shafts
 //!   as nodes.
+//! - **Bearing block** ([`bearing`]): K/C/M force coefficients on a soft support, impedance
+//!   H = (K + Kh) − ω²(M + Mh) + iω(C + Ch), flexibility G = H⁻¹, state space (San Andrés 2011).
 //!
 //! No I/O: file formats live in the `rigtwin` package.
 #![warn(missing_docs)]
 
+pub mod bearing;
 pub mod bending;
 pub mod chain;
 pub mod error;
@@ -33,6 +36,7 @@ pub mod segment;
 pub mod shuffle;
 pub mod statespace;
 
+pub use bearing::{BearingModel, CoefficientTable, Coefficients, Support};
 pub use bending::{Beam, BeamSegment, Deflection};
 pub use chain::{Body, Chain};
 pub use error::{PlantError, Result};
