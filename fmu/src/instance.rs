@@ -1,0 +1,543 @@
+//! One FMU instance, independent of the FMI version: its mode (checked at every entry, as the
+//! Reference FMUs do), parameters, states, inputs, the model, and what the standard asks of
+//! each call. The version glue (`fmi2`, `fmi3`) only converts arguments and statuses.
+
+use nalgebra::DVector;
+
+use crate::model::{LinearModel, NU, NX};
+use crate::params::FmuParams;
+use crate::variables::{
+    lookup, parameter_set, parameter_values, variant_number, Causality, Constraint, Kind, Slot, PARAMETERS,
+};
+
+/// Whether the instance simulates itself (co-simulation) or lends its derivatives to the
+/// importer's solver (model exchange).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Interface {
+    /// Model exchange.
+    ModelExchange,
+    /// Co-simulation.
+    CoSimulation,
+}
+
+/// The instance's state in the FMI state machine.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Mode {
+    /// After instantiation.
+    Instantiated,
+    /// Between Enter- and ExitInitializationMode.
+    InitializationMode,
+    /// Model exchange: event mode.
+    EventMode,
+    /// Model exchange: continuous-time mode.
+    ContinuousTimeMode,
+    /// Co-simulation: step mode.
+    StepMode,
+    /// After Terminate.
+    Terminated,
+}
+
+/// Status escalation OK < Warning < Discard < Error < Fatal.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
+pub enum Status {
+    /// Success.
+    Ok,
+    /// Success with something to say.
+    Warning,
+    /// The step was not done.
+    Discard,
+    /// The call failed; the instance can be reset, restored or freed.
+    Error,
+    /// The instance is unusable.
+    Fatal,
+}
+
+/// A failed call: its status and the message logged for it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Failure {
+    /// Status returned.
+    pub status: Status,
+    /// Message logged.
+    pub message: String,
+}
+
+/// Result of an instance call.
+pub type Res<T> = Result<T, Failure>;
+
+fn error<T>(message: impl Into<String>) -> Res<T> {
+    Err(Failure { status: Status::Error, message: message.into() })
+}
+
+/// Where log messages go (the importer's callback, wrapped by the version glue).
+pub trait Logger {
+    /// Passes one message on.
+    fn log(&self, status: Status, category: &str, message: &str);
+}
+
+/// A saved instance state (Get/SetFMUState).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Snapshot {
+    mode: Mode,
+    time: f64,
+    x: Vec<f64>,
+    u: Vec<f64>,
+    params: [f64; 29],
+    variant: i32,
+}
+
+const SNAPSHOT_MAGIC: &[u8; 8] = b"RIGTWIN1";
+
+impl Snapshot {
+    /// Bytes of the state (SerializeFMUState).
+    pub fn to_bytes(&self) -> Vec<u8> {
+        let mut b = SNAPSHOT_MAGIC.to_vec();
+        b.push(self.mode as u8);
+        b.extend(self.variant.to_le_bytes());
+        for v in std::iter::once(&self.time).chain(&self.x).chain(&self.u).chain(&self.params) {
+            b.extend(v.to_le_bytes());
+        }
+        b
+    }
+
+    /// Length of [`Snapshot::to_bytes`].
+    pub const BYTES: usize = 8 + 1 + 4 + 8 * (1 + NX + NU + 29);
+
+    /// The state of serialized bytes, if they are one.
+    pub fn from_bytes(b: &[u8]) -> Option<Snapshot> {
+        if b.len() != Self::BYTES || &b[..8] != SNAPSHOT_MAGIC {
+            return None;
+        }
+        let mode = [
+            Mode::Instantiated,
+            Mode::InitializationMode,
+            Mode::EventMode,
+            Mode::ContinuousTimeMode,
+            Mode::StepMode,
+            Mode::Terminated,
+        ]
+        .get(b[8] as usize)
+        .copied()?;
+        let variant = i32::from_le_bytes(b[9..13].try_into().ok()?);
+        let f: Vec<f64> = b[13..].chunks_exact(8).map(|c| f64::from_le_bytes(c.try_into().expect("8 bytes"))).collect();
+        let mut params = [0.0; 29];
+        params.copy_from_slice(&f[1 + NX + NU..]);
+        Some(Snapshot {
+            mode,
+            time: f[0],
+            x: f[1..1 + NX].to_vec(),
+            u: f[1 + NX..1 + NX + NU].to_vec(),
+            params,
+            variant,
+        })
+    }
+}
+
+/// One instance.
+pub struct Instance {
+    /// Instance name given by the importer.
+    pub name: String,
+    /// ME or CS.
+    pub interface: Interface,
+    /// Current mode.
+    pub mode: Mode,
+    /// Whether informational messages are logged (errors and warnings always are).
+    pub logging_on: bool,
+    logger: Box<dyn Logger>,
+    params: [f64; 29],
+    variant: i32,
+    start: ([f64; 29], i32),
+    x: DVector<f64>,
+    u: DVector<f64>,
+    time: f64,
+    model: Option<LinearModel>,
+}
+
+impl Instance {
+    /// A new instance with the start values of `p`.
+    pub fn new(name: &str, interface: Interface, logger: Box<dyn Logger>, logging_on: bool, p: &FmuParams) -> Instance {
+        let params = parameter_values(p);
+        let variant = variant_number(p.variant);
+        Instance {
+            name: name.to_string(),
+            interface,
+            mode: Mode::Instantiated,
+            logging_on,
+            logger,
+            params,
+            variant,
+            start: (params, variant),
+            x: DVector::zeros(NX),
+            u: DVector::zeros(NU),
+            time: 0.0,
+            model: None,
+        }
+    }
+
+    /// Logs a failure (always) and returns its status.
+    pub fn report(&self, f: &Failure) -> Status {
+        let category = if f.status >= Status::Error { "logStatusError" } else { "logStatusWarning" };
+        self.logger.log(f.status, category, &f.message);
+        f.status
+    }
+
+    /// Logs an informational message when logging is on.
+    pub fn info(&self, message: &str) {
+        if self.logging_on {
+            self.logger.log(Status::Ok, "logEvents", message);
+        }
+    }
+
+    /// Fails unless the instance is in one of `allowed`.
+    pub fn expect(&self, function: &str, allowed: &[Mode]) -> Res<()> {
+        if allowed.contains(&self.mode) {
+            Ok(())
+        } else {
+            error(format!("{function} is not allowed in {:?} (allowed: {allowed:?})", self.mode))
+        }
+    }
+
+    fn params(&self) -> Res<FmuParams> {
+        parameter_set(&self.params, self.variant).or_else(error)
+    }
+
+    fn model(&mut self) -> Res<&mut LinearModel> {
+        if self.model.is_none() {
+            let p = self.params()?;
+            self.model =
+                Some(LinearModel::new(&p).or_else(|e| error(format!("the parameters do not describe a model: {e}")))?);
+        }
+        Ok(self.model.as_mut().expect("built above"))
+    }
+
+    /// Enter initialization mode at `start_time`.
+    pub fn enter_initialization_mode(&mut self, start_time: f64) -> Res<()> {
+        self.expect("EnterInitializationMode", &[Mode::Instantiated])?;
+        if !start_time.is_finite() {
+            return error(format!("start time {start_time} is not finite"));
+        }
+        self.time = start_time;
+        self.mode = Mode::InitializationMode;
+        Ok(())
+    }
+
+    /// Leave initialization mode: the parameters must now describe a model.
+    pub fn exit_initialization_mode(&mut self) -> Res<()> {
+        self.expect("ExitInitializationMode", &[Mode::InitializationMode])?;
+        self.model()?;
+        self.mode = match self.interface {
+            Interface::CoSimulation => Mode::StepMode,
+            Interface::ModelExchange => Mode::EventMode,
+        };
+        self.info("initialized");
+        Ok(())
+    }
+
+    /// Terminate.
+    pub fn terminate(&mut self) -> Res<()> {
+        self.expect("Terminate", &[Mode::EventMode, Mode::ContinuousTimeMode, Mode::StepMode])?;
+        self.mode = Mode::Terminated;
+        Ok(())
+    }
+
+    /// Reset to the state right after instantiation.
+    pub fn reset(&mut self) {
+        (self.params, self.variant) = self.start;
+        self.x.fill(0.0);
+        self.u.fill(0.0);
+        self.time = 0.0;
+        self.model = None;
+        self.mode = Mode::Instantiated;
+    }
+
+    /// Model exchange: enter event mode.
+    pub fn enter_event_mode(&mut self) -> Res<()> {
+        self.expect("EnterEventMode", &[Mode::EventMode, Mode::ContinuousTimeMode])?;
+        self.mode = Mode::EventMode;
+        Ok(())
+    }
+
+    /// Model exchange: enter continuous-time mode.
+    pub fn enter_continuous_time_mode(&mut self) -> Res<()> {
+        self.expect("EnterContinuousTimeMode", &[Mode::EventMode])?;
+        self.mode = Mode::ContinuousTimeMode;
+        Ok(())
+    }
+
+    /// Model exchange: set the time.
+    pub fn set_time(&mut self, t: f64) -> Res<()> {
+        self.expect("SetTime", &[Mode::EventMode, Mode::ContinuousTimeMode])?;
+        if !t.is_finite() {
+            return error(format!("time {t} is not finite"));
+        }
+        self.time = t;
+        Ok(())
+    }
+
+    /// Model exchange: the continuous states.
+    pub fn continuous_states(&self, out: &mut [f64]) -> Res<()> {
+        if out.len() != NX {
+            return error(format!("{} continuous states asked for; the model has {NX}", out.len()));
+        }
+        out.copy_from_slice(self.x.as_slice());
+        Ok(())
+    }
+
+    /// Model exchange: set the continuous states.
+    pub fn set_continuous_states(&mut self, x: &[f64]) -> Res<()> {
+        self.expect("SetContinuousStates", &[Mode::ContinuousTimeMode])?;
+        if x.len() != NX {
+            return error(format!("{} continuous states given; the model has {NX}", x.len()));
+        }
+        if let Some(i) = x.iter().position(|v| !v.is_finite()) {
+            return error(format!("continuous state {i} is not finite ({})", x[i]));
+        }
+        self.x.copy_from_slice(x);
+        Ok(())
+    }
+
+    /// Model exchange: ẋ.
+    pub fn derivatives(&mut self, out: &mut [f64]) -> Res<()> {
+        self.expect(
+            "GetContinuousStateDerivatives",
+            &[Mode::InitializationMode, Mode::EventMode, Mode::ContinuousTimeMode, Mode::Terminated],
+        )?;
+        if out.len() != NX {
+            return error(format!("{} derivatives asked for; the model has {NX}", out.len()));
+        }
+        let (x, u) = (self.x.clone(), self.u.clone());
+        out.copy_from_slice(self.model()?.derivatives(&x, &u).as_slice());
+        Ok(())
+    }
+
+    /// Co-simulation: one communication step of length `h` from `t`.
+    pub fn do_step(&mut self, t: f64, h: f64) -> Res<()> {
+        self.expect("DoStep", &[Mode::StepMode])?;
+        if !(h > 0.0 && h.is_finite()) {
+            return error(format!("communication step size {h} s must be positive and finite"));
+        }
+        if (t - self.time).abs() > 1e-9 * self.time.abs().max(h) {
+            return error(format!("currentCommunicationPoint {t} s differs from the FMU's time {} s", self.time));
+        }
+        let u = self.u.clone();
+        let mut x = self.x.clone();
+        self.model()?.step(&mut x, &u, h);
+        self.x = x;
+        self.time = t + h;
+        Ok(())
+    }
+
+    /// Current time, s.
+    pub fn time(&self) -> f64 {
+        self.time
+    }
+
+    /// Float64 values by value reference.
+    pub fn get_f64(&mut self, vrs: &[u32], out: &mut [f64]) -> Res<()> {
+        if vrs.len() != out.len() {
+            return error("the number of value references and values differ");
+        }
+        let needs_model =
+            vrs.iter().any(|&v| matches!(lookup(v).map(|x| x.slot), Some(Slot::Derivative(_) | Slot::Torque(_))));
+        let computed = if needs_model {
+            let (x, u) = (self.x.clone(), self.u.clone());
+            let m = self.model()?;
+            Some((m.derivatives(&x, &u), &m.torque * &x))
+        } else {
+            None
+        };
+        for (&vr, o) in vrs.iter().zip(out.iter_mut()) {
+            let var = lookup(vr).filter(|v| v.kind == Kind::Float64);
+            *o = match var.map(|v| v.slot) {
+                Some(Slot::Time) => self.time,
+                Some(Slot::Param(i)) => self.params[i],
+                Some(Slot::State(i)) => self.x[i],
+                Some(Slot::Input(i)) => self.u[i],
+                Some(Slot::Derivative(i)) => computed.as_ref().expect("computed above").0[i],
+                Some(Slot::Torque(i)) => computed.as_ref().expect("computed above").1[i],
+                _ => return error(format!("value reference {vr} is not a Float64 variable of this FMU")),
+            };
+        }
+        Ok(())
+    }
+
+    /// Sets Float64 values; nothing is changed if any value is refused.
+    pub fn set_f64(&mut self, vrs: &[u32], values: &[f64]) -> Res<()> {
+        if vrs.len() != values.len() {
+            return error("the number of value references and values differ");
+        }
+        let before_init = [Mode::Instantiated, Mode::InitializationMode];
+        let mut changes = Vec::with_capacity(vrs.len());
+        for (&vr, &v) in vrs.iter().zip(values) {
+            let Some(var) = lookup(vr).filter(|x| x.kind == Kind::Float64) else {
+                return error(format!("value reference {vr} is not a Float64 variable of this FMU"));
+            };
+            if !v.is_finite() {
+                return error(format!("`{}` = {v}: expected a finite number", var.name));
+            }
+            match (var.causality, var.slot) {
+                (Causality::Parameter, Slot::Param(i)) => {
+                    self.expect(&format!("setting the fixed parameter `{}`", var.name), &before_init)?;
+                    let ok = match PARAMETERS[i].3 {
+                        Constraint::Finite => true,
+                        Constraint::NonNegative => v >= 0.0,
+                        Constraint::Positive => v > 0.0,
+                    };
+                    if !ok {
+                        let want = if PARAMETERS[i].3 == Constraint::Positive { "> 0" } else { ">= 0" };
+                        return error(format!("`{}` = {v} {}: expected {want}", var.name, PARAMETERS[i].1));
+                    }
+                }
+                (Causality::Input, _) => self.expect(
+                    &format!("setting the input `{}`", var.name),
+                    &[
+                        Mode::Instantiated,
+                        Mode::InitializationMode,
+                        Mode::EventMode,
+                        Mode::ContinuousTimeMode,
+                        Mode::StepMode,
+                    ],
+                )?,
+                (_, Slot::State(_)) => {
+                    self.expect(&format!("setting the start value of `{}`", var.name), &before_init)?
+                }
+                _ => return error(format!("`{}` (value reference {vr}) cannot be set: it is calculated", var.name)),
+            }
+            changes.push((var.slot, v));
+        }
+        for (slot, v) in changes {
+            match slot {
+                Slot::Param(i) => {
+                    self.params[i] = v;
+                    self.model = None;
+                }
+                Slot::Input(i) => self.u[i] = v,
+                Slot::State(i) => self.x[i] = v,
+                _ => unreachable!("refused above"),
+            }
+        }
+        Ok(())
+    }
+
+    /// Int32 values (the variant).
+    pub fn get_i32(&self, vrs: &[u32], out: &mut [i32]) -> Res<()> {
+        if vrs.len() != out.len() {
+            return error("the number of value references and values differ");
+        }
+        for (&vr, o) in vrs.iter().zip(out.iter_mut()) {
+            match lookup(vr).map(|v| v.slot) {
+                Some(Slot::Variant) => *o = self.variant,
+                _ => return error(format!("value reference {vr} is not an integer variable of this FMU")),
+            }
+        }
+        Ok(())
+    }
+
+    /// Sets Int32 values (the variant).
+    pub fn set_i32(&mut self, vrs: &[u32], values: &[i32]) -> Res<()> {
+        if vrs.len() != values.len() {
+            return error("the number of value references and values differ");
+        }
+        for (&vr, &v) in vrs.iter().zip(values) {
+            match lookup(vr).map(|x| x.slot) {
+                Some(Slot::Variant) => {
+                    self.expect(
+                        "setting the fixed parameter `variant`",
+                        &[Mode::Instantiated, Mode::InitializationMode],
+                    )?;
+                    if !(1..=4).contains(&v) {
+                        return error(format!("`variant` = {v}: expected 1, 2, 3 or 4"));
+                    }
+                }
+                _ => return error(format!("value reference {vr} is not an integer variable of this FMU")),
+            }
+        }
+        if let Some(&v) = values.last() {
+            self.variant = v;
+            self.model = None;
+        }
+        Ok(())
+    }
+
+    /// The instance's state (GetFMUState).
+    pub fn snapshot(&self) -> Snapshot {
+        Snapshot {
+            mode: self.mode,
+            time: self.time,
+            x: self.x.as_slice().to_vec(),
+            u: self.u.as_slice().to_vec(),
+            params: self.params,
+            variant: self.variant,
+        }
+    }
+
+    /// Restores a state (SetFMUState).
+    pub fn restore(&mut self, s: &Snapshot) {
+        if s.params != self.params || s.variant != self.variant {
+            self.model = None;
+        }
+        self.mode = s.mode;
+        self.time = s.time;
+        self.x.copy_from_slice(&s.x);
+        self.u.copy_from_slice(&s.u);
+        self.params = s.params;
+        self.variant = s.variant;
+    }
+
+    /// Directional derivative Σ_j ∂unknown_i/∂known_j · seed_j of the linear model: the
+    /// unknowns are derivatives or outputs, the knowns states or inputs.
+    pub fn directional_derivative(
+        &mut self,
+        unknowns: &[u32],
+        knowns: &[u32],
+        seed: &[f64],
+        out: &mut [f64],
+    ) -> Res<()> {
+        if knowns.len() != seed.len() || unknowns.len() != out.len() {
+            return error("the numbers of value references, seeds and results differ");
+        }
+        let m = self.model()?.clone();
+        // column of a known in [x u]
+        let cols = knowns
+            .iter()
+            .map(|&vr| match lookup(vr).map(|v| v.slot) {
+                Some(Slot::State(i)) => Ok(i),
+                Some(Slot::Input(i)) => Ok(NX + i),
+                _ => {
+                    error(format!("value reference {vr} is not a state or an input: no derivative with respect to it"))
+                }
+            })
+            .collect::<Res<Vec<usize>>>()?;
+        for (&vr, o) in unknowns.iter().zip(out.iter_mut()) {
+            let row = |col: usize| -> Res<f64> {
+                Ok(match lookup(vr).map(|v| v.slot) {
+                    Some(Slot::Derivative(i)) => {
+                        if col < NX {
+                            m.a[(i, col)]
+                        } else {
+                            m.b[(i, col - NX)]
+                        }
+                    }
+                    // a state that is an output and the derivative of another state
+                    Some(Slot::State(i)) => {
+                        let as_output = if col == i { 1.0 } else { 0.0 };
+                        as_output
+                    }
+                    Some(Slot::Torque(i)) => {
+                        if col < NX {
+                            m.torque[(i, col)]
+                        } else {
+                            0.0
+                        }
+                    }
+                    _ => return error(format!("value reference {vr} is not an output or a derivative")),
+                })
+            };
+            let mut acc = 0.0;
+            for (&c, &s) in cols.iter().zip(seed) {
+                acc += row(c)? * s;
+            }
+            *o = acc;
+        }
+        Ok(())
+    }
+}
