@@ -2,6 +2,7 @@
 //! commands print. The physics is in the `plant` crate.
 pub mod bearing;
 pub mod bundle;
+pub mod fmu_package;
 pub mod identification;
 pub mod report;
 pub mod rigfile;

@@ -113,6 +113,19 @@ enum Command {
         #[arg(long)]
         json: bool,
     },
+    /// Write the FMUs (FMI 3.0 and FMI 2.0, co-simulation and model exchange).
+    Fmu {
+        /// Parameter set: a rig file (its [model], variant and optional [bearing]); default:
+        /// the paper's V1/V2 powertrain with damping and the identified sfd_shake bearing.
+        #[arg(long, value_name = "FILE")]
+        params: Option<PathBuf>,
+        /// Folder for rigtwin-fmi3.fmu and rigtwin-fmi2.fmu.
+        #[arg(long, value_name = "DIR", default_value = "out")]
+        out: PathBuf,
+        /// Also write both modelDescription.xml files into this folder (e.g. modelDescription).
+        #[arg(long, value_name = "DIR")]
+        descriptions: Option<PathBuf>,
+    },
     /// Which additional spring and variants make j_drive and c_short identifiable.
     DesignSpring {
         /// Rig description (default: the paper's); its j_drive and c_short are the expected values.
@@ -268,6 +281,18 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             } else {
                 print!("{}", rep.human());
             }
+        }
+        Command::Fmu { params, out, descriptions } => {
+            let p = match &params {
+                Some(f) => rigtwin::fmu_package::params_of_rig(&load_rig(f)?),
+                None => rigtwin_fmu::FmuParams::default(),
+            };
+            if let Some(d) = &descriptions {
+                rigtwin::fmu_package::write_descriptions(&p, d)?;
+            }
+            let lib = rigtwin::fmu_package::find_library()?;
+            let [a, b] = rigtwin::fmu_package::package(&p, &lib, &out)?;
+            println!("wrote {} and {} (token {})", a.display(), b.display(), rigtwin_fmu::token(&p));
         }
         Command::DesignSpring { rig, sigma_hz, target, model, json } => {
             let r = match &rig {

@@ -36,6 +36,12 @@
 //! right_after = 10               # inserted, mirrored, between bodies 10 and 11 (M3 side)
 //! bodies = [ ... ]
 //!
+//! [bearing.element]              # optional: a bearing block the FMU exports (N/m, N s/m, kg)
+//! K_N_per_m = [[4.0e5, 0.0], [0.0, 5.0e5]]
+//! C_Ns_per_m = [[2600.0, 0.0], [0.0, 2800.0]]
+//! M_kg = [[5.4, 0.0], [0.0, 5.9]]
+//! [bearing.support]              # k_x, k_y, c_x, c_y, m_x, m_y as in a bearing_shake bundle
+//!
 //! [bending]                      # optional (section 2.5): the shaft line carrying the spring
 //! bearing_a_m = 0.0              # as a beam on two bearings; beyond them it overhangs
 //! bearing_b_m = 0.08
@@ -74,6 +80,7 @@ struct RigFile {
     model: RigParams,
     chain: Option<ChainFile>,
     bending: Option<BendingFile>,
+    bearing: Option<plant::BearingModel>,
 }
 
 #[derive(Deserialize)]
@@ -238,6 +245,7 @@ pub fn parse_rig(text: &str, file: &Path) -> Result<Rig, RigFileError> {
         variant: raw.variant,
         model: raw.model,
         chain,
+        bearing: raw.bearing,
         bending: raw.bending.map(|b| plant::Beam {
             bearing_a_m: b.bearing_a_m,
             bearing_b_m: b.bearing_b_m,

@@ -2,7 +2,7 @@
 
 #![allow(non_snake_case, clippy::missing_safety_doc, clippy::too_many_arguments)]
 
-use std::ffi::{c_char, c_void, CStr, CString};
+use std::ffi::{c_char, CStr, CString};
 use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::path::Path;
 
@@ -834,6 +834,3 @@ const _: () = {
     let _: fmi3DoStepTYPE = Some(fmi3DoStep);
     let _: fmi3ActivateModelPartitionTYPE = Some(fmi3ActivateModelPartition);
 };
-
-#[allow(dead_code)]
-fn _unused(_: *mut c_void) {}

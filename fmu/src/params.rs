@@ -57,3 +57,16 @@ impl Default for FmuParams {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn json_round_trip_keeps_the_token() {
+        let p = FmuParams::default();
+        let back: FmuParams = serde_json::from_str(&serde_json::to_string(&p).unwrap()).unwrap();
+        assert_eq!(back, p);
+        assert_eq!(crate::token(&back), crate::token(&p));
+    }
+}

@@ -88,5 +88,6 @@ pub fn rig() -> Rig {
         model: params(0.529, 1479.0),
         chain: Some(chain()),
         bending: None, // the paper gives no geometry of its spring
+        bearing: None,
     }
 }

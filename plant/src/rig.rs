@@ -419,6 +419,8 @@ pub struct Rig {
     pub chain: Option<RigChain>,
     /// The shaft line with the additional spring as a beam on its bearings (section 2.5).
     pub bending: Option<crate::bending::Beam>,
+    /// A bearing test element on its support, exported beside the powertrain by the FMU.
+    pub bearing: Option<crate::bearing::BearingModel>,
 }
 
 impl Rig {
@@ -430,6 +432,9 @@ impl Rig {
         }
         if let Some(b) = &self.bending {
             b.validate("bending")?;
+        }
+        if let Some(b) = &self.bearing {
+            b.validate()?;
         }
         Ok(())
     }

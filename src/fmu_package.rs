@@ -1,0 +1,110 @@
+//! `rigtwin fmu`: the two .fmu archives (FMI 3.0 and FMI 2.0, co-simulation and model
+//! exchange) from the shared library of the `fmu` crate and a parameter set.
+
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+use plant::Rig;
+use rigtwin_fmu::{describe, FmuParams, Version, MODEL_IDENTIFIER, PARAMS_RESOURCE};
+
+/// File name of the `fmu` crate's shared library on this platform.
+pub fn library_file_name() -> String {
+    format!("{}rigtwin_fmu{}", std::env::consts::DLL_PREFIX, std::env::consts::DLL_SUFFIX)
+}
+
+/// The FMI platform folders of this machine: (FMI 3, FMI 2).
+pub fn platform_folders() -> anyhow::Result<(&'static str, &'static str)> {
+    match (std::env::consts::ARCH, std::env::consts::OS) {
+        ("x86_64", "linux") => Ok(("x86_64-linux", "linux64")),
+        ("aarch64", "linux") => Ok(("aarch64-linux", "linux64")),
+        ("x86_64", "windows") => Ok(("x86_64-windows", "win64")),
+        ("x86_64", "macos") => Ok(("x86_64-darwin", "darwin64")),
+        ("aarch64", "macos") => Ok(("aarch64-darwin", "darwin64")),
+        (a, o) => anyhow::bail!("no FMI platform folder is defined for {a}/{o}"),
+    }
+}
+
+/// The shared library: `RIGTWIN_FMU_LIB` if set, else beside the running executable (cargo puts
+/// both in target/<profile>/).
+pub fn find_library() -> anyhow::Result<PathBuf> {
+    if let Ok(p) = std::env::var("RIGTWIN_FMU_LIB") {
+        return Ok(PathBuf::from(p));
+    }
+    let exe = std::env::current_exe()?;
+    let name = library_file_name();
+    let mut dir = exe.parent();
+    while let Some(d) = dir {
+        let candidate = d.join(&name);
+        if candidate.exists() {
+            return Ok(candidate);
+        }
+        if d.file_name().map(|n| n == "target").unwrap_or(false) {
+            break;
+        }
+        dir = d.parent();
+    }
+    anyhow::bail!(
+        "the FMU library {name} was not found beside {}: build it with `cargo build --release --workspace` \
+         (or set RIGTWIN_FMU_LIB)",
+        exe.display()
+    )
+}
+
+/// The FMU parameter set of a rig: its reduced model and variant, and its bearing if it
+/// describes one (else the identified squeeze-film damper of the default).
+pub fn params_of_rig(rig: &Rig) -> FmuParams {
+    let default = FmuParams::default();
+    FmuParams {
+        powertrain: rig.model.clone(),
+        variant: rig.variant,
+        bearing: rig.bearing.clone().unwrap_or(default.bearing),
+    }
+}
+
+/// Writes both modelDescription.xml files into `dir/fmi3/` and `dir/fmi2/`.
+pub fn write_descriptions(p: &FmuParams, dir: &Path) -> anyhow::Result<()> {
+    for (version, sub) in [(Version::Fmi3, "fmi3"), (Version::Fmi2, "fmi2")] {
+        let d = dir.join(sub);
+        std::fs::create_dir_all(&d)?;
+        atomic_write(&d.join("modelDescription.xml"), describe(p, version).as_bytes())?;
+    }
+    Ok(())
+}
+
+fn atomic_write(path: &Path, bytes: &[u8]) -> anyhow::Result<()> {
+    let tmp = path.with_extension("partial");
+    std::fs::write(&tmp, bytes).map_err(|e| anyhow::anyhow!("{}: {e}", tmp.display()))?;
+    std::fs::rename(&tmp, path).map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
+    Ok(())
+}
+
+/// Writes `rigtwin-fmi3.fmu` and `rigtwin-fmi2.fmu` into `out`; returns their paths.
+pub fn package(p: &FmuParams, library: &Path, out: &Path) -> anyhow::Result<[PathBuf; 2]> {
+    // the parameters must describe a model before anything is written
+    rigtwin_fmu::model::LinearModel::new(p)
+        .map_err(|e| anyhow::anyhow!("the parameter set does not describe a model: {e}"))?;
+    let lib = std::fs::read(library).map_err(|e| anyhow::anyhow!("{}: {e}", library.display()))?;
+    let (p3, p2) = platform_folders()?;
+    std::fs::create_dir_all(out).map_err(|e| anyhow::anyhow!("{}: {e}", out.display()))?;
+    let params_json = serde_json::to_vec_pretty(p)?;
+    let mut written = Vec::new();
+    for (version, platform, name) in [(Version::Fmi3, p3, "rigtwin-fmi3.fmu"), (Version::Fmi2, p2, "rigtwin-fmi2.fmu")]
+    {
+        let mut buf = std::io::Cursor::new(Vec::new());
+        {
+            let mut zip = zip::ZipWriter::new(&mut buf);
+            let opts = zip::write::SimpleFileOptions::default().compression_method(zip::CompressionMethod::Deflated);
+            zip.start_file("modelDescription.xml", opts)?;
+            zip.write_all(describe(p, version).as_bytes())?;
+            zip.start_file(format!("binaries/{platform}/{MODEL_IDENTIFIER}{}", std::env::consts::DLL_SUFFIX), opts)?;
+            zip.write_all(&lib)?;
+            zip.start_file(format!("resources/{PARAMS_RESOURCE}"), opts)?;
+            zip.write_all(&params_json)?;
+            zip.finish()?;
+        }
+        let path = out.join(name);
+        atomic_write(&path, buf.get_ref())?;
+        written.push(path);
+    }
+    Ok([written.remove(0), written.remove(0)])
+}
