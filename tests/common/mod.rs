@@ -1,0 +1,42 @@
+//! Shared by the FMU tests: the packaged FMUs, built once per test binary.
+
+#![allow(dead_code)]
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+use std::sync::OnceLock;
+
+/// Builds the `fmu` crate's shared library (`cargo test` builds only its rlib) and packages
+/// both FMUs with the default parameters into a temporary folder; returns that folder.
+pub fn fmu_dir() -> &'static Path {
+    static DIR: OnceLock<PathBuf> = OnceLock::new();
+    DIR.get_or_init(|| {
+        let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
+        let status = Command::new(cargo)
+            .args(["build", "-p", "fmu", "--lib"])
+            .current_dir(env!("CARGO_MANIFEST_DIR"))
+            .status()
+            .expect("run cargo build -p fmu");
+        assert!(status.success(), "building the FMU library failed");
+        let dir =
+            std::env::temp_dir().join(format!("rigtwin-fmus-{}-{:?}", std::process::id(), std::thread::current().id()));
+        let out =
+            Command::new(env!("CARGO_BIN_EXE_rigtwin")).args(["fmu", "--out", dir.to_str().unwrap()]).output().unwrap();
+        assert!(out.status.success(), "rigtwin fmu: {}", String::from_utf8_lossy(&out.stderr));
+        dir
+    })
+}
+
+/// The Python of the venv `.ci/run` makes (override with RIGTWIN_PYTHON).
+pub fn python() -> PathBuf {
+    if let Ok(p) = std::env::var("RIGTWIN_PYTHON") {
+        return PathBuf::from(p);
+    }
+    let p = Path::new(env!("CARGO_MANIFEST_DIR")).join(".venv/bin/python");
+    assert!(
+        p.exists(),
+        "{} is missing: `bash .ci/run` creates the venv with fmpy, fmu-manipulation-toolbox and libcosimpy",
+        p.display()
+    );
+    p
+}
