@@ -42,10 +42,13 @@ struct RigArgs {
 #[derive(Subcommand)]
 enum Command {
     /// The main job on a rig: modal summary of the full chain, its reduction, the three-mass
-    /// variants and the open-differential model.
+    /// variants and the open-differential model; then its FMUs.
     Run {
         #[command(flatten)]
         rig: RigArgs,
+        /// Folder the FMUs are written to.
+        #[arg(long, value_name = "DIR", default_value = "out")]
+        out: PathBuf,
     },
     /// Natural frequencies, mode shapes and the shuffle mode of one model.
     Modal {
@@ -307,13 +310,22 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                 print!("{}", rep.human());
             }
         }
-        Command::Run { rig } => {
+        Command::Run { rig, out } => {
             let (r, variant) = load(&rig)?;
             let summary = report::summary(&r, variant)?;
+            // the FMUs of the same rig, in the variant asked for
+            let params = rigtwin::fmu_package::params_of_rig(&Rig { variant, ..r.clone() });
+            let lib = rigtwin::fmu_package::find_library()?;
+            let [a, b] = rigtwin::fmu_package::package(&params, &lib, &out)?;
             if rig.json {
                 print_json(&summary)?;
             } else {
                 print!("{}", summary.human());
+                println!(
+                    "\n5. FMUs (FMI 3.0 and 2.0, co-simulation and model exchange)\n  {}\n  {}",
+                    a.display(),
+                    b.display()
+                );
             }
         }
     }

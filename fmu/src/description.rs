@@ -10,25 +10,30 @@ use crate::variables::{parameter_values, table, variant_number, Causality, Kind,
 /// The model identifier: the shared library's name inside the FMU.
 pub const MODEL_IDENTIFIER: &str = "rigtwin";
 
-/// Units used by the table: (name, SI base-unit exponents kg, m, s, rad).
-const UNITS: [(&str, [i32; 4]); 16] = [
-    ("s", [0, 0, 1, 0]),
-    ("rad", [0, 0, 0, 1]),
-    ("rad/s", [0, 0, -1, 1]),
-    ("rad/s2", [0, 0, -2, 1]),
-    ("kg.m2", [1, 2, 0, 0]),
-    ("N.m/rad", [1, 2, -2, -1]),
-    ("N.m.s/rad", [1, 2, -1, -1]),
-    ("N.m", [1, 2, -2, 0]),
-    ("N", [1, 1, -2, 0]),
-    ("N/m", [1, 0, -2, 0]),
-    ("N.s/m", [1, 0, -1, 0]),
-    ("kg", [1, 0, 0, 0]),
-    ("m", [0, 1, 0, 0]),
-    ("m/s", [0, 1, -1, 0]),
-    ("m/s2", [0, 1, -2, 0]),
-    ("1", [0, 0, 0, 0]),
+/// Units used by the table: (name, SI base-unit exponents kg, m, s, rad, the FMI 3 type and
+/// quantity that carries it).
+const UNITS: [(&str, [i32; 4], &str); 15] = [
+    ("s", [0, 0, 1, 0], "Time"),
+    ("rad", [0, 0, 0, 1], "Angle"),
+    ("rad/s", [0, 0, -1, 1], "AngularVelocity"),
+    ("rad/s2", [0, 0, -2, 1], "AngularAcceleration"),
+    ("kg.m2", [1, 2, 0, 0], "MomentOfInertia"),
+    ("N.m/rad", [1, 2, -2, -1], "TorsionalStiffness"),
+    ("N.m.s/rad", [1, 2, -1, -1], "TorsionalDamping"),
+    ("N.m", [1, 2, -2, 0], "Torque"),
+    ("N", [1, 1, -2, 0], "Force"),
+    ("N/m", [1, 0, -2, 0], "Stiffness"),
+    ("N.s/m", [1, 0, -1, 0], "Damping"),
+    ("kg", [1, 0, 0, 0], "Mass"),
+    ("m", [0, 1, 0, 0], "Length"),
+    ("m/s", [0, 1, -1, 0], "Velocity"),
+    ("m/s2", [0, 1, -2, 0], "Acceleration"),
 ];
+
+/// The FMI 3 type declaring a unit.
+fn type_of_unit(unit: &str) -> &'static str {
+    UNITS.iter().find(|u| u.0 == unit).map(|u| u.2).expect("every unit of the table is declared")
+}
 
 fn base_unit(e: &[i32; 4]) -> String {
     let mut s = String::from("<BaseUnit");
@@ -113,10 +118,18 @@ fn describe_with(p: &FmuParams, version: Version, token: &str) -> String {
         }
     }
     let _ = writeln!(x, "  <UnitDefinitions>");
-    for (name, e) in UNITS {
+    for (name, e, _) in UNITS {
         let _ = writeln!(x, "    <Unit name=\"{name}\">{}</Unit>", base_unit(&e));
     }
     let _ = writeln!(x, "  </UnitDefinitions>");
+    if version == Version::Fmi3 {
+        // FMI 3 carries units through declared types (as the Reference FMUs do)
+        let _ = writeln!(x, "  <TypeDefinitions>");
+        for (unit, _, name) in UNITS {
+            let _ = writeln!(x, "    <Float64Type name=\"{name}\" quantity=\"{name}\" unit=\"{unit}\"/>");
+        }
+        let _ = writeln!(x, "  </TypeDefinitions>");
+    }
     let _ = writeln!(x, "  <LogCategories>");
     for (c, d) in [("logStatusWarning", "warnings"), ("logStatusError", "errors"), ("logEvents", "instance events")] {
         let _ = writeln!(x, "    <Category name=\"{c}\" description=\"{d}\"/>");
@@ -166,7 +179,7 @@ fn describe_with(p: &FmuParams, version: Version, token: &str) -> String {
                     let _ = write!(attrs, " initial=\"{i}\"");
                 }
                 if v.kind == Kind::Float64 {
-                    attrs += &unit;
+                    let _ = write!(attrs, " declaredType=\"{}\"", type_of_unit(v.unit));
                 } else {
                     attrs += " min=\"1\" max=\"4\"";
                 }
