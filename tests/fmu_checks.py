@@ -37,6 +37,64 @@ for version, path in fmus.items():
                                  relative_tolerance=1e-12, start_values={"M_drive": 10.0}, output=outputs)
         report["step"][key] = {name: step[name].tolist() for name in ["time"] + outputs}
 
+# FMU state and directional derivatives through the C calls of a real importer
+from fmpy import extract, read_model_description
+from fmpy.fmi2 import FMU2Slave
+from fmpy.fmi3 import FMU3Slave
+
+report["state"] = {}
+report["derivative"] = {}
+for version, path in fmus.items():
+    md = read_model_description(str(path))
+    vrs = {v.name: v.valueReference for v in md.modelVariables}
+    unzip = extract(str(path))
+    cls = FMU3Slave if version == "fmi3" else FMU2Slave
+    fmu = cls(guid=md.guid, unzipDirectory=unzip, modelIdentifier=md.coSimulation.modelIdentifier, instanceName="state")
+    fmu.instantiate()
+    if version == "fmi3":
+        get, set_ = (lambda names: fmu.getFloat64([vrs[n] for n in names])), (lambda names, v: fmu.setFloat64([vrs[n] for n in names], v))
+        save, load, ser, deser = fmu.getFMUState, fmu.setFMUState, fmu.serializeFMUState, fmu.deserializeFMUState
+        derivative = lambda u, k: fmu.getDirectionalDerivative([vrs[n] for n in u], [vrs[n] for n in k], [1.0] * len(k))
+    else:
+        fmu.setupExperiment(startTime=0.0)
+        get, set_ = (lambda names: fmu.getReal([vrs[n] for n in names])), (lambda names, v: fmu.setReal([vrs[n] for n in names], v))
+        save, load, ser, deser = fmu.getFMUstate, fmu.setFMUstate, fmu.serializeFMUstate, fmu.deSerializeFMUstate
+        derivative = lambda u, k: fmu.getDirectionalDerivative([vrs[n] for n in u], [vrs[n] for n in k], [1.0] * len(k))
+    set_(["phi_drive"], [0.01])
+    fmu.enterInitializationMode()
+    fmu.exitInitializationMode()
+    t, h = 0.0, 1e-3
+    for _ in range(100):
+        fmu.doStep(t, h)
+        t += h
+    state = save()
+    blob = ser(state)
+    for _ in range(100):
+        fmu.doStep(t, h)
+        t += h
+    first = get(["w_drive", "T_short"])
+    load(state)
+    t = 0.1
+    for _ in range(100):
+        fmu.doStep(t, h)
+        t += h
+    again = get(["w_drive", "T_short"])
+    load(deser(blob))
+    t = 0.1
+    for _ in range(100):
+        fmu.doStep(t, h)
+        t += h
+    from_bytes = get(["w_drive", "T_short"])
+    report["state"][version] = {"first": list(first), "again": list(again), "from_bytes": list(from_bytes), "bytes": len(blob)}
+    # ∂ der(w_drive) / ∂ phi_drive and ∂ der(w_drive) / ∂ M_drive, ∂ T_short / ∂ phi_drive
+    report["derivative"][version] = {
+        "dwdot_dphi": list(derivative(["der(w_drive)"], ["phi_drive"])),
+        "dwdot_dM": list(derivative(["der(w_drive)"], ["M_drive"])),
+        "dT_dphi": list(derivative(["T_short"], ["phi_drive"])),
+    }
+    fmu.terminate()
+    fmu.freeInstance()
+
 # OSP libcosim runs the FMI 2 FMU: initial twist, 1 ms steps to 0.5 s
 from libcosimpy.CosimExecution import CosimExecution
 from libcosimpy.CosimSlave import CosimLocalSlave

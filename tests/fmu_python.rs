@@ -99,6 +99,27 @@ fn fmus_pass_validation_simulate_like_the_plant_and_run_in_libcosim() {
         }
     }
 
+    // FMU state: restoring it (also from its serialized bytes) repeats the same 100 steps exactly
+    for v in ["fmi3", "fmi2"] {
+        let st = &r["state"][v];
+        assert_eq!(floats(&st["first"]), floats(&st["again"]), "{v}: set FMU state");
+        assert_eq!(floats(&st["first"]), floats(&st["from_bytes"]), "{v}: deserialized FMU state");
+    }
+    // Directional derivatives against plant's matrices: ∂ẇ_drive/∂φ_drive = −C[1,1]/J_drive,
+    // ∂ẇ_drive/∂M_drive = 1/J_drive, ∂T_short/∂φ_drive = the torque row's angle entry.
+    let p = FmuParams::default();
+    let m = p.powertrain.open_differential(p.variant).unwrap();
+    let k = m.stiffness_matrix();
+    let j = p.powertrain.j_drive;
+    let torque_row = &m.springs[0];
+    for v in ["fmi3", "fmi2"] {
+        let d = &r["derivative"][v];
+        let close = |got: f64, want: f64| assert!((got - want).abs() <= 1e-12 * want.abs().max(1.0), "{v}: {got} vs {want}");
+        close(floats(&d["dwdot_dphi"])[0], -k[(1, 1)] / j);
+        close(floats(&d["dwdot_dM"])[0], 1.0 / j);
+        close(floats(&d["dT_dphi"])[0], torque_row.stiffness * torque_row.elongation[1]);
+    }
+
     // libcosim ran the FMI 2 FMU from the same twist: compare with plant's free response at 0.5 s.
     let lc = &r["libcosim"];
     assert_eq!(lc["ok"], true);
