@@ -114,7 +114,8 @@ fn fmus_pass_validation_simulate_like_the_plant_and_run_in_libcosim() {
     let torque_row = &m.springs[0];
     for v in ["fmi3", "fmi2"] {
         let d = &r["derivative"][v];
-        let close = |got: f64, want: f64| assert!((got - want).abs() <= 1e-12 * want.abs().max(1.0), "{v}: {got} vs {want}");
+        let close =
+            |got: f64, want: f64| assert!((got - want).abs() <= 1e-12 * want.abs().max(1.0), "{v}: {got} vs {want}");
         close(floats(&d["dwdot_dphi"])[0], -k[(1, 1)] / j);
         close(floats(&d["dwdot_dM"])[0], 1.0 / j);
         close(floats(&d["dT_dphi"])[0], torque_row.stiffness * torque_row.elongation[1]);

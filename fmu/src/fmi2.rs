@@ -1,6 +1,6 @@
 //! FMI 2.0 glue: argument conversion, status mapping and panic containment around [`Instance`].
 
-#![allow(non_snake_case, clippy::missing_safety_doc)]
+#![allow(missing_docs, non_snake_case, clippy::missing_safety_doc)]
 
 use std::ffi::{c_char, CStr, CString};
 use std::panic::{catch_unwind, AssertUnwindSafe};

@@ -318,10 +318,9 @@ impl Instance {
         if (t - self.time).abs() > 1e-9 * self.time.abs().max(h) {
             return error(format!("currentCommunicationPoint {t} s differs from the FMU's time {} s", self.time));
         }
-        let u = self.u.clone();
-        let mut x = self.x.clone();
-        self.model()?.step(&mut x, &u, h);
-        self.x = x;
+        self.model()?;
+        let model = self.model.as_mut().expect("built above");
+        model.step(&mut self.x, &self.u, h);
         self.time = t + h;
         Ok(())
     }

@@ -9,14 +9,14 @@
 //!   the value-reference map and the instantiation token come from it;
 //! - [`model`]: the linear dynamics, with the exact zero-order-hold co-simulation step;
 //! - [`instance`]: the state machine every call goes through, version-independent;
-//! - `fmi3`, `fmi2`: thin `extern "C"` glue. Every body runs under `catch_unwind`, so no panic
+//! - [`fmi3`], [`fmi2`]: thin `extern "C"` glue, the exported C API. Every body runs under `catch_unwind`, so no panic
 //!   crosses into the importer; every signature is checked at compile time against the
 //!   standard's headers (fmi-sys). There is no global mutable state: instances run in parallel.
 #![warn(missing_docs)]
 
 pub mod description;
-mod fmi2;
-mod fmi3;
+pub mod fmi2;
+pub mod fmi3;
 pub mod instance;
 pub mod model;
 pub mod params;

@@ -23,6 +23,7 @@ pub struct LinearModel {
     /// Side-shaft torques from the states (2×10).
     pub torque: DMatrix<f64>,
     cache: Vec<(f64, DMatrix<f64>, DMatrix<f64>)>,
+    scratch: DVector<f64>,
 }
 
 /// Discretisations kept: a co-simulation master uses one or a few step sizes.
@@ -45,7 +46,7 @@ impl LinearModel {
         if a.iter().chain(b.iter()).any(|v| !v.is_finite()) {
             return Err("the parameters give a system matrix with non-finite entries".into());
         }
-        Ok(LinearModel { a, b, torque, cache: Vec::new() })
+        Ok(LinearModel { a, b, torque, cache: Vec::new(), scratch: DVector::zeros(NX) })
     }
 
     /// ẋ = A x + B u.
@@ -53,9 +54,24 @@ impl LinearModel {
         &self.a * x + &self.b * u
     }
 
-    /// One exact step of length `h` with `u` held.
+    /// One exact step of length `h` with `u` held; allocates only when a new step size is
+    /// discretised.
     pub fn step(&mut self, x: &mut DVector<f64>, u: &DVector<f64>, h: f64) {
-        let i = match self.cache.iter().position(|c| c.0 == h) {
+        let i = self.discretise(h);
+        let (_, ad, bd) = &self.cache[i];
+        self.scratch.gemv(1.0, ad, x, 0.0);
+        self.scratch.gemv(1.0, bd, u, 1.0);
+        x.copy_from(&self.scratch);
+    }
+
+    /// (Ad, Bd) of step size `h`.
+    pub fn discretisation(&mut self, h: f64) -> (&DMatrix<f64>, &DMatrix<f64>) {
+        let i = self.discretise(h);
+        (&self.cache[i].1, &self.cache[i].2)
+    }
+
+    fn discretise(&mut self, h: f64) -> usize {
+        match self.cache.iter().position(|c| c.0 == h) {
             Some(i) => i,
             None => {
                 let mut aug = DMatrix::zeros(NX + NU, NX + NU);
@@ -68,10 +84,7 @@ impl LinearModel {
                 self.cache.push((h, e.view((0, 0), (NX, NX)).into_owned(), e.view((0, NX), (NX, NU)).into_owned()));
                 self.cache.len() - 1
             }
-        };
-        let (_, ad, bd) = &self.cache[i];
-        let next = ad * &*x + bd * u;
-        x.copy_from(&next);
+        }
     }
 }
 
