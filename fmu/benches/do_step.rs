@@ -68,7 +68,7 @@ fn fmu_step(c: &mut Criterion) {
         > = lib.get(b"reference_step").unwrap();
         let mut x = vec![0.0; NX];
         x[1] = 0.01;
-        let u = vec![0.0; NU];
+        let u = [0.0; NU];
         let mut scratch = vec![0.0; NX];
         c.bench_function("C reference step (gcc -O2, same 10-state ZOH matrices)", |b| {
             b.iter(|| {

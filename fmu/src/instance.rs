@@ -518,8 +518,11 @@ impl Instance {
                     }
                     // a state that is an output and the derivative of another state
                     Some(Slot::State(i)) => {
-                        let as_output = if col == i { 1.0 } else { 0.0 };
-                        as_output
+                        if col == i {
+                            1.0
+                        } else {
+                            0.0
+                        }
                     }
                     Some(Slot::Torque(i)) => {
                         if col < NX {
