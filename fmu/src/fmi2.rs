@@ -2,7 +2,9 @@
 
 #![allow(missing_docs, non_snake_case, clippy::missing_safety_doc)]
 
-use std::ffi::{c_char, CStr, CString};
+use std::ffi::{c_char, CString};
+
+use crate::ffi::{cstring, slice, slice_mut, str_of};
 use std::panic::{catch_unwind, AssertUnwindSafe};
 
 use fmi_sys::fmi2::*;
@@ -25,10 +27,6 @@ fn status2(s: Status) -> fmi2Status {
     }
 }
 
-fn cstring(s: &str) -> CString {
-    CString::new(s.replace('\0', " ")).expect("NULs replaced")
-}
-
 impl Logger for Fmi2Logger {
     fn log(&self, status: Status, category: &str, message: &str) {
         if let Some(cb) = self.functions.logger {
@@ -46,34 +44,6 @@ impl Logger for Fmi2Logger {
                 )
             };
         }
-    }
-}
-
-unsafe fn str_of<'a>(p: *const c_char) -> &'a str {
-    if p.is_null() {
-        ""
-    } else {
-        CStr::from_ptr(p).to_str().unwrap_or("")
-    }
-}
-
-unsafe fn slice<'a, T>(p: *const T, n: usize) -> Result<&'a [T], Failure> {
-    if n == 0 {
-        Ok(&[])
-    } else if p.is_null() {
-        Err(Failure { status: Status::Error, message: "a null array was passed with a non-zero length".into() })
-    } else {
-        Ok(std::slice::from_raw_parts(p, n))
-    }
-}
-
-unsafe fn slice_mut<'a, T>(p: *mut T, n: usize) -> Result<&'a mut [T], Failure> {
-    if n == 0 {
-        Ok(&mut [])
-    } else if p.is_null() {
-        Err(Failure { status: Status::Error, message: "a null array was passed with a non-zero length".into() })
-    } else {
-        Ok(std::slice::from_raw_parts_mut(p, n))
     }
 }
 

@@ -2,7 +2,9 @@
 
 #![allow(missing_docs, non_snake_case, clippy::missing_safety_doc, clippy::too_many_arguments)]
 
-use std::ffi::{c_char, CStr, CString};
+use std::ffi::c_char;
+
+use crate::ffi::{cstring, slice, slice_mut, str_of};
 use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::path::Path;
 
@@ -33,39 +35,6 @@ impl Logger for Fmi3Logger {
             // SAFETY: the importer's callback with NUL-terminated strings that outlive the call
             unsafe { cb(self.env, status3(status), c.as_ptr(), m.as_ptr()) };
         }
-    }
-}
-
-fn cstring(s: &str) -> CString {
-    CString::new(s.replace('\0', " ")).expect("NULs replaced")
-}
-
-unsafe fn str_of<'a>(p: *const c_char) -> &'a str {
-    if p.is_null() {
-        ""
-    } else {
-        CStr::from_ptr(p).to_str().unwrap_or("")
-    }
-}
-
-/// A slice from a pointer and a length; a null pointer is only fine for length 0.
-unsafe fn slice<'a, T>(p: *const T, n: usize) -> Result<&'a [T], Failure> {
-    if n == 0 {
-        Ok(&[])
-    } else if p.is_null() {
-        Err(Failure { status: Status::Error, message: "a null array was passed with a non-zero length".into() })
-    } else {
-        Ok(std::slice::from_raw_parts(p, n))
-    }
-}
-
-unsafe fn slice_mut<'a, T>(p: *mut T, n: usize) -> Result<&'a mut [T], Failure> {
-    if n == 0 {
-        Ok(&mut [])
-    } else if p.is_null() {
-        Err(Failure { status: Status::Error, message: "a null array was passed with a non-zero length".into() })
-    } else {
-        Ok(std::slice::from_raw_parts_mut(p, n))
     }
 }
 

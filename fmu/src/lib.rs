@@ -15,6 +15,7 @@
 #![warn(missing_docs)]
 
 pub mod description;
+mod ffi;
 pub mod fmi2;
 pub mod fmi3;
 pub mod instance;
