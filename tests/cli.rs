@@ -1,5 +1,7 @@
 //! The command line: JSON contracts, the shipped rig file, and errors for bad rig files.
 
+mod common;
+
 use std::path::Path;
 use std::process::{Command, Output};
 
@@ -85,8 +87,12 @@ fn shipped_rig_file_is_the_embedded_default() {
     assert_eq!(a.bodies.len() + sa.bodies.len(), b.bodies.len() + sb.bodies.len());
     // c_long_ratio is written with 16 digits in the file
     assert_abs_diff_eq!(rig.model.c_long(), default.model.c_long(), epsilon = 1e-9);
-    let a = json(&["run", "--json", "--rig", path.to_str().unwrap()]);
-    let b = json(&["run", "--json"]);
+    // `run` also writes the FMUs: the library must be built, and they go to a scratch folder
+    let out = common::fmu_dir().join("run");
+    let out = out.to_str().unwrap();
+    let a = json(&["run", "--json", "--out", out, "--rig", path.to_str().unwrap()]);
+    let b = json(&["run", "--json", "--out", out]);
+    assert!(std::path::Path::new(out).join("rigtwin-fmi3.fmu").exists());
     assert_abs_diff_eq!(
         a["differential"]["frequencies_hz"][2].as_f64().unwrap(),
         b["differential"]["frequencies_hz"][2].as_f64().unwrap(),
