@@ -1,8 +1,8 @@
 //! C-boundary helpers shared by the FMI 2 and FMI 3 glue.
 
-use std::ffi::{c_char, CStr, CString};
+use std::ffi::{c_char, c_void, CStr, CString};
 
-use crate::instance::{Failure, Status};
+use crate::instance::{Failure, Instance, Res, Snapshot, Status};
 
 /// A C string of `s` (interior NULs become spaces).
 pub(crate) fn cstring(s: &str) -> CString {
@@ -38,4 +38,82 @@ pub(crate) unsafe fn slice_mut<'a, T>(p: *mut T, n: usize) -> Result<&'a mut [T]
         (_, true) => Err(null_array()),
         _ => Ok(std::slice::from_raw_parts_mut(p, n)),
     }
+}
+
+// FMU states: both versions hand them over as `void*` (fmi2FMUstate, fmi3FMUState).
+
+fn null_argument(function: &str) -> Failure {
+    Failure { status: Status::Error, message: format!("{function}: a null pointer was passed") }
+}
+
+/// GetFMUState: a new state, or the given one overwritten.
+pub(crate) unsafe fn get_state(inst: &Instance, state: *mut *mut c_void, function: &str) -> Res<()> {
+    if state.is_null() {
+        return Err(null_argument(function));
+    }
+    let snap = inst.snapshot();
+    if (*state).is_null() {
+        *state = Box::into_raw(Box::new(snap)) as *mut c_void;
+    } else {
+        *((*state) as *mut Snapshot) = snap;
+    }
+    Ok(())
+}
+
+/// SetFMUState.
+pub(crate) unsafe fn set_state(inst: &mut Instance, state: *mut c_void, function: &str) -> Res<()> {
+    if state.is_null() {
+        return Err(null_argument(function));
+    }
+    inst.restore(&*(state as *const Snapshot));
+    Ok(())
+}
+
+/// FreeFMUState: frees and nulls the state (a null state is fine).
+pub(crate) unsafe fn free_state(state: *mut *mut c_void) -> Res<()> {
+    if !state.is_null() && !(*state).is_null() {
+        drop(Box::from_raw(*state as *mut Snapshot));
+        *state = std::ptr::null_mut();
+    }
+    Ok(())
+}
+
+/// SerializedFMUStateSize.
+pub(crate) unsafe fn state_size(size: *mut usize, function: &str) -> Res<()> {
+    if size.is_null() {
+        return Err(null_argument(function));
+    }
+    *size = Snapshot::BYTES;
+    Ok(())
+}
+
+/// SerializeFMUState into `size` bytes at `out`.
+pub(crate) unsafe fn serialize_state(state: *mut c_void, out: *mut u8, size: usize, function: &str) -> Res<()> {
+    if state.is_null() || size < Snapshot::BYTES {
+        return Err(Failure {
+            status: Status::Error,
+            message: format!("{function}: a state and {} bytes are needed", Snapshot::BYTES),
+        });
+    }
+    let bytes = (*(state as *const Snapshot)).to_bytes();
+    slice_mut(out, size)?[..bytes.len()].copy_from_slice(&bytes);
+    Ok(())
+}
+
+/// DeserializeFMUState into a new state.
+pub(crate) unsafe fn deserialize_state(
+    bytes: *const u8,
+    size: usize,
+    state: *mut *mut c_void,
+    function: &str,
+) -> Res<()> {
+    let snap = Snapshot::from_bytes(slice(bytes, size)?).ok_or_else(|| Failure {
+        status: Status::Error,
+        message: format!("{function}: the bytes are not a state of this FMU"),
+    })?;
+    if state.is_null() {
+        return Err(null_argument(function));
+    }
+    *state = Box::into_raw(Box::new(snap)) as *mut c_void;
+    Ok(())
 }

@@ -4,12 +4,12 @@
 
 use std::ffi::{c_char, CString};
 
-use crate::ffi::{cstring, slice, slice_mut, str_of};
+use crate::ffi::{self, cstring, slice, slice_mut, str_of};
 use std::panic::{catch_unwind, AssertUnwindSafe};
 
 use fmi_sys::fmi2::*;
 
-use crate::instance::{Failure, Instance, Interface, Logger, Mode, Res, Snapshot, Status};
+use crate::instance::{Failure, Instance, Interface, Logger, Mode, Res, Status};
 use crate::model::NX;
 
 struct Fmi2Logger {
@@ -278,40 +278,17 @@ pub unsafe extern "C" fn fmi2SetString(
 
 #[no_mangle]
 pub unsafe extern "C" fn fmi2GetFMUstate(c: fmi2Component, state: *mut fmi2FMUstate) -> fmi2Status {
-    with(c, |comp| {
-        if state.is_null() {
-            return Err(null_arg("fmi2GetFMUstate"));
-        }
-        let snap = comp.inner.snapshot();
-        if (*state).is_null() {
-            *state = Box::into_raw(Box::new(snap)) as fmi2FMUstate;
-        } else {
-            *((*state) as *mut Snapshot) = snap;
-        }
-        Ok(())
-    })
+    with(c, |comp| ffi::get_state(&comp.inner, state, "fmi2GetFMUstate"))
 }
 
 #[no_mangle]
 pub unsafe extern "C" fn fmi2SetFMUstate(c: fmi2Component, state: fmi2FMUstate) -> fmi2Status {
-    with(c, |comp| {
-        if state.is_null() {
-            return Err(null_arg("fmi2SetFMUstate"));
-        }
-        comp.inner.restore(&*(state as *const Snapshot));
-        Ok(())
-    })
+    with(c, |comp| ffi::set_state(&mut comp.inner, state, "fmi2SetFMUstate"))
 }
 
 #[no_mangle]
 pub unsafe extern "C" fn fmi2FreeFMUstate(c: fmi2Component, state: *mut fmi2FMUstate) -> fmi2Status {
-    with(c, |_| {
-        if !state.is_null() && !(*state).is_null() {
-            drop(Box::from_raw(*state as *mut Snapshot));
-            *state = std::ptr::null_mut();
-        }
-        Ok(())
-    })
+    with(c, |_| ffi::free_state(state))
 }
 
 #[no_mangle]
@@ -320,13 +297,7 @@ pub unsafe extern "C" fn fmi2SerializedFMUstateSize(
     _state: fmi2FMUstate,
     size: *mut usize,
 ) -> fmi2Status {
-    with(c, |_| {
-        if size.is_null() {
-            return Err(null_arg("fmi2SerializedFMUstateSize"));
-        }
-        *size = Snapshot::BYTES;
-        Ok(())
-    })
+    with(c, |_| ffi::state_size(size, "fmi2SerializedFMUstateSize"))
 }
 
 #[no_mangle]
@@ -336,18 +307,7 @@ pub unsafe extern "C" fn fmi2SerializeFMUstate(
     out: *mut fmi2Byte,
     size: usize,
 ) -> fmi2Status {
-    with(c, |_| {
-        if state.is_null() || size < Snapshot::BYTES {
-            return Err(Failure {
-                status: Status::Error,
-                message: format!("fmi2SerializeFMUstate: a state and {} bytes are needed", Snapshot::BYTES),
-            });
-        }
-        let bytes = (*(state as *const Snapshot)).to_bytes();
-        let out = slice_mut(out as *mut u8, size)?;
-        out[..bytes.len()].copy_from_slice(&bytes);
-        Ok(())
-    })
+    with(c, |_| ffi::serialize_state(state, out as *mut u8, size, "fmi2SerializeFMUstate"))
 }
 
 #[no_mangle]
@@ -357,17 +317,7 @@ pub unsafe extern "C" fn fmi2DeSerializeFMUstate(
     size: usize,
     state: *mut fmi2FMUstate,
 ) -> fmi2Status {
-    with(c, |_| {
-        let snap = Snapshot::from_bytes(slice(bytes as *const u8, size)?).ok_or_else(|| Failure {
-            status: Status::Error,
-            message: "fmi2DeSerializeFMUstate: the bytes are not a state of this FMU".into(),
-        })?;
-        if state.is_null() {
-            return Err(null_arg("fmi2DeSerializeFMUstate"));
-        }
-        *state = Box::into_raw(Box::new(snap)) as fmi2FMUstate;
-        Ok(())
-    })
+    with(c, |_| ffi::deserialize_state(bytes as *const u8, size, state, "fmi2DeSerializeFMUstate"))
 }
 
 #[no_mangle]

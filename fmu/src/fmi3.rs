@@ -4,13 +4,13 @@
 
 use std::ffi::c_char;
 
-use crate::ffi::{cstring, slice, slice_mut, str_of};
+use crate::ffi::{self, cstring, slice, slice_mut, str_of};
 use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::path::Path;
 
 use fmi_sys::fmi3::*;
 
-use crate::instance::{Failure, Instance, Interface, Logger, Res, Snapshot, Status};
+use crate::instance::{Failure, Instance, Interface, Logger, Res, Status};
 use crate::model::NX;
 
 struct Fmi3Logger {
@@ -382,41 +382,17 @@ pub unsafe extern "C" fn fmi3GetVariableDependencies(
 
 #[no_mangle]
 pub unsafe extern "C" fn fmi3GetFMUState(instance: fmi3Instance, state: *mut fmi3FMUState) -> fmi3Status {
-    with(instance, |i| {
-        if state.is_null() {
-            return Err(Failure { status: Status::Error, message: "fmi3GetFMUState: null state pointer".into() });
-        }
-        let snap = i.snapshot();
-        if (*state).is_null() {
-            *state = Box::into_raw(Box::new(snap)) as fmi3FMUState;
-        } else {
-            // the importer asks to overwrite a state it got before
-            *((*state) as *mut Snapshot) = snap;
-        }
-        Ok(())
-    })
+    with(instance, |i| ffi::get_state(i, state, "fmi3GetFMUState"))
 }
 
 #[no_mangle]
 pub unsafe extern "C" fn fmi3SetFMUState(instance: fmi3Instance, state: fmi3FMUState) -> fmi3Status {
-    with(instance, |i| {
-        if state.is_null() {
-            return Err(Failure { status: Status::Error, message: "fmi3SetFMUState: null state".into() });
-        }
-        i.restore(&*(state as *const Snapshot));
-        Ok(())
-    })
+    with(instance, |i| ffi::set_state(i, state, "fmi3SetFMUState"))
 }
 
 #[no_mangle]
 pub unsafe extern "C" fn fmi3FreeFMUState(instance: fmi3Instance, state: *mut fmi3FMUState) -> fmi3Status {
-    with(instance, |_| {
-        if !state.is_null() && !(*state).is_null() {
-            drop(Box::from_raw(*state as *mut Snapshot));
-            *state = std::ptr::null_mut();
-        }
-        Ok(())
-    })
+    with(instance, |_| ffi::free_state(state))
 }
 
 #[no_mangle]
@@ -425,16 +401,7 @@ pub unsafe extern "C" fn fmi3SerializedFMUStateSize(
     _state: fmi3FMUState,
     size: *mut usize,
 ) -> fmi3Status {
-    with(instance, |_| {
-        if size.is_null() {
-            return Err(Failure {
-                status: Status::Error,
-                message: "fmi3SerializedFMUStateSize: null size pointer".into(),
-            });
-        }
-        *size = Snapshot::BYTES;
-        Ok(())
-    })
+    with(instance, |_| ffi::state_size(size, "fmi3SerializedFMUStateSize"))
 }
 
 #[no_mangle]
@@ -444,17 +411,7 @@ pub unsafe extern "C" fn fmi3SerializeFMUState(
     out: *mut fmi3Byte,
     size: usize,
 ) -> fmi3Status {
-    with(instance, |_| {
-        if state.is_null() || size < Snapshot::BYTES {
-            return Err(Failure {
-                status: Status::Error,
-                message: format!("fmi3SerializeFMUState: a state and {} bytes are needed", Snapshot::BYTES),
-            });
-        }
-        let bytes = (*(state as *const Snapshot)).to_bytes();
-        slice_mut(out, size)?[..bytes.len()].copy_from_slice(&bytes);
-        Ok(())
-    })
+    with(instance, |_| ffi::serialize_state(state, out, size, "fmi3SerializeFMUState"))
 }
 
 #[no_mangle]
@@ -464,20 +421,7 @@ pub unsafe extern "C" fn fmi3DeserializeFMUState(
     size: usize,
     state: *mut fmi3FMUState,
 ) -> fmi3Status {
-    with(instance, |_| {
-        let snap = Snapshot::from_bytes(slice(bytes, size)?).ok_or_else(|| Failure {
-            status: Status::Error,
-            message: "fmi3DeserializeFMUState: the bytes are not a state of this FMU".into(),
-        })?;
-        if state.is_null() {
-            return Err(Failure {
-                status: Status::Error,
-                message: "fmi3DeserializeFMUState: null state pointer".into(),
-            });
-        }
-        *state = Box::into_raw(Box::new(snap)) as fmi3FMUState;
-        Ok(())
-    })
+    with(instance, |_| ffi::deserialize_state(bytes, size, state, "fmi3DeserializeFMUState"))
 }
 
 #[no_mangle]
