@@ -125,12 +125,7 @@ pub unsafe extern "C" fn fmi2Instantiate(
         };
         let location = str_of(resource_location);
         let resources = if location.is_empty() { None } else { crate::path_of_uri(location) };
-        let params =
-            crate::load_params(resources.as_deref()).map_err(|e| format!("cannot read the parameters: {e}"))?;
-        let expected = crate::token(&params);
-        if str_of(guid) != expected {
-            return Err(format!("GUID {} does not match this FMU's {expected}", str_of(guid)));
-        }
+        let params = crate::checked_params(resources.as_deref(), str_of(guid), "GUID")?;
         Ok((interface, params))
     }));
     match result {

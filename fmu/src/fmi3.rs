@@ -73,14 +73,7 @@ unsafe fn instantiate(
     let logger = Fmi3Logger { callback: log, env };
     let result = catch_unwind(AssertUnwindSafe(|| {
         let resources = (!resource_path.is_null()).then(|| Path::new(str_of(resource_path)).to_path_buf());
-        let params =
-            crate::load_params(resources.as_deref()).map_err(|e| format!("cannot read the parameters: {e}"))?;
-        let expected = crate::token(&params);
-        let given = str_of(token);
-        if given != expected {
-            return Err(format!("instantiation token {given} does not match this FMU's {expected}"));
-        }
-        Ok(params)
+        crate::checked_params(resources.as_deref(), str_of(token), "instantiation token")
     }));
     match result {
         Ok(Ok(params)) => {

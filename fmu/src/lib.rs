@@ -43,6 +43,17 @@ pub(crate) fn load_params(resources: Option<&Path>) -> Result<FmuParams, String>
     serde_json::from_str(&text).map_err(|e| format!("{}: {e}", file.display()))
 }
 
+/// The parameter set of an instance, if `given` is its token (`what` names the token in the
+/// message: "GUID" in FMI 2, "instantiation token" in FMI 3).
+pub(crate) fn checked_params(resources: Option<&Path>, given: &str, what: &str) -> Result<FmuParams, String> {
+    let params = load_params(resources).map_err(|e| format!("cannot read the parameters: {e}"))?;
+    let expected = token(&params);
+    if given != expected {
+        return Err(format!("{what} {given} does not match this FMU's {expected}"));
+    }
+    Ok(params)
+}
+
 /// FMI 2's resource location is a URI (`file:///path` or `file:/path`); the local path of it.
 pub(crate) fn path_of_uri(uri: &str) -> Option<PathBuf> {
     let rest = uri.strip_prefix("file://").or_else(|| uri.strip_prefix("file:"))?;
