@@ -200,13 +200,15 @@ impl Instance {
         parameter_set(&self.params, self.variant).or_else(error)
     }
 
-    fn model(&mut self) -> Res<&mut LinearModel> {
+    /// Builds the model from the parameters if a parameter changed since it was built. Callers
+    /// then borrow `self.model` beside `self.x` and `self.u`, so nothing is copied.
+    fn ensure_model(&mut self) -> Res<()> {
         if self.model.is_none() {
             let p = self.params()?;
             self.model =
                 Some(LinearModel::new(&p).or_else(|e| error(format!("the parameters do not describe a model: {e}")))?);
         }
-        Ok(self.model.as_mut().expect("built above"))
+        Ok(())
     }
 
     /// Enter initialization mode at `start_time`.
@@ -223,7 +225,7 @@ impl Instance {
     /// Leave initialization mode: the parameters must now describe a model.
     pub fn exit_initialization_mode(&mut self) -> Res<()> {
         self.expect("ExitInitializationMode", &[Mode::InitializationMode])?;
-        self.model()?;
+        self.ensure_model()?;
         self.mode = match self.interface {
             Interface::CoSimulation => Mode::StepMode,
             Interface::ModelExchange => Mode::EventMode,
@@ -304,8 +306,9 @@ impl Instance {
         if out.len() != NX {
             return error(format!("{} derivatives asked for; the model has {NX}", out.len()));
         }
-        let (x, u) = (self.x.clone(), self.u.clone());
-        out.copy_from_slice(self.model()?.derivatives(&x, &u).as_slice());
+        self.ensure_model()?;
+        let m = self.model.as_ref().expect("built above");
+        out.copy_from_slice(m.derivatives(&self.x, &self.u).as_slice());
         Ok(())
     }
 
@@ -318,7 +321,7 @@ impl Instance {
         if (t - self.time).abs() > 1e-9 * self.time.abs().max(h) {
             return error(format!("currentCommunicationPoint {t} s differs from the FMU's time {} s", self.time));
         }
-        self.model()?;
+        self.ensure_model()?;
         let model = self.model.as_mut().expect("built above");
         model.step(&mut self.x, &self.u, h);
         self.time = t + h;
@@ -338,9 +341,9 @@ impl Instance {
         let needs_model =
             vrs.iter().any(|&v| matches!(lookup(v).map(|x| x.slot), Some(Slot::Derivative(_) | Slot::Torque(_))));
         let computed = if needs_model {
-            let (x, u) = (self.x.clone(), self.u.clone());
-            let m = self.model()?;
-            Some((m.derivatives(&x, &u), &m.torque * &x))
+            self.ensure_model()?;
+            let m = self.model.as_ref().expect("built above");
+            Some((m.derivatives(&self.x, &self.u), &m.torque * &self.x))
         } else {
             None
         };
@@ -494,7 +497,8 @@ impl Instance {
         if knowns.len() != seed.len() || unknowns.len() != out.len() {
             return error("the numbers of value references, seeds and results differ");
         }
-        let m = self.model()?.clone();
+        self.ensure_model()?;
+        let m = self.model.as_ref().expect("built above");
         // column of a known in [x u]
         let cols = knowns
             .iter()
