@@ -153,9 +153,22 @@ impl Sweep {
     /// Both estimates and the mode seen.
     pub fn analyse(&self, settings: &SweepSettings) -> Result<SweepAnalysis> {
         self.check()?;
+        // the excitation is the same for both machines: its spectrum and its frequency over
+        // time are computed once
+        let u = rfft(&detrend(&self.torque_nm));
+        if u.iter().skip(1).all(|c| c.norm() == 0.0) {
+            return Err(IdentError::Data("the drive torque does not oscillate: no sweep to analyse".into()));
+        }
+        let excitation = zero_crossing_frequency(
+            &high_pass(&detrend(&self.torque_nm), self.dt_s, 0.5 * settings.band_hz.0),
+            self.dt_s,
+        );
+        if excitation.len() < 4 {
+            return Err(IdentError::Data("the drive torque does not oscillate: no sweep to analyse".into()));
+        }
         let fits = [
-            self.modal_fit_channel(&self.speed_m2_radps, "speed_m2", settings)?,
-            self.modal_fit_channel(&self.speed_m3_radps, "speed_m3", settings)?,
+            self.modal_fit_channel(&u, &self.speed_m2_radps, "speed_m2", settings)?,
+            self.modal_fit_channel(&u, &self.speed_m3_radps, "speed_m3", settings)?,
         ];
         // the two machines' errors are as correlated as their fit residuals (same lines)
         let rho = {
@@ -177,8 +190,8 @@ impl Sweep {
         let paper = combine(
             "paper",
             &[
-                self.paper_channel(&self.speed_m2_radps, "speed_m2", settings)?,
-                self.paper_channel(&self.speed_m3_radps, "speed_m3", settings)?,
+                self.paper_channel(&excitation, &self.speed_m2_radps, "speed_m2", settings)?,
+                self.paper_channel(&excitation, &self.speed_m3_radps, "speed_m3", settings)?,
             ],
             None,
             None,
@@ -195,8 +208,15 @@ impl Sweep {
         Ok(SweepAnalysis { paper, modal_fit, phase_m2_m3_deg: phase, amplitude_ratio_m2_m3: ratio.norm(), mode })
     }
 
-    /// The paper's procedure on one speed signal.
-    fn paper_channel(&self, speed: &[f64], name: &'static str, st: &SweepSettings) -> Result<ChannelEstimate> {
+    /// The paper's procedure on one speed signal; `excitation` is the torque's (time, frequency)
+    /// from its zero crossings.
+    fn paper_channel(
+        &self,
+        excitation: &[(f64, f64)],
+        speed: &[f64],
+        name: &'static str,
+        st: &SweepSettings,
+    ) -> Result<ChannelEstimate> {
         let dt = self.dt_s;
         let y = high_pass(&detrend(speed), dt, st.high_pass_hz);
         let window = ((st.window_s / dt).round() as usize).max(16);
@@ -213,11 +233,7 @@ impl Sweep {
         while b + 1 < power.len() && power[b + 1] >= limit {
             b += 1;
         }
-        let excitation = zero_crossing_frequency(&high_pass(&detrend(&self.torque_nm), dt, 0.5 * st.band_hz.0), dt);
-        if excitation.len() < 4 {
-            return Err(IdentError::Data("the drive torque does not oscillate: no sweep to analyse".into()));
-        }
-        let f = |t: f64| interpolate(&excitation, t).expect("non-empty");
+        let f = |t: f64| interpolate(excitation, t).expect("non-empty");
         let (fa, fb) = (f(times[a]), f(times[b]));
         Ok(ChannelEstimate {
             signal: name,
@@ -226,15 +242,18 @@ impl Sweep {
         })
     }
 
-    fn modal_fit_channel(&self, speed: &[f64], name: &'static str, st: &SweepSettings) -> Result<ChannelFit> {
+    /// The modal fit of one speed signal; `u` is the torque's spectrum (non-zero, checked).
+    fn modal_fit_channel(
+        &self,
+        u: &[Complex64],
+        speed: &[f64],
+        name: &'static str,
+        st: &SweepSettings,
+    ) -> Result<ChannelFit> {
         let n = speed.len();
         let df = 1.0 / (n as f64 * self.dt_s);
-        let u = rfft(&detrend(&self.torque_nm));
         let y = rfft(&detrend(speed));
         let umax = u.iter().skip(1).map(|c| c.norm()).fold(0.0, f64::max);
-        if umax == 0.0 {
-            return Err(IdentError::Data("the drive torque does not oscillate: no sweep to analyse".into()));
-        }
         // excited lines of the band: |U| at least 2 % of its largest value
         let excited: Vec<usize> = (1..u.len())
             .filter(|&k| {
