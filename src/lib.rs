@@ -2,7 +2,9 @@
 //! commands print. The physics is in the `plant` crate.
 pub mod bearing;
 pub mod bundle;
+pub mod control;
 pub mod fmu_package;
 pub mod identification;
+pub mod plot;
 pub mod report;
 pub mod rigfile;

@@ -129,6 +129,38 @@ enum Command {
         #[arg(long, value_name = "DIR")]
         descriptions: Option<PathBuf>,
     },
+    /// Model-predictive control of the rig (section 1.2): the closed loop with the MPC and
+    /// with PI speed control after a drive-torque step or during a sweep; step time,
+    /// allocations, first input against the exact optimum, shuffle overshoot and settling.
+    Mpc {
+        /// Prediction horizon, steps of 1 ms (10-100 in the real-time regime).
+        #[arg(long, default_value_t = 50)]
+        horizon: usize,
+        /// What the rig is asked to do.
+        #[arg(long, value_enum, default_value_t = ScenarioArg::Step)]
+        scenario: ScenarioArg,
+        /// Number of move blocks (1, 2, 4, … steps, the last taking the rest); 0: every step free.
+        #[arg(long, default_value_t = 4)]
+        blocks: usize,
+        /// QP formulation.
+        #[arg(long, value_enum, default_value_t = FormulationArg::Condensed)]
+        formulation: FormulationArg,
+        /// Parameter set (a rig file, as for `rigtwin fmu --params`); default: the FMU's.
+        #[arg(long, value_name = "FILE")]
+        params: Option<PathBuf>,
+        /// Wall-clock limit of one QP solve, µs; past it the shifted previous plan is applied.
+        #[arg(long, default_value_t = 600.0)]
+        time_limit_us: f64,
+        /// Print JSON instead of text.
+        #[arg(long)]
+        json: bool,
+        /// Write side-shaft torque, load speed and machine torques over time as SVG.
+        #[arg(long, value_name = "FILE.svg")]
+        plot: Option<PathBuf>,
+        /// Write the QPs of the checked steps as JSON for scripts/qp_compare.py (OSQP, DAQP).
+        #[arg(long, value_name = "FILE.json")]
+        export_qp: Option<PathBuf>,
+    },
     /// Which additional spring and variants make j_drive and c_short identifiable.
     DesignSpring {
         /// Rig description (default: the paper's); its j_drive and c_short are the expected values.
@@ -147,6 +179,18 @@ enum Command {
         #[arg(long)]
         json: bool,
     },
+}
+
+#[derive(Clone, Copy, clap::ValueEnum)]
+enum ScenarioArg {
+    Step,
+    Sweep,
+}
+
+#[derive(Clone, Copy, clap::ValueEnum)]
+enum FormulationArg {
+    Condensed,
+    Sparse,
 }
 
 #[derive(Clone, Copy, clap::ValueEnum)]
@@ -297,6 +341,44 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             let [a, b] = rigtwin::fmu_package::package(&p, &lib, &out)?;
             println!("wrote {} and {} (token {})", a.display(), b.display(), rigtwin_fmu::token(&p));
         }
+        Command::Mpc { horizon, scenario, blocks, formulation, params, time_limit_us, json, plot, export_qp } => {
+            let p = match &params {
+                Some(f) => rigtwin::fmu_package::params_of_rig(&load_rig(f)?),
+                None => rigtwin_fmu::FmuParams::default(),
+            };
+            let mut settings = mpc::MpcSettings::powertrain(horizon);
+            settings.move_blocks = if blocks == 0 { Vec::new() } else { mpc::exponential_blocks(horizon, blocks) };
+            settings.formulation = match formulation {
+                FormulationArg::Condensed => mpc::Formulation::Condensed,
+                FormulationArg::Sparse => mpc::Formulation::Sparse,
+            };
+            settings.solver.time_limit_s = time_limit_us * 1e-6;
+            settings.validate().map_err(|e| anyhow::anyhow!("--horizon/--blocks/--time-limit-us: {e}"))?;
+            let kind = match scenario {
+                ScenarioArg::Step => mpc::closed_loop::ScenarioKind::Step,
+                ScenarioArg::Sweep => mpc::closed_loop::ScenarioKind::Sweep,
+            };
+            let mut qps = Vec::new();
+            let (rep, run) = rigtwin::control::report(
+                &p,
+                &settings,
+                kind,
+                Some(mpc::alloc_counter::allocations),
+                export_qp.is_some().then_some(&mut qps),
+            )?;
+            if let Some(f) = &export_qp {
+                let text = serde_json::to_string(&serde_json::json!({ "qps": qps }))?;
+                std::fs::write(f, text).map_err(|e| anyhow::anyhow!("{}: {e}", f.display()))?;
+            }
+            if let Some(f) = &plot {
+                rigtwin::control::plot(f, &p, &run, kind)?;
+            }
+            if json {
+                print_json(&rep.to_json())?;
+            } else {
+                print!("{}", rep.human());
+            }
+        }
         Command::DesignSpring { rig, sigma_hz, target, model, json } => {
             let r = match &rig {
                 Some(f) => load_rig(f)?,
@@ -331,6 +413,10 @@ fn run(cli: Cli) -> anyhow::Result<()> {
     }
     Ok(())
 }
+
+/// Counts heap allocations so that `rigtwin mpc` can report them per controller step.
+#[global_allocator]
+static ALLOCATOR: mpc::alloc_counter::Counting = mpc::alloc_counter::Counting;
 
 fn main() -> ExitCode {
     match run(Cli::parse()) {

@@ -21,13 +21,7 @@ impl Default for FmuParams {
     /// `sfd_shake` (KCM, full coupling, IVFM; `tests/fmu_defaults.rs` re-identifies it).
     fn default() -> Self {
         FmuParams {
-            powertrain: RigParams {
-                d_short: 1.12,
-                d_long: 0.87,
-                load_drag: 0.5,
-                c_long: Some(1479.0 * 7.0 / 9.0),
-                ..paper::params(0.529, 1479.0)
-            },
+            powertrain: paper::damped_params(),
             variant: Variant::V1,
             bearing: BearingModel {
                 element: Coefficients {

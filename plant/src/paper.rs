@@ -68,6 +68,13 @@ pub fn params(j_drive: f64, c_short: f64) -> RigParams {
     }
 }
 
+/// The paper's V1/V2 set (Table 4) with the side-shaft dampings and load-machine drag declared
+/// in the example bundles (`../shared/DATA.md`): d_short 1.12, d_long 0.87 Nm s/rad, drag
+/// 0.5 Nm s/rad. The default plant of the FMU and the MPC.
+pub fn damped_params() -> RigParams {
+    RigParams { d_short: 1.12, d_long: 0.87, load_drag: 0.5, c_long: Some(1479.0 * 7.0 / 9.0), ..params(0.529, 1479.0) }
+}
+
 /// The chain of Table A1 with the spring of Table A2 between J5 and J6 on the left and,
 /// mirrored, between J12 and J13 on the right.
 pub fn chain() -> RigChain {

@@ -1,0 +1,351 @@
+//! `rigtwin mpc`: the closed loop of the MPC and of the PI baseline on the default rig, the
+//! controller's timing and allocations, its first input against the exact optimum, and the
+//! QPs for other solvers.
+
+use std::path::Path;
+
+use mpc::closed_loop::{
+    compare, median_p99, step_figures, Comparison, LinearPlant, Plant, Probes, RigSignals, Scenario, ScenarioKind,
+    StepFigures,
+};
+use mpc::qp::QpSnapshot;
+use mpc::{Controller, MpcSettings, StepInfo};
+use plant::mechanical::Output;
+use plant::statespace::StateSpace;
+use serde::Serialize;
+
+/// The PI baseline's speed-loop crossover, Hz (a typical rig's load-machine speed loop).
+pub const PI_BANDWIDTH_HZ: f64 = 5.0;
+/// Settling band of the shuffle figures, relative to the step height.
+pub const SETTLING_BAND: f64 = 0.02;
+/// Every this many steps the real-time first input is compared with the exact optimum.
+pub const CHECK_EVERY: usize = 25;
+
+/// The plant the controller is built on: the open-differential state space of `params`
+/// with speed and side-shaft torque outputs.
+pub fn plant_of(params: &rigtwin_fmu::FmuParams) -> anyhow::Result<StateSpace> {
+    Ok(params.powertrain.open_differential(params.variant)?.state_space(&[Output::Speeds, Output::SpringTorques])?)
+}
+
+/// Median, 99th percentile and maximum, µs.
+#[derive(Debug, Clone, Serialize)]
+pub struct Timing {
+    /// Median.
+    pub median: f64,
+    /// 99th percentile.
+    pub p99: f64,
+    /// Largest.
+    pub max: f64,
+}
+
+/// Shuffle figures of both controllers.
+#[derive(Debug, Clone, Serialize)]
+pub struct Shuffle {
+    /// With the MPC.
+    pub mpc: StepFigures,
+    /// With the PI speed loops.
+    pub baseline: StepFigures,
+    /// The signal the figures are taken from.
+    pub signal: String,
+    /// Drive-torque step, Nm.
+    pub step_nm: f64,
+    /// Settling band, relative to the step height.
+    pub settling_band: f64,
+}
+
+/// A pair of figures.
+#[derive(Debug, Clone, Serialize)]
+pub struct Pair {
+    /// With the MPC.
+    pub mpc: f64,
+    /// With the PI speed loops.
+    pub baseline: f64,
+}
+
+/// What `rigtwin mpc` prints.
+#[derive(Debug, Clone, Serialize)]
+pub struct MpcReport {
+    /// Prediction horizon, steps of `dt_s`.
+    pub horizon: usize,
+    /// Sample time, s.
+    pub dt_s: f64,
+    /// QP formulation.
+    pub formulation: mpc::Formulation,
+    /// Move blocks.
+    pub move_blocks: Vec<usize>,
+    /// QP size: variables and constraint rows.
+    pub qp_variables: usize,
+    /// Constraint rows.
+    pub qp_constraints: usize,
+    /// The run the timing comes from.
+    pub scenario: ScenarioKind,
+    /// One controller step (estimate + target + QP + bookkeeping), µs.
+    pub step_time_us: Timing,
+    /// Interior-point iterations per step: mean.
+    pub qp_iterations_mean: f64,
+    /// Largest number of heap allocations in one step after the first.
+    pub allocations_per_step: u64,
+    /// Heap allocations in the first step.
+    pub allocations_first_step: u64,
+    /// Steps that fell back to the shifted plan.
+    pub fallbacks: usize,
+    /// Largest |u₀ − u₀*| over the checked steps, Nm (u₀* from the same QP solved to 1e-12).
+    pub u0_error_nm: f64,
+    /// Steps checked for `u0_error_nm`.
+    pub u0_checked_steps: usize,
+    /// Shuffle after the drive-torque step.
+    pub shuffle: Shuffle,
+    /// RMS load-speed error (both machines), rad/s.
+    pub speed_error_rms_radps: Pair,
+    /// Sweep only: largest deviation of the short side-shaft torque from its quasi-static
+    /// share of the drive torque (half of it) during the sweep, Nm.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub sweep_peak_torque_deviation_nm: Option<Pair>,
+}
+
+/// Rename `u0_error_nm` and `step_time_us` to the contract's spelling.
+impl MpcReport {
+    /// JSON with the contract's keys (`u0_error_Nm`).
+    pub fn to_json(&self) -> serde_json::Value {
+        let mut v = serde_json::to_value(self).expect("report serialises");
+        if let Some(o) = v.as_object_mut() {
+            if let Some(e) = o.remove("u0_error_nm") {
+                o.insert("u0_error_Nm".into(), e);
+            }
+            if let Some(e) = o.remove("sweep_peak_torque_deviation_nm") {
+                o.insert("sweep_peak_torque_deviation_Nm".into(), e);
+            }
+        }
+        v
+    }
+
+    /// Text for the terminal.
+    pub fn human(&self) -> String {
+        let mut s = String::new();
+        s += &format!(
+            "MPC on the open-differential rig: N = {} at {} ms, {:?}, move blocks {:?} → QP {} variables × {} constraints\n",
+            self.horizon,
+            self.dt_s * 1e3,
+            self.formulation,
+            self.move_blocks,
+            self.qp_variables,
+            self.qp_constraints
+        );
+        s += &format!(
+            "  controller step ({:?} run): median {:.1} µs, p99 {:.1} µs, max {:.1} µs; {:.1} QP iterations; {} allocation(s) per step; {} fallback(s)\n",
+            self.scenario,
+            self.step_time_us.median,
+            self.step_time_us.p99,
+            self.step_time_us.max,
+            self.qp_iterations_mean,
+            self.allocations_per_step,
+            self.fallbacks
+        );
+        s += &format!(
+            "  first input vs the exact optimum: max |u0 − u0*| = {:.2e} Nm over {} steps\n",
+            self.u0_error_nm, self.u0_checked_steps
+        );
+        s += &format!(
+            "  shuffle after a {} Nm drive-torque step ({}; settling band ±{:.0} %):\n",
+            self.shuffle.step_nm,
+            self.shuffle.signal,
+            self.shuffle.settling_band * 100.0
+        );
+        s += &format!(
+            "    MPC:      overshoot {:5.1} %, settling time {:.3} s\n",
+            self.shuffle.mpc.overshoot * 100.0,
+            self.shuffle.mpc.settling_time_s
+        );
+        s += &format!(
+            "    PI ({} Hz speed loops): overshoot {:5.1} %, settling time {:.3} s\n",
+            PI_BANDWIDTH_HZ,
+            self.shuffle.baseline.overshoot * 100.0,
+            self.shuffle.baseline.settling_time_s
+        );
+        s += &format!(
+            "  RMS load-speed error: MPC {:.4} rad/s, PI {:.4} rad/s\n",
+            self.speed_error_rms_radps.mpc, self.speed_error_rms_radps.baseline
+        );
+        if let Some(p) = &self.sweep_peak_torque_deviation_nm {
+            s += &format!(
+                "  sweep: peak side-shaft torque deviation from half the drive torque: MPC {:.2} Nm, PI {:.2} Nm\n",
+                p.mpc, p.baseline
+            );
+        }
+        s
+    }
+}
+
+/// A QP of one step with what rigtwin's Clarabel made of it.
+#[derive(Debug, Clone, Serialize)]
+pub struct ExportedQp {
+    /// The QP.
+    #[serde(flatten)]
+    pub qp: QpSnapshot,
+    /// The real-time solve's first input, Nm.
+    #[serde(rename = "clarabel_u0_Nm")]
+    pub clarabel_u0_nm: Vec<f64>,
+    /// The real-time step's wall-clock time, µs (estimate + QP).
+    pub clarabel_solve_time_us: f64,
+}
+
+fn run_on(
+    ss: &StateSpace,
+    settings: &MpcSettings,
+    scenario: &Scenario,
+    j_load: f64,
+    probes: Probes<'_>,
+) -> anyhow::Result<Comparison> {
+    let mut make = |x0: &nalgebra::DVector<f64>| -> Result<Box<dyn Plant>, String> {
+        Ok(Box::new(LinearPlant::new(ss, settings.dt_s, x0).map_err(|e| e.to_string())?))
+    };
+    compare(ss, &mut make, settings, scenario, j_load, PI_BANDWIDTH_HZ, probes).map_err(|e| anyhow::anyhow!(e))
+}
+
+/// Runs the closed loops and measures. `allocations` reads the process's allocation counter
+/// (the binary installs `mpc::alloc_counter::Counting`); `export` receives the QPs of the
+/// checked steps.
+pub fn report(
+    params: &rigtwin_fmu::FmuParams,
+    settings: &MpcSettings,
+    kind: ScenarioKind,
+    allocations: Option<fn() -> u64>,
+    mut export: Option<&mut Vec<ExportedQp>>,
+) -> anyhow::Result<(MpcReport, Comparison)> {
+    let ss = plant_of(params)?;
+    let sig = RigSignals::of(&ss)?;
+    let j_load = params.powertrain.effective(params.variant)?.j_m2;
+    let scenario = Scenario::new(kind);
+    let mut u0_error: f64 = 0.0;
+    let mut checked = 0;
+    let mut failure: Option<String> = None;
+    let mut hook = |k: usize, c: &Controller, info: &StepInfo| {
+        if k % CHECK_EVERY != 0 || info.fallback {
+            return;
+        }
+        match c.exact_first_input() {
+            Ok(exact) => {
+                let rt = c.planned_first_input();
+                let e = rt.iter().zip(&exact).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
+                u0_error = u0_error.max(e);
+                checked += 1;
+                if let Some(list) = export.as_deref_mut() {
+                    list.push(ExportedQp {
+                        qp: c.snapshot(),
+                        clarabel_u0_nm: rt,
+                        clarabel_solve_time_us: info.elapsed_s * 1e6,
+                    });
+                }
+            }
+            Err(e) => failure = Some(e.to_string()),
+        }
+    };
+    let run = run_on(&ss, settings, &scenario, j_load, Probes { allocations, after_step: Some(&mut hook) })?;
+    if let Some(f) = failure {
+        anyhow::bail!("reference solve of the exact optimum failed: {f}");
+    }
+    let step = if kind == ScenarioKind::Step {
+        run.clone()
+    } else {
+        run_on(&ss, settings, &Scenario::new(ScenarioKind::Step), j_load, Probes::default())?
+    };
+    let k_step = (Scenario::new(ScenarioKind::Step).start_s / settings.dt_s).round() as usize;
+    let fig =
+        |t: &mpc::closed_loop::Trace| step_figures(&t.output(sig.short_shaft), k_step, settings.dt_s, SETTLING_BAND);
+    let speed_rms = |t: &mpc::closed_loop::Trace| {
+        let n = t.outputs.len() as f64;
+        (t.outputs
+            .iter()
+            .map(|y| {
+                (y[sig.speeds[0]] - scenario.speed_radps).powi(2) + (y[sig.speeds[2]] - scenario.speed_radps).powi(2)
+            })
+            .sum::<f64>()
+            / (2.0 * n))
+            .sqrt()
+    };
+    let sweep_dev = |t: &mpc::closed_loop::Trace| {
+        t.outputs
+            .iter()
+            .zip(&t.time_s)
+            .filter(|(_, &time)| time >= scenario.start_s)
+            .map(|(y, &time)| (y[sig.short_shaft] - 0.5 * scenario.drive_torque(time)).abs())
+            .fold(0.0, f64::max)
+    };
+    let times_us: Vec<f64> = run.step_times_s.iter().map(|t| t * 1e6).collect();
+    let (median, p99) = median_p99(&times_us);
+    let rep = MpcReport {
+        horizon: settings.horizon,
+        dt_s: settings.dt_s,
+        formulation: settings.formulation,
+        move_blocks: settings.blocks(),
+        qp_variables: 0,
+        qp_constraints: 0,
+        scenario: kind,
+        step_time_us: Timing { median, p99, max: times_us.iter().copied().fold(0.0, f64::max) },
+        qp_iterations_mean: run.iterations.iter().map(|&i| i as f64).sum::<f64>() / run.iterations.len().max(1) as f64,
+        allocations_per_step: run.step_allocations.iter().skip(1).copied().max().unwrap_or(0),
+        allocations_first_step: run.step_allocations.first().copied().unwrap_or(0),
+        fallbacks: run.fallbacks,
+        u0_error_nm: u0_error,
+        u0_checked_steps: checked,
+        shuffle: Shuffle {
+            mpc: fig(&step.mpc),
+            baseline: fig(&step.baseline),
+            signal: ss.output_names[sig.short_shaft].clone(),
+            step_nm: Scenario::new(ScenarioKind::Step).torque_nm,
+            settling_band: SETTLING_BAND,
+        },
+        speed_error_rms_radps: Pair { mpc: speed_rms(&run.mpc), baseline: speed_rms(&run.baseline) },
+        sweep_peak_torque_deviation_nm: (kind == ScenarioKind::Sweep)
+            .then(|| Pair { mpc: sweep_dev(&run.mpc), baseline: sweep_dev(&run.baseline) }),
+    };
+    let c = Controller::new(&ss, settings)?;
+    Ok((MpcReport { qp_variables: c.qp().nvars(), qp_constraints: c.qp().nrows(), ..rep }, run))
+}
+
+/// SVG: side-shaft torque, load speed and the MPC's inputs over time.
+pub fn plot(path: &Path, params: &rigtwin_fmu::FmuParams, run: &Comparison, kind: ScenarioKind) -> anyhow::Result<()> {
+    use crate::plot::{lines, Panel};
+    let ss = plant_of(params)?;
+    let sig = RigSignals::of(&ss)?;
+    let series = |t: &mpc::closed_loop::Trace, j: usize| {
+        t.time_s.iter().zip(&t.outputs).map(|(&x, y)| (x, y[j])).collect::<Vec<_>>()
+    };
+    let input = |t: &mpc::closed_loop::Trace, j: usize| {
+        t.time_s.iter().zip(&t.inputs).map(|(&x, u)| (x, u[j])).collect::<Vec<_>>()
+    };
+    let panels = vec![
+        Panel {
+            title: "short side-shaft torque".into(),
+            x_desc: "time [s]".into(),
+            y_desc: "T_short_side_shaft [Nm]".into(),
+            log_y: false,
+            series: vec![
+                ("MPC".into(), series(&run.mpc, sig.short_shaft)),
+                ("PI baseline".into(), series(&run.baseline, sig.short_shaft)),
+            ],
+        },
+        Panel {
+            title: "load machine M2 speed".into(),
+            x_desc: "time [s]".into(),
+            y_desc: "w_m2 [rad/s]".into(),
+            log_y: false,
+            series: vec![
+                ("MPC".into(), series(&run.mpc, sig.speeds[0])),
+                ("PI baseline".into(), series(&run.baseline, sig.speeds[0])),
+            ],
+        },
+        Panel {
+            title: "machine torques with MPC".into(),
+            x_desc: "time [s]".into(),
+            y_desc: "torque [Nm]".into(),
+            log_y: false,
+            series: vec![
+                ("M_m2".into(), input(&run.mpc, sig.inputs[0])),
+                ("M_drive".into(), input(&run.mpc, sig.inputs[1])),
+                ("M_m3".into(), input(&run.mpc, sig.inputs[2])),
+            ],
+        },
+    ];
+    lines(path, &format!("rigtwin mpc: {kind:?} scenario, MPC vs PI speed control"), &panels)
+}
