@@ -1,0 +1,39 @@
+//! Heap allocations per controller step, counted by a global allocator.
+
+#[global_allocator]
+static ALLOCATOR: mpc::alloc_counter::Counting = mpc::alloc_counter::Counting;
+
+use mpc::closed_loop::{steady_spin, LinearPlant, Plant};
+use mpc::{Controller, MpcSettings};
+use plant::mechanical::Output;
+
+/// rigtwin's part of a step allocates nothing; Clarabel 0.11's `solve` allocates once per call
+/// (its timer tree is cleared and one nested map re-created), so a whole step makes exactly
+/// one allocation after the first. The QP update itself (q, b) is allocation-free.
+#[test]
+fn a_step_allocates_only_inside_clarabel() {
+    let ss = plant::paper::damped_params()
+        .open_differential(plant::rig::Variant::V1)
+        .unwrap()
+        .state_space(&[Output::Speeds, Output::SpringTorques])
+        .unwrap();
+    let (x0, u0) = steady_spin(&ss, 10.0).unwrap();
+    for horizon in [10, 50, 100] {
+        let mut c = Controller::new(&ss, &MpcSettings::powertrain(horizon)).unwrap();
+        c.reset(&x0, &u0);
+        let mut p = LinearPlant::new(&ss, 1e-3, &x0).unwrap();
+        let mut y = vec![0.0; 5];
+        let mut u = u0.clone();
+        let mut counts = Vec::new();
+        for k in 0..200 {
+            y.copy_from_slice(p.outputs());
+            let r = [10.0, 10.0, if k > 20 { 40.0 } else { 0.0 }];
+            let before = mpc::alloc_counter::allocations();
+            let (v, _) = c.step(&y, &r);
+            u.copy_from_slice(v);
+            counts.push(mpc::alloc_counter::allocations() - before);
+            p.advance(&u).unwrap();
+        }
+        assert!(counts[1..].iter().all(|&c| c == 1), "N = {horizon}: allocations per step {:?}", &counts[..10]);
+    }
+}
