@@ -161,6 +161,22 @@ enum Command {
         #[arg(long, value_name = "FILE.json")]
         export_qp: Option<PathBuf>,
     },
+    /// Close the loop with measured data: the declared model's residual, the effect it lacks,
+    /// the extended model, the error before and after (torsional_sweep or bearing_shake).
+    Diagnose {
+        /// The measurement bundle.
+        #[arg(value_name = "BUNDLE.toml")]
+        bundle: PathBuf,
+        /// Also write the report as JSON to this file.
+        #[arg(long, value_name = "FILE")]
+        json: Option<PathBuf>,
+        /// Write measured vs model (before and after) and the residual spectrum as SVG.
+        #[arg(long, value_name = "FILE.svg")]
+        plot: Option<PathBuf>,
+        /// Write the extended model as a rig file (`rigtwin fmu --params` takes it).
+        #[arg(long, value_name = "FILE.toml")]
+        write_model: Option<PathBuf>,
+    },
     /// Which additional spring and variants make j_drive and c_short identifiable.
     DesignSpring {
         /// Rig description (default: the paper's); its j_drive and c_short are the expected values.
@@ -378,6 +394,27 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             } else {
                 print!("{}", rep.human());
             }
+        }
+        Command::Diagnose { bundle, json, plot, write_model } => {
+            let start = std::time::Instant::now();
+            let show = std::io::IsTerminal::is_terminal(&std::io::stderr());
+            let progress = |name: &str| {
+                if show || start.elapsed().as_secs_f64() > 1.0 {
+                    eprintln!("  fitted {name} ({:.1} s)", start.elapsed().as_secs_f64());
+                }
+            };
+            let d = rigtwin::diagnosis::diagnose(&bundle, &progress)?;
+            if let Some(f) = &json {
+                let text = serde_json::to_string_pretty(&d.report)?;
+                rigtwin::fmu_package::atomic_write(f, text.as_bytes())?;
+            }
+            if let Some(f) = &write_model {
+                rigtwin::fmu_package::atomic_write(f, d.model_toml.as_bytes())?;
+            }
+            if let Some(f) = &plot {
+                rigtwin::plot::lines(f, &format!("rigtwin diagnose {}", bundle.display()), &d.panels)?;
+            }
+            print!("{}", rigtwin::diagnosis::human(&d.report));
         }
         Command::DesignSpring { rig, sigma_hz, target, model, json } => {
             let r = match &rig {

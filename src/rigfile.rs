@@ -42,6 +42,13 @@
 //! M_kg = [[5.4, 0.0], [0.0, 5.9]]
 //! [bearing.support]              # k_x, k_y, c_x, c_y, m_x, m_y as in a bearing_shake bundle
 //!
+//! [effects]                      # optional: drive-path effects (`rigtwin diagnose --write-model`)
+//! time_delay_s = 0.0             # dead time of the drive torque
+//! actuator_lag_s = 0.0           # first-order lag of the drive torque
+//! backlash_rad = 0.0             # total play of each side shaft
+//! compliance_stiffness_nm_per_rad = 0.0   # motor-cage compliance inside the drive (0: rigid)
+//! compliance_motor_fraction = 0.5         # share of j_drive on the motor side
+//!
 //! [bending]                      # optional (section 2.5): the shaft line carrying the spring
 //! bearing_a_m = 0.0              # as a beam on two bearings; beyond them it overhangs
 //! bearing_b_m = 0.08
@@ -81,6 +88,8 @@ struct RigFile {
     chain: Option<ChainFile>,
     bending: Option<BendingFile>,
     bearing: Option<plant::BearingModel>,
+    #[serde(default)]
+    effects: plant::effects::DriveEffects,
 }
 
 #[derive(Deserialize)]
@@ -246,6 +255,7 @@ pub fn parse_rig(text: &str, file: &Path) -> Result<Rig, RigFileError> {
         model: raw.model,
         chain,
         bearing: raw.bearing,
+        effects: raw.effects,
         bending: raw.bending.map(|b| plant::Beam {
             bearing_a_m: b.bearing_a_m,
             bearing_b_m: b.bearing_b_m,
@@ -263,6 +273,7 @@ pub fn parse_rig(text: &str, file: &Path) -> Result<Rig, RigFileError> {
         }),
     };
     rig.validate().map_err(|e| err(e.to_string()))?;
+    rig.effects.validate().map_err(|e| err(e.to_string()))?;
     Ok(rig)
 }
 

@@ -69,7 +69,8 @@ impl FmuPlant {
         // plant's output order: w_m2, w_drive, w_m3, T_short_side_shaft, T_long_side_shaft
         assert_eq!(names[3], "T_short_side_shaft");
         let outputs = [vr("w_m2"), vr("w_drive"), vr("w_m3"), vr("T_short"), vr("T_long")];
-        let mut p = FmuPlant { inst, t: 0.0, y: vec![0.0; 5], outputs, inputs: [vr("M_m2"), vr("M_drive"), vr("M_m3")] };
+        let mut p =
+            FmuPlant { inst, t: 0.0, y: vec![0.0; 5], outputs, inputs: [vr("M_m2"), vr("M_drive"), vr("M_m3")] };
         p.read();
         p
     }
@@ -108,7 +109,8 @@ fn closed_loop_with_the_fmu_matches_the_plant() {
     let scenario = Scenario { duration_s: 0.4, ..Scenario::new(ScenarioKind::Step) };
     let j_load = params.powertrain.effective(params.variant).unwrap().j_m2;
     let names = ss.output_names.clone();
-    let mut fmu = |x0: &nalgebra::DVector<f64>| -> Result<Box<dyn Plant>, String> { Ok(Box::new(FmuPlant::new(x0, &names))) };
+    let mut fmu =
+        |x0: &nalgebra::DVector<f64>| -> Result<Box<dyn Plant>, String> { Ok(Box::new(FmuPlant::new(x0, &names))) };
     let with_fmu = compare(&ss, &mut fmu, &settings, &scenario, j_load, 5.0, Probes::default()).unwrap();
     let mut lin = |x0: &nalgebra::DVector<f64>| -> Result<Box<dyn Plant>, String> {
         Ok(Box::new(LinearPlant::new(&ss, 1e-3, x0).map_err(|e| e.to_string())?))

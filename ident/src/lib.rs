@@ -13,6 +13,7 @@
 
 pub mod bearing;
 pub mod design;
+pub mod diagnose;
 pub mod error;
 pub mod parametrise;
 pub mod signal;

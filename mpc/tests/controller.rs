@@ -136,7 +136,12 @@ fn hard_bounds_and_rates_hold() {
         let set = &s.inputs[j];
         let dmax = set.max_rate_nm_per_s * s.dt_s;
         for k in 0..us.len() {
-            assert!(us[k][i] <= set.max_nm + 1e-9 && us[k][i] >= set.min_nm - 1e-9, "{} at {k}: {}", set.name, us[k][i]);
+            assert!(
+                us[k][i] <= set.max_nm + 1e-9 && us[k][i] >= set.min_nm - 1e-9,
+                "{} at {k}: {}",
+                set.name,
+                us[k][i]
+            );
             if k > 0 {
                 assert!((us[k][i] - us[k - 1][i]).abs() <= dmax + 1e-9, "{} rate at {k}", set.name);
             }

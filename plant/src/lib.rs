@@ -26,6 +26,7 @@
 pub mod bearing;
 pub mod bending;
 pub mod chain;
+pub mod effects;
 pub mod error;
 pub mod mechanical;
 pub mod modal;

@@ -96,5 +96,6 @@ pub fn rig() -> Rig {
         chain: Some(chain()),
         bending: None, // the paper gives no geometry of its spring
         bearing: None,
+        effects: Default::default(),
     }
 }

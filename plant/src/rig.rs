@@ -421,6 +421,8 @@ pub struct Rig {
     pub bending: Option<crate::bending::Beam>,
     /// A bearing test element on its support, exported beside the powertrain by the FMU.
     pub bearing: Option<crate::bearing::BearingModel>,
+    /// Drive-path effects the reduced model leaves out (found by `rigtwin diagnose`).
+    pub effects: crate::effects::DriveEffects,
 }
 
 impl Rig {

@@ -1,0 +1,1 @@
+//! Diagnosis of a bearing shake test (to come in this file).

@@ -1,0 +1,98 @@
+//! A small Levenberg–Marquardt for the diagnosis' fits: forward-difference Jacobian, parameters
+//! in whatever space the caller chooses (log for positive ones).
+
+use nalgebra::{DMatrix, DVector};
+
+/// Minimises ‖f(x)‖² from `x0`; `f` returns `None` where the model cannot be evaluated.
+/// Returns the best x and its sum of squares.
+pub fn minimise(f: &dyn Fn(&[f64]) -> Option<Vec<f64>>, x0: &[f64], max_iter: usize) -> (Vec<f64>, f64) {
+    let p = x0.len();
+    let mut x = x0.to_vec();
+    let Some(mut r) = f(&x) else { return (x, f64::INFINITY) };
+    let mut cost: f64 = r.iter().map(|v| v * v).sum();
+    let mut lambda = 1e-3;
+    for _ in 0..max_iter {
+        // Jacobian by forward differences.
+        let mut jac = DMatrix::zeros(r.len(), p);
+        let mut ok = true;
+        for j in 0..p {
+            let h = 1e-5 * x[j].abs().max(1.0);
+            let mut xp = x.clone();
+            xp[j] += h;
+            match f(&xp) {
+                Some(rp) => {
+                    for i in 0..r.len() {
+                        jac[(i, j)] = (rp[i] - r[i]) / h;
+                    }
+                }
+                None => ok = false,
+            }
+        }
+        if !ok {
+            break;
+        }
+        let jt = jac.transpose();
+        let jtj = &jt * &jac;
+        let g = &jt * DVector::from_column_slice(&r);
+        let mut improved = false;
+        for _ in 0..8 {
+            let mut a = jtj.clone();
+            for j in 0..p {
+                a[(j, j)] += lambda * jtj[(j, j)].max(1e-12);
+            }
+            let Some(step) = a.lu().solve(&(-&g)) else {
+                lambda *= 10.0;
+                continue;
+            };
+            let xn: Vec<f64> = x.iter().zip(step.iter()).map(|(a, b)| a + b).collect();
+            if let Some(rn) = f(&xn) {
+                let cn: f64 = rn.iter().map(|v| v * v).sum();
+                if cn < cost {
+                    let rel = (cost - cn) / cost;
+                    x = xn;
+                    r = rn;
+                    cost = cn;
+                    lambda = (lambda / 5.0).max(1e-9);
+                    improved = true;
+                    if rel < 1e-7 {
+                        return (x, cost);
+                    }
+                    break;
+                }
+            }
+            lambda *= 10.0;
+        }
+        if !improved {
+            break;
+        }
+    }
+    (x, cost)
+}
+
+/// Golden-section minimisation of a 1-D function on [a, b].
+pub fn golden(f: &dyn Fn(f64) -> f64, mut a: f64, mut b: f64, iters: usize) -> f64 {
+    let g = (5f64.sqrt() - 1.0) / 2.0;
+    let mut c = b - g * (b - a);
+    let mut d = a + g * (b - a);
+    let (mut fc, mut fd) = (f(c), f(d));
+    for _ in 0..iters {
+        if fc < fd {
+            b = d;
+            d = c;
+            fd = fc;
+            c = b - g * (b - a);
+            fc = f(c);
+        } else {
+            a = c;
+            c = d;
+            fc = fd;
+            d = a + g * (b - a);
+            fd = f(d);
+        }
+    }
+    if fc < fd {
+        c
+    } else {
+        d
+    }
+}

@@ -1,0 +1,49 @@
+//! Closing the loop with measured data: the declared model's residual, the evidence on what it
+//! lacks, every candidate effect fitted with the declared parameters re-fitted, and the choice
+//! by error reduction and an information criterion (BIC with the residual's effective sample
+//! count).
+
+pub mod bearing;
+mod lm;
+pub mod torsional;
+
+use std::collections::BTreeMap;
+
+use serde::Serialize;
+
+/// One candidate's result.
+#[derive(Debug, Clone, Serialize)]
+pub struct CandidateScore {
+    /// Effect name (the report's vocabulary).
+    pub effect: String,
+    /// Fitted parameters (effect and re-fitted declared ones), SI, keys with units.
+    pub parameters: BTreeMap<String, f64>,
+    /// Normalised error after fitting.
+    pub error_after: f64,
+    /// Bayesian information criterion n_eff ln(SSR/n) + k ln(n_eff); lower is better.
+    pub score: f64,
+    /// Number of fitted parameters.
+    pub fitted_parameters: usize,
+}
+
+/// Bayesian information criterion of a residual of `n` values whose effective count is
+/// `n_eff`, with sum of squares `ssr` and `k` fitted parameters.
+pub fn bic(ssr: f64, n: usize, n_eff: f64, k: usize) -> f64 {
+    n_eff * (ssr / n as f64).max(1e-300).ln() + k as f64 * n_eff.max(2.0).ln()
+}
+
+/// Lag-1 autocorrelation of `r` (0 for white noise).
+pub fn lag1_autocorrelation(r: &[f64]) -> f64 {
+    let m = r.iter().sum::<f64>() / r.len().max(1) as f64;
+    let den: f64 = r.iter().map(|v| (v - m).powi(2)).sum();
+    if den == 0.0 {
+        return 0.0;
+    }
+    r.windows(2).map(|w| (w[0] - m) * (w[1] - m)).sum::<f64>() / den
+}
+
+/// Effective sample count of an AR(1)-like residual: n (1 − ρ)/(1 + ρ), at least 10.
+pub fn effective_count(n: usize, rho: f64) -> f64 {
+    let rho = rho.clamp(-0.99, 0.999_999);
+    (n as f64 * (1.0 - rho) / (1.0 + rho)).max(10.0)
+}

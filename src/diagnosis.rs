@@ -1,0 +1,193 @@
+//! `rigtwin diagnose`: the declared model of a bundle against its measurement, the effect it
+//! lacks, the extended model and the error before and after.
+
+use std::collections::BTreeMap;
+use std::path::Path;
+
+use ident::diagnose::CandidateScore;
+use serde::Serialize;
+
+use crate::bundle::{load_bearing, load_torsional};
+
+/// The report (the JSON contract's keys first).
+#[derive(Debug, Clone, Serialize)]
+pub struct DiagnosisReport {
+    /// The chosen effect.
+    pub effect: String,
+    /// Its fitted parameters (SI; the declared ones re-fitted beside them).
+    pub parameters: BTreeMap<String, f64>,
+    /// Error of the declared model.
+    pub error_before: f64,
+    /// Error of the extended model.
+    pub error_after: f64,
+    /// Every candidate, best score first.
+    pub candidates: Vec<CandidateScore>,
+    /// `torsional_sweep` or `bearing_shake`.
+    pub kind: String,
+    /// How the error is defined.
+    pub error_definition: String,
+    /// The best model still leaves a structured residual.
+    pub structured_residual: bool,
+    /// What the residual showed.
+    pub evidence: serde_json::Value,
+    /// Remarks.
+    pub notes: Vec<String>,
+}
+
+/// The diagnosis with what is needed to plot it and write the model.
+pub struct Diagnosis {
+    /// The report.
+    pub report: DiagnosisReport,
+    /// The extended model as a rig file (TOML).
+    pub model_toml: String,
+    /// Plot panels.
+    pub panels: Vec<crate::plot::Panel>,
+}
+
+fn kind_of(file: &Path) -> anyhow::Result<String> {
+    #[derive(serde::Deserialize)]
+    struct K {
+        kind: Option<String>,
+    }
+    let text = std::fs::read_to_string(file).map_err(|e| anyhow::anyhow!("{}: cannot read: {e}", file.display()))?;
+    let k: K =
+        toml::from_str(&text).map_err(|e| anyhow::anyhow!("{}: {}", file.display(), e.to_string().trim_end()))?;
+    k.kind.ok_or_else(|| anyhow::anyhow!("{}: missing key `kind` (torsional_sweep or bearing_shake)", file.display()))
+}
+
+/// Diagnoses the bundle `file`; `progress` is told each candidate as it is fitted.
+pub fn diagnose(file: &Path, progress: &(dyn Fn(&str) + Sync)) -> anyhow::Result<Diagnosis> {
+    match kind_of(file)?.as_str() {
+        "torsional_sweep" => torsional(file, progress),
+        "bearing_shake" => bearing(file, progress),
+        other => anyhow::bail!("{}: `kind` = \"{other}\": expected torsional_sweep or bearing_shake", file.display()),
+    }
+}
+
+fn spectrum(x: &[f64], dt: f64, f_max: f64) -> Vec<(f64, f64)> {
+    let s = ident::signal::rfft(x);
+    let n = x.len();
+    let df = 1.0 / (n as f64 * dt);
+    // Average neighbouring lines into ~0.25 Hz bins to keep the plot readable.
+    let bin = ((0.25 / df).round() as usize).max(1);
+    s.chunks(bin)
+        .enumerate()
+        .map(|(i, c)| {
+            (
+                (i * bin) as f64 * df,
+                (c.iter().map(|v| v.norm_sqr()).sum::<f64>() / c.len() as f64).sqrt() * 2.0 / n as f64,
+            )
+        })
+        .take_while(|(f, _)| *f <= f_max)
+        .collect()
+}
+
+fn torsional(file: &Path, progress: &(dyn Fn(&str) + Sync)) -> anyhow::Result<Diagnosis> {
+    let b = load_torsional(file)?;
+    let d = ident::diagnose::torsional::diagnose(&b.sweep, &b.model, b.variant, progress)
+        .map_err(|e| anyhow::anyhow!("{}: {e}", file.display()))?;
+    let mut notes = Vec::new();
+    if d.effect == "none" {
+        notes.push("no candidate beats re-fitting the declared parameters".into());
+    }
+    if d.structured_residual {
+        notes.push(format!(
+            "the best model still leaves a structured residual (lag-1 autocorrelation above 0.5, error {:.3})",
+            d.error_after
+        ));
+    }
+    let model_toml = rig_toml(&d.model.rig, d.model.variant, &d.model.effects, None)?;
+    let dt = b.sweep.dt_s;
+    let t = &d.traces;
+    let res_before: Vec<f64> = t.measured.iter().zip(&t.before).map(|(a, b)| a - b).collect();
+    let res_after: Vec<f64> = t.measured.iter().zip(&t.after).map(|(a, b)| a - b).collect();
+    let pts = |y: &[f64]| t.time_s.iter().zip(y).map(|(&a, &b)| (a, b)).collect::<Vec<_>>();
+    let panels = vec![
+        crate::plot::Panel {
+            title: "M2 speed (offsets and drift removed)".into(),
+            x_desc: "time [s]".into(),
+            y_desc: "speed_m2 [rad/s]".into(),
+            log_y: false,
+            series: vec![
+                ("measured".into(), pts(&t.measured)),
+                ("declared model".into(), pts(&t.before)),
+                (format!("with {}", d.effect), pts(&t.after)),
+            ],
+        },
+        crate::plot::Panel {
+            title: "residual spectrum (M2 speed)".into(),
+            x_desc: "frequency [Hz]".into(),
+            y_desc: "amplitude [rad/s]".into(),
+            log_y: true,
+            series: vec![
+                ("declared model".into(), spectrum(&res_before, dt, 60.0)),
+                (format!("with {}", d.effect), spectrum(&res_after, dt, 60.0)),
+                ("measured speed".into(), spectrum(&t.measured, dt, 60.0)),
+            ],
+        },
+    ];
+    Ok(Diagnosis {
+        report: DiagnosisReport {
+            effect: d.effect,
+            parameters: d.parameters,
+            error_before: d.error_before,
+            error_after: d.error_after,
+            candidates: d.candidates,
+            kind: "torsional_sweep".into(),
+            error_definition: "‖y_meas − y_model‖/‖y_meas‖ over both load-machine speeds, below 0.5 Hz removed".into(),
+            structured_residual: d.structured_residual,
+            evidence: serde_json::to_value(&d.evidence)?,
+            notes,
+        },
+        model_toml,
+        panels,
+    })
+}
+
+fn bearing(_file: &Path, _progress: &(dyn Fn(&str) + Sync)) -> anyhow::Result<Diagnosis> {
+    anyhow::bail!("bearing diagnosis: not yet")
+}
+
+/// The extended model as a rig file that `rigtwin fmu --params` reads.
+pub fn rig_toml(
+    rig: &plant::RigParams,
+    variant: plant::Variant,
+    effects: &plant::effects::DriveEffects,
+    bearing: Option<&plant::BearingModel>,
+) -> anyhow::Result<String> {
+    #[derive(Serialize)]
+    struct Out<'a> {
+        name: String,
+        variant: plant::Variant,
+        model: &'a plant::RigParams,
+        #[serde(skip_serializing_if = "Option::is_none")]
+        effects: Option<&'a plant::effects::DriveEffects>,
+        #[serde(skip_serializing_if = "Option::is_none")]
+        bearing: Option<&'a plant::BearingModel>,
+    }
+    let out = Out {
+        name: "extended model written by rigtwin diagnose".into(),
+        variant,
+        model: rig,
+        effects: (!effects.is_empty()).then_some(effects),
+        bearing,
+    };
+    Ok(toml::to_string(&out)?)
+}
+
+/// Text for the terminal.
+pub fn human(r: &DiagnosisReport) -> String {
+    let mut s = format!("diagnosis ({}): {}\n", r.kind, r.effect);
+    for (k, v) in &r.parameters {
+        s += &format!("  {k} = {v:.6e}\n");
+    }
+    s += &format!("  error before {:.4}, after {:.4} ({})\n", r.error_before, r.error_after, r.error_definition);
+    s += "  candidates (best score first):\n";
+    for c in &r.candidates {
+        s += &format!("    {:<26} error {:.4}  score {:>12.1}\n", c.effect, c.error_after, c.score);
+    }
+    for n in &r.notes {
+        s += &format!("  note: {n}\n");
+    }
+    s
+}
