@@ -52,13 +52,31 @@ pub fn find_library() -> anyhow::Result<PathBuf> {
 
 /// The FMU parameter set of a rig: its reduced model and variant, and its bearing if it
 /// describes one (else the identified squeeze-film damper of the default).
-pub fn params_of_rig(rig: &Rig) -> FmuParams {
+pub fn params_of_rig(rig: &Rig) -> anyhow::Result<FmuParams> {
+    let e = &rig.effects;
+    let unsupported: Vec<&str> = [
+        (e.time_delay_s > 0.0, "time_delay_s"),
+        (e.actuator_lag_s > 0.0, "actuator_lag_s"),
+        (e.backlash_rad > 0.0, "backlash_rad"),
+        (e.compliance_stiffness_nm_per_rad > 0.0, "compliance_stiffness_nm_per_rad"),
+    ]
+    .into_iter()
+    .filter_map(|(on, k)| on.then_some(k))
+    .collect();
+    if !unsupported.is_empty() {
+        anyhow::bail!(
+            "{}: [effects] {} cannot be exported yet: the FMU carries the linear open-differential model \
+             (re-fitted parameters and shaft damping) and the bearing (added mass, cross coupling, damping)",
+            rig.name,
+            unsupported.join(", ")
+        );
+    }
     let default = FmuParams::default();
-    FmuParams {
+    Ok(FmuParams {
         powertrain: rig.model.clone(),
         variant: rig.variant,
         bearing: rig.bearing.clone().unwrap_or(default.bearing),
-    }
+    })
 }
 
 /// Writes both modelDescription.xml files into `dir/fmi3/` and `dir/fmi2/`.

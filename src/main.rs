@@ -347,7 +347,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         }
         Command::Fmu { params, out, descriptions } => {
             let p = match &params {
-                Some(f) => rigtwin::fmu_package::params_of_rig(&load_rig(f)?),
+                Some(f) => rigtwin::fmu_package::params_of_rig(&load_rig(f)?)?,
                 None => rigtwin_fmu::FmuParams::default(),
             };
             if let Some(d) = &descriptions {
@@ -359,7 +359,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         }
         Command::Mpc { horizon, scenario, blocks, formulation, params, time_limit_us, json, plot, export_qp } => {
             let p = match &params {
-                Some(f) => rigtwin::fmu_package::params_of_rig(&load_rig(f)?),
+                Some(f) => rigtwin::fmu_package::params_of_rig(&load_rig(f)?)?,
                 None => rigtwin_fmu::FmuParams::default(),
             };
             let mut settings = mpc::MpcSettings::powertrain(horizon);
@@ -433,7 +433,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             let (r, variant) = load(&rig)?;
             let summary = report::summary(&r, variant)?;
             // the FMUs of the same rig, in the variant asked for
-            let params = rigtwin::fmu_package::params_of_rig(&Rig { variant, ..r.clone() });
+            let params = rigtwin::fmu_package::params_of_rig(&Rig { variant, ..r.clone() })?;
             let lib = rigtwin::fmu_package::find_library()?;
             let [a, b] = rigtwin::fmu_package::package(&params, &lib, &out)?;
             if rig.json {

@@ -394,7 +394,7 @@ pub struct BearingFit {
 }
 
 /// The free coefficients: (matrix 0 = K, 1 = C, 2 = M; row; column).
-fn unknowns(structure: Structure, coupling: Coupling) -> Vec<(usize, usize, usize)> {
+pub(crate) fn unknowns(structure: Structure, coupling: Coupling) -> Vec<(usize, usize, usize)> {
     let entries: Vec<(usize, usize)> = match coupling {
         Coupling::Direct => vec![(0, 0), (1, 1)],
         Coupling::Full => vec![(0, 0), (0, 1), (1, 0), (1, 1)],
@@ -443,7 +443,7 @@ fn rows(ms: &[Matrix2<Complex64>]) -> DVector<f64> {
 }
 
 /// Solves the column-scaled linear least-squares problem a p ≈ b.
-fn least_squares(a: &DMatrix<f64>, b: &DVector<f64>) -> Result<DVector<f64>> {
+pub(crate) fn least_squares(a: &DMatrix<f64>, b: &DVector<f64>) -> Result<DVector<f64>> {
     let scale = DVector::from_iterator(a.ncols(), a.column_iter().map(|c| c.norm().max(1e-300)));
     let mut an = a.clone();
     for (j, mut c) in an.column_iter_mut().enumerate() {
