@@ -220,7 +220,7 @@ pub fn report(
     let mut checked = 0;
     let mut failure: Option<String> = None;
     let mut hook = |k: usize, c: &Controller, info: &StepInfo| {
-        if k % CHECK_EVERY != 0 || info.fallback {
+        if !k.is_multiple_of(CHECK_EVERY) || info.fallback {
             return;
         }
         match c.exact_first_input() {

@@ -218,8 +218,8 @@ fn bearing(file: &Path, progress: &(dyn Fn(&str) + Sync)) -> anyhow::Result<Diag
         series: vec![("declared model".into(), misfit(&none)), (format!("with {}", d.effect), misfit(&d.model))],
     });
     let mut evidence = serde_json::to_value(&d.evidence)?;
-    evidence["r2_before"] = serde_json::to_value(&d.r2_before)?;
-    evidence["r2_after"] = serde_json::to_value(&d.r2_after)?;
+    evidence["r2_before"] = serde_json::to_value(d.r2_before)?;
+    evidence["r2_after"] = serde_json::to_value(d.r2_after)?;
     Ok(Diagnosis {
         report: DiagnosisReport {
             effect: d.effect,

@@ -111,6 +111,41 @@ pub fn interpolate(table: &[(f64, f64)], x: f64) -> Option<f64> {
     Some(a.1 + (b.1 - a.1) * (x - a.0) / (b.0 - a.0))
 }
 
+/// Zero-phase second-order Butterworth high-pass (bilinear transform, run forward then
+/// backward): O(n), for removing offsets and drift from signals compared with each other
+/// through the same filter.
+pub fn filtfilt_high_pass(x: &[f64], dt_s: f64, cutoff_hz: f64) -> Vec<f64> {
+    let k = (std::f64::consts::PI * cutoff_hz * dt_s).tan();
+    let q = std::f64::consts::FRAC_1_SQRT_2;
+    let norm = 1.0 / (1.0 + k / q + k * k);
+    let (b0, b1, b2) = (norm, -2.0 * norm, norm);
+    let (a1, a2) = (2.0 * (k * k - 1.0) * norm, (1.0 - k / q + k * k) * norm);
+    let run = |input: &mut dyn Iterator<Item = f64>| -> Vec<f64> {
+        let (mut x1, mut x2, mut y1, mut y2) = (0.0, 0.0, 0.0, 0.0);
+        let mut out = Vec::with_capacity(x.len());
+        let mut first = true;
+        for v in input {
+            if first {
+                // start from rest at the first value: no step into the filter
+                x1 = v;
+                x2 = v;
+                first = false;
+            }
+            let y = b0 * v + b1 * x1 + b2 * x2 - a1 * y1 - a2 * y2;
+            x2 = x1;
+            x1 = v;
+            y2 = y1;
+            y1 = y;
+            out.push(y);
+        }
+        out
+    };
+    let forward = run(&mut x.iter().copied());
+    let mut back = run(&mut forward.iter().rev().copied());
+    back.reverse();
+    back
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -160,39 +195,4 @@ mod tests {
         let at = interpolate(&f, 5.0).unwrap();
         assert_relative_eq!(at, 11.0, max_relative = 1e-3);
     }
-}
-
-/// Zero-phase second-order Butterworth high-pass (bilinear transform, run forward then
-/// backward): O(n), for removing offsets and drift from signals compared with each other
-/// through the same filter.
-pub fn filtfilt_high_pass(x: &[f64], dt_s: f64, cutoff_hz: f64) -> Vec<f64> {
-    let k = (std::f64::consts::PI * cutoff_hz * dt_s).tan();
-    let q = std::f64::consts::FRAC_1_SQRT_2;
-    let norm = 1.0 / (1.0 + k / q + k * k);
-    let (b0, b1, b2) = (norm, -2.0 * norm, norm);
-    let (a1, a2) = (2.0 * (k * k - 1.0) * norm, (1.0 - k / q + k * k) * norm);
-    let run = |input: &mut dyn Iterator<Item = f64>| -> Vec<f64> {
-        let (mut x1, mut x2, mut y1, mut y2) = (0.0, 0.0, 0.0, 0.0);
-        let mut out = Vec::with_capacity(x.len());
-        let mut first = true;
-        for v in input {
-            if first {
-                // start from rest at the first value: no step into the filter
-                x1 = v;
-                x2 = v;
-                first = false;
-            }
-            let y = b0 * v + b1 * x1 + b2 * x2 - a1 * y1 - a2 * y2;
-            x2 = x1;
-            x1 = v;
-            y2 = y1;
-            y1 = y;
-            out.push(y);
-        }
-        out
-    };
-    let forward = run(&mut x.iter().copied());
-    let mut back = run(&mut forward.iter().rev().copied());
-    back.reverse();
-    back
 }

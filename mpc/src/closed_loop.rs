@@ -337,6 +337,12 @@ pub struct Comparison {
     pub fallbacks: usize,
 }
 
+/// Called after each MPC step with the sample index, the controller and what the step did.
+pub type AfterStep<'a> = &'a mut dyn FnMut(usize, &Controller, &crate::controller::StepInfo);
+
+/// Makes a fresh plant starting at a state.
+pub type MakePlant<'a> = &'a mut dyn FnMut(&DVector<f64>) -> std::result::Result<Box<dyn Plant>, String>;
+
 /// Probes called around the MPC's steps: an allocation counter, and a hook after each step
 /// (sample index, controller) — e.g. to keep QPs for other solvers.
 #[derive(Default)]
@@ -344,7 +350,7 @@ pub struct Probes<'a> {
     /// Reads a process-wide allocation count.
     pub allocations: Option<fn() -> u64>,
     /// Called after each MPC step.
-    pub after_step: Option<&'a mut dyn FnMut(usize, &Controller, &crate::controller::StepInfo)>,
+    pub after_step: Option<AfterStep<'a>>,
 }
 
 /// Runs the MPC (with `settings`) and the PI baseline (speed loops of `pi_bandwidth_hz` on load
@@ -352,7 +358,7 @@ pub struct Probes<'a> {
 /// speed. `make_plant` gives a fresh plant per run (the linear plant, an FMU, …).
 pub fn compare(
     plant: &StateSpace,
-    make_plant: &mut dyn FnMut(&DVector<f64>) -> std::result::Result<Box<dyn Plant>, String>,
+    make_plant: MakePlant<'_>,
     settings: &crate::settings::MpcSettings,
     scenario: &Scenario,
     j_load: f64,

@@ -13,7 +13,7 @@
 //! - [`estimator`]: steady-state Kalman filter with input disturbances (offset-free).
 //! - [`controller`]: one allocation-free step; the shifted previous plan when a solve fails.
 //! - [`closed_loop`]: simulation against a plant, the PI baseline, step figures.
-//! - [`riccati`]: `dare`.
+//! - [`riccati`]: the discrete Riccati equation (`dare`).
 #![warn(missing_docs)]
 
 pub mod alloc_counter;

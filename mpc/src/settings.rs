@@ -249,7 +249,10 @@ impl MpcSettings {
         pos("state_noise_ratio", self.state_noise_ratio)?;
         for (i, u) in self.inputs.iter().enumerate() {
             let key = |f: &str| format!("inputs[{i}].{f}");
-            if !(u.min_nm < u.max_nm) || !u.min_nm.is_finite() || !u.max_nm.is_finite() {
+            if u.min_nm.partial_cmp(&u.max_nm) != Some(std::cmp::Ordering::Less)
+                || !u.min_nm.is_finite()
+                || !u.max_nm.is_finite()
+            {
                 return Err(setting(
                     key("min_nm"),
                     format!("need finite min_nm < max_nm, got {} and {}", u.min_nm, u.max_nm),
@@ -267,7 +270,7 @@ impl MpcSettings {
             }
             nonneg(&key("weight"), y.weight)?;
             if let (Some(lo), Some(hi)) = (y.soft_min, y.soft_max) {
-                if !(lo < hi) {
+                if lo.partial_cmp(&hi) != Some(std::cmp::Ordering::Less) {
                     return Err(setting(key("soft_min"), format!("need soft_min < soft_max, got {lo} and {hi}")));
                 }
             }

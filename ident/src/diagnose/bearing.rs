@@ -96,6 +96,9 @@ pub struct BearingDiagnosis {
 
 type Unknown = (usize, usize, usize);
 
+/// A fitted candidate: name, fit, unknowns, parameter count, reported parameters.
+type Fitted = (String, BearingModelFit, Vec<Unknown>, usize, BTreeMap<String, f64>);
+
 /// Linear least squares of the unknowns for fixed η and τ; returns the fit and its error.
 fn fit_linear(
     imp: &Impedances,
@@ -246,7 +249,7 @@ pub fn diagnose(
     };
     let n = 8 * imp.h.len();
     let w_mid = 2.0 * PI * 0.5 * (imp.frequencies_hz[0] + imp.frequencies_hz[imp.frequencies_hz.len() - 1]);
-    let mut results: Vec<(String, BearingModelFit, Vec<Unknown>, usize, BTreeMap<String, f64>)> = Vec::new();
+    let mut results: Vec<Fitted> = Vec::new();
     let push = |results: &mut Vec<_>, name: &str, fit: BearingModelFit, us: Vec<Unknown>, k: usize| {
         let mut p = declared_parameters(&fit, &us);
         match name {

@@ -281,7 +281,7 @@ pub fn diagnose(
     let measured =
         [high_pass(&sweep.speed_m2_radps, dt, HIGH_PASS_HZ), high_pass(&sweep.speed_m3_radps, dt, HIGH_PASS_HZ)];
     let norm = measured.iter().flatten().map(|v| v * v).sum::<f64>().sqrt();
-    if !(norm > 0.0) {
+    if norm.is_nan() || norm <= 0.0 {
         return Err(IdentError::Data("the load-machine speeds do not oscillate: nothing to compare".into()));
     }
     let speed0 = 0.5 * (sweep.speed_m2_radps[0] + sweep.speed_m3_radps[0]);
@@ -314,17 +314,24 @@ pub fn diagnose(
                     }
                     let f = |x: &[f64]| problem.residual(&(c.build)(problem, x));
                     // Grid over the effect's own parameters with the declared ones, then LM on all.
-                    let mut best: Option<(Vec<f64>, f64)> = None;
-                    for s in &c.starts {
+                    // The grid's points run on two threads: the other candidates are done
+                    // long before the slow one (backlash) has finished its grid.
+                    let cost_at = |s: &Vec<f64>| {
                         let mut x = vec![0.0, 0.0];
                         x.extend(s);
-                        if let Some(r) = f(&x) {
-                            let cost: f64 = r.iter().map(|v| v * v).sum();
-                            if best.as_ref().is_none_or(|b| cost < b.1) {
-                                best = Some((x, cost));
-                            }
-                        }
-                    }
+                        let cost = f(&x).map(|r| r.iter().map(|v| v * v).sum::<f64>());
+                        (x, cost.unwrap_or(f64::INFINITY))
+                    };
+                    let half = c.starts.len().div_ceil(2);
+                    let (a, b) = c.starts.split_at(half);
+                    let mut grid: Vec<(Vec<f64>, f64)> = std::thread::scope(|inner| {
+                        let other = inner.spawn(|| b.iter().map(cost_at).collect::<Vec<_>>());
+                        let mut mine: Vec<_> = a.iter().map(cost_at).collect();
+                        mine.extend(other.join().unwrap_or_default());
+                        mine
+                    });
+                    grid.retain(|g| g.1.is_finite());
+                    let best = grid.into_iter().min_by(|p, q| p.1.total_cmp(&q.1));
                     let (x, cost) = match best {
                         Some((x0, _)) => lm::minimise(&f, &x0, 12),
                         None => (vec![], f64::INFINITY),
