@@ -10,7 +10,6 @@ use mpc::closed_loop::{
 };
 use mpc::qp::QpSnapshot;
 use mpc::{Controller, MpcSettings, StepInfo};
-use plant::mechanical::Output;
 use plant::statespace::StateSpace;
 use serde::Serialize;
 
@@ -24,7 +23,7 @@ pub const CHECK_EVERY: usize = 25;
 /// The plant the controller is built on: the open-differential state space of `params`
 /// with speed and side-shaft torque outputs.
 pub fn plant_of(params: &rigtwin_fmu::FmuParams) -> anyhow::Result<StateSpace> {
-    Ok(params.powertrain.open_differential(params.variant)?.state_space(&[Output::Speeds, Output::SpringTorques])?)
+    Ok(mpc::closed_loop::rig_plant(&params.powertrain, params.variant)?)
 }
 
 /// Median, 99th percentile and maximum, µs.

@@ -10,6 +10,23 @@ use rigtwin::identification::{self, FrequencyMethod, Source};
 use rigtwin::report::{self, ModelKind};
 use rigtwin::rigfile::load_rig;
 
+/// `print!` that does not panic when stdout is closed early (`rigtwin ... | head`): what
+/// cannot be written is dropped, as with any command-line tool whose reader has gone.
+macro_rules! out {
+    ($($arg:tt)*) => {{
+        use std::io::Write as _;
+        let _ = write!(std::io::stdout(), $($arg)*);
+    }};
+}
+
+/// `println!` that does not panic when stdout is closed early.
+macro_rules! outln {
+    ($($arg:tt)*) => {{
+        use std::io::Write as _;
+        let _ = writeln!(std::io::stdout(), $($arg)*);
+    }};
+}
+
 #[derive(Parser)]
 #[command(
     name = "rigtwin",
@@ -273,7 +290,7 @@ fn load(args: &RigArgs) -> anyhow::Result<(Rig, Variant)> {
 }
 
 fn print_json<T: serde::Serialize>(v: &T) -> anyhow::Result<()> {
-    println!("{}", serde_json::to_string_pretty(v)?);
+    outln!("{}", serde_json::to_string_pretty(v)?);
     Ok(())
 }
 
@@ -285,7 +302,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             if rig.json {
                 print_json(&rep)?;
             } else {
-                print!("{}", rep.human(12));
+                out!("{}", rep.human(12));
             }
         }
         Command::Reduce { rig, masses } => {
@@ -294,7 +311,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             if rig.json {
                 print_json(&rep)?;
             } else {
-                print!("{}", rep.human());
+                out!("{}", rep.human());
             }
         }
         Command::Parametrise { bundles, measured, rig, sigma_hz, model, method, samples, json } => {
@@ -316,7 +333,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             if json {
                 print_json(&rep)?;
             } else {
-                print!("{}", rep.human());
+                out!("{}", rep.human());
             }
         }
         Command::Bearing { bundle, structure, coupling, method, plot, json } => {
@@ -342,7 +359,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             if json {
                 print_json(&rep)?;
             } else {
-                print!("{}", rep.human());
+                out!("{}", rep.human());
             }
         }
         Command::Fmu { params, out, descriptions } => {
@@ -355,7 +372,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             }
             let lib = rigtwin::fmu_package::find_library()?;
             let [a, b] = rigtwin::fmu_package::package(&p, &lib, &out)?;
-            println!("wrote {} and {} (token {})", a.display(), b.display(), rigtwin_fmu::token(&p));
+            outln!("wrote {} and {} (token {})", a.display(), b.display(), rigtwin_fmu::token(&p));
         }
         Command::Mpc { horizon, scenario, blocks, formulation, params, time_limit_us, json, plot, export_qp } => {
             let p = match &params {
@@ -392,7 +409,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             if json {
                 print_json(&rep.to_json())?;
             } else {
-                print!("{}", rep.human());
+                out!("{}", rep.human());
             }
         }
         Command::Diagnose { bundle, json, plot, write_model } => {
@@ -414,7 +431,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             if let Some(f) = &plot {
                 rigtwin::plot::lines(f, &format!("rigtwin diagnose {}", bundle.display()), &d.panels)?;
             }
-            print!("{}", rigtwin::diagnosis::human(&d.report));
+            out!("{}", rigtwin::diagnosis::human(&d.report));
         }
         Command::DesignSpring { rig, sigma_hz, target, model, json } => {
             let r = match &rig {
@@ -426,7 +443,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             if json {
                 print_json(&rep)?;
             } else {
-                print!("{}", rep.human());
+                out!("{}", rep.human());
             }
         }
         Command::Run { rig, out } => {
@@ -439,8 +456,8 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             if rig.json {
                 print_json(&summary)?;
             } else {
-                print!("{}", summary.human());
-                println!(
+                out!("{}", summary.human());
+                outln!(
                     "\n5. FMUs (FMI 3.0 and 2.0, co-simulation and model exchange)\n  {}\n  {}",
                     a.display(),
                     b.display()

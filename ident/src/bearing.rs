@@ -547,6 +547,11 @@ pub fn r2(imp: &Impedances, support: &Support, element: &Coefficients) -> R2 {
             element.impedance(w) + support_impedance(support, w)
         })
         .collect();
+    r2_against(imp, &model)
+}
+
+/// r² of every impedance term of `model` (one matrix per line) against the measured ones.
+pub fn r2_against(imp: &Impedances, model: &[Matrix2<Complex64>]) -> R2 {
     let term = |i: usize, j: usize| -> [f64; 2] {
         let one = |part: fn(&Complex64) -> f64| {
             let y: Vec<f64> = imp.h.iter().map(|h| part(&h[(i, j)])).collect();

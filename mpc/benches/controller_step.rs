@@ -6,9 +6,8 @@
 use std::time::{Duration, Instant};
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
-use mpc::closed_loop::{median_p99, steady_spin, LinearPlant, Plant, Scenario, ScenarioKind};
+use mpc::closed_loop::{median_p99, rig_plant, steady_spin, LinearPlant, Plant, Scenario, ScenarioKind};
 use mpc::{Controller, MpcSettings};
-use plant::mechanical::Output;
 
 #[global_allocator]
 static ALLOCATOR: mpc::alloc_counter::Counting = mpc::alloc_counter::Counting;
@@ -24,11 +23,7 @@ struct Loop {
 
 impl Loop {
     fn new(horizon: usize) -> Self {
-        let ss = plant::paper::damped_params()
-            .open_differential(plant::rig::Variant::V1)
-            .unwrap()
-            .state_space(&[Output::Speeds, Output::SpringTorques])
-            .unwrap();
+        let ss = rig_plant(&plant::paper::damped_params(), plant::rig::Variant::V1).unwrap();
         let (x0, u0) = steady_spin(&ss, 10.0).unwrap();
         let mut settings = MpcSettings::powertrain(horizon);
         settings.solver.time_limit_s = 1.0; // measure the solve, never cut it short

@@ -305,6 +305,13 @@ impl RigSignals {
     }
 }
 
+/// The open-differential rig of `params` in `variant` with the outputs the controller and the
+/// figures use: the three speeds and the two side-shaft torques.
+pub fn rig_plant(params: &plant::rig::RigParams, variant: plant::rig::Variant) -> Result<StateSpace> {
+    use plant::mechanical::Output;
+    Ok(params.open_differential(variant)?.state_space(&[Output::Speeds, Output::SpringTorques])?)
+}
+
 /// Steady spinning at `speed` (all angles zero, every speed equal) and the inputs that hold
 /// it (drag compensation): u = −B⁺ A x.
 pub fn steady_spin(plant: &StateSpace, speed: f64) -> Result<(DVector<f64>, Vec<f64>)> {

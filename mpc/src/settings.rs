@@ -129,7 +129,7 @@ impl Default for SolverSettings {
     /// Duality-gap tolerance 1e-8: at N = 50 the first input is within 1e-4 Nm of the exact
     /// optimum (1e-3 Nm at 1e-7, same iteration count); the time limit is 60 % of a 1 kHz
     /// period. Iterative refinement is off:
-    /// on this QP it doubled the solve time (`examples/tune.rs`) without changing the first
+    /// on this QP it doubled the solve time (measured with `rigtwin mpc`) without changing the first
     /// input by more than 1e-5 Nm.
     fn default() -> Self {
         SolverSettings {

@@ -3,20 +3,15 @@
 #[global_allocator]
 static ALLOCATOR: mpc::alloc_counter::Counting = mpc::alloc_counter::Counting;
 
-use mpc::closed_loop::{steady_spin, LinearPlant, Plant};
+use mpc::closed_loop::{rig_plant, steady_spin, LinearPlant, Plant};
 use mpc::{Controller, MpcSettings};
-use plant::mechanical::Output;
 
 /// rigtwin's part of a step allocates nothing; Clarabel 0.11's `solve` allocates once per call
 /// (its timer tree is cleared and one nested map re-created), so a whole step makes exactly
 /// one allocation after the first. The QP update itself (q, b) is allocation-free.
 #[test]
 fn a_step_allocates_only_inside_clarabel() {
-    let ss = plant::paper::damped_params()
-        .open_differential(plant::rig::Variant::V1)
-        .unwrap()
-        .state_space(&[Output::Speeds, Output::SpringTorques])
-        .unwrap();
+    let ss = rig_plant(&plant::paper::damped_params(), plant::rig::Variant::V1).unwrap();
     let (x0, u0) = steady_spin(&ss, 10.0).unwrap();
     for horizon in [10, 50, 100] {
         let mut c = Controller::new(&ss, &MpcSettings::powertrain(horizon)).unwrap();

@@ -2,15 +2,14 @@
 //! static torque split of the open differential, offset-free tracking under an unmodelled
 //! torque and a mis-set inertia, bounds, the fallback, and both QP formulations.
 
-use mpc::closed_loop::{steady_spin, LinearPlant, Plant, RigSignals};
+use mpc::closed_loop::{rig_plant, steady_spin, LinearPlant, Plant, RigSignals};
 use mpc::{exponential_blocks, Controller, Formulation, MpcError, MpcSettings};
 use nalgebra::{DMatrix, DVector};
-use plant::mechanical::Output;
 use plant::rig::{RigParams, Variant};
 use plant::statespace::StateSpace;
 
 fn rig(params: &RigParams) -> StateSpace {
-    params.open_differential(Variant::V1).unwrap().state_space(&[Output::Speeds, Output::SpringTorques]).unwrap()
+    rig_plant(params, Variant::V1).unwrap()
 }
 
 fn nominal() -> StateSpace {

@@ -160,21 +160,7 @@ pub fn error(imp: &Impedances, support: &Support, fit: &BearingModelFit) -> f64 
 fn r2_of(imp: &Impedances, support: &Support, fit: &BearingModelFit) -> R2 {
     let model: Vec<Matrix2<Complex64>> =
         imp.frequencies_hz.iter().map(|f| fit.measured_impedance(support, 2.0 * PI * f)).collect();
-    let term = |i: usize, j: usize| -> [f64; 2] {
-        let one = |part: fn(&Complex64) -> f64| {
-            let y: Vec<f64> = imp.h.iter().map(|h| part(&h[(i, j)])).collect();
-            let mean = y.iter().sum::<f64>() / y.len() as f64;
-            let tot: f64 = y.iter().map(|v| (v - mean).powi(2)).sum();
-            let res: f64 = y.iter().zip(&model).map(|(a, m)| (a - part(&m[(i, j)])).powi(2)).sum();
-            if tot > 0.0 {
-                1.0 - res / tot
-            } else {
-                f64::NAN
-            }
-        };
-        [one(|c| c.re), one(|c| c.im)]
-    };
-    R2 { hxx: term(0, 0), hxy: term(0, 1), hyx: term(1, 0), hyy: term(1, 1) }
+    crate::bearing::r2_against(imp, &model)
 }
 
 fn declared_parameters(fit: &BearingModelFit, us: &[Unknown]) -> BTreeMap<String, f64> {
