@@ -417,7 +417,7 @@ fn basis(u: (usize, usize, usize), omega: f64) -> Matrix2<Complex64> {
     b
 }
 
-fn coefficients(us: &[(usize, usize, usize)], p: &DVector<f64>) -> Coefficients {
+pub(crate) fn coefficients(us: &[(usize, usize, usize)], p: &DVector<f64>) -> Coefficients {
     let mut c = Coefficients::default();
     for (u, &v) in us.iter().zip(p.iter()) {
         let m = match u.0 {

@@ -11,7 +11,7 @@ use plant::{Coefficients, Support};
 use serde::Serialize;
 
 use super::{bic, lm, CandidateScore};
-use crate::bearing::{least_squares, unknowns, Coupling, Impedances, Structure, R2};
+use crate::bearing::{coefficients, least_squares, unknowns, Coupling, Impedances, Structure, R2};
 use crate::error::Result;
 
 /// The bearing vocabulary.
@@ -132,16 +132,7 @@ fn fit_linear(
         }
     }
     let p = least_squares(&a, &b).ok()?;
-    let mut element = Coefficients::default();
-    for (u, &v) in us.iter().zip(p.iter()) {
-        let m = match u.0 {
-            0 => &mut element.k_n_per_m,
-            1 => &mut element.c_ns_per_m,
-            _ => &mut element.m_kg,
-        };
-        m[u.1][u.2] = v;
-    }
-    let fit = BearingModelFit { element, loss_factor: eta, sensor_delay_s: tau };
+    let fit = BearingModelFit { element: coefficients(us, &p), loss_factor: eta, sensor_delay_s: tau };
     let e = error(imp, support, &fit);
     e.is_finite().then_some((fit, e))
 }
