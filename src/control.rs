@@ -277,8 +277,8 @@ pub fn report(
         dt_s: settings.dt_s,
         formulation: settings.formulation,
         move_blocks: settings.blocks(),
-        qp_variables: 0,
-        qp_constraints: 0,
+        qp_variables: run.qp_size.0,
+        qp_constraints: run.qp_size.1,
         scenario: kind,
         step_time_us: Timing { median, p99, max: times_us.iter().copied().fold(0.0, f64::max) },
         qp_iterations_mean: run.iterations.iter().map(|&i| i as f64).sum::<f64>() / run.iterations.len().max(1) as f64,
@@ -298,8 +298,7 @@ pub fn report(
         sweep_peak_torque_deviation_nm: (kind == ScenarioKind::Sweep)
             .then(|| Pair { mpc: sweep_dev(&run.mpc), baseline: sweep_dev(&run.baseline) }),
     };
-    let c = Controller::new(&ss, settings)?;
-    Ok((MpcReport { qp_variables: c.qp().nvars(), qp_constraints: c.qp().nrows(), ..rep }, run))
+    Ok((rep, run))
 }
 
 /// SVG: side-shaft torque, load speed and the MPC's inputs over time.

@@ -144,15 +144,14 @@ fn torsional(file: &Path, progress: &(dyn Fn(&str) + Sync)) -> anyhow::Result<Di
     })
 }
 
-fn bearing(file: &Path, progress: &(dyn Fn(&str) + Sync)) -> anyhow::Result<Diagnosis> {
+/// The bearing's candidates are linear fits and two 1-D searches (well under a second), so
+/// there is no progress to report.
+fn bearing(file: &Path, _progress: &(dyn Fn(&str) + Sync)) -> anyhow::Result<Diagnosis> {
     let b = load_bearing(file)?;
     let imp = ident::Impedances::from_tests([&b.tests[0], &b.tests[1]], b.band_hz)
         .map_err(|e| anyhow::anyhow!("{}: {e}", file.display()))?;
     let d = ident::diagnose::bearing::diagnose(&imp, &b.support, b.structure, b.coupling)
         .map_err(|e| anyhow::anyhow!("{}: {e}", file.display()))?;
-    for name in ident::diagnose::bearing::EFFECTS {
-        progress(name);
-    }
     let mut notes = Vec::new();
     if d.effect == "none" {
         notes.push("no candidate beats re-fitting the declared structure".into());

@@ -342,6 +342,8 @@ pub struct Comparison {
     pub iterations: Vec<u32>,
     /// Steps that used the fallback plan.
     pub fallbacks: usize,
+    /// The MPC's QP: variables and constraint rows.
+    pub qp_size: (usize, usize),
 }
 
 /// Called after each MPC step with the sample index, the controller and what the step did.
@@ -438,6 +440,7 @@ pub fn compare(
         step_allocations: allocs,
         iterations: iters,
         fallbacks: controller.fallbacks(),
+        qp_size: (controller.qp().nvars(), controller.qp().nrows()),
     })
 }
 

@@ -225,7 +225,6 @@ pub fn diagnose(
         u
     };
     let n = 8 * imp.h.len();
-    let w_mid = 2.0 * PI * 0.5 * (imp.frequencies_hz[0] + imp.frequencies_hz[imp.frequencies_hz.len() - 1]);
     let mut results: Vec<Fitted> = Vec::new();
     let push = |results: &mut Vec<_>, name: &str, fit: BearingModelFit, us: Vec<Unknown>, k: usize| {
         let mut p = declared_parameters(&fit, &us);
@@ -290,7 +289,6 @@ pub fn diagnose(
         }
     }
     let model = results[best].1.clone();
-    let _ = w_mid;
     let mut candidates = scored.clone();
     candidates.sort_by(|a, b| a.score.total_cmp(&b.score));
     Ok(BearingDiagnosis {

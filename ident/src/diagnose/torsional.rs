@@ -9,7 +9,7 @@ use serde::Serialize;
 
 use super::{bic, effective_count, lag1_autocorrelation, lm, CandidateScore};
 use crate::error::{IdentError, Result};
-use crate::signal::{filtfilt_high_pass as high_pass, rfft};
+use crate::signal::{filtfilt_high_pass, rfft};
 use crate::sweep::Sweep;
 
 /// The torsional vocabulary.
@@ -117,19 +117,24 @@ impl Problem<'_> {
         if !a.iter().chain(&b).all(|v| v.is_finite()) {
             return None;
         }
-        Some([high_pass(&a, self.sweep.dt_s, HIGH_PASS_HZ), high_pass(&b, self.sweep.dt_s, HIGH_PASS_HZ)])
+        Some([
+            filtfilt_high_pass(&a, self.sweep.dt_s, HIGH_PASS_HZ),
+            filtfilt_high_pass(&b, self.sweep.dt_s, HIGH_PASS_HZ),
+        ])
     }
 
     fn residual(&self, model: &TorsionalModel) -> Option<Vec<f64>> {
-        let s = self.simulate(model)?;
-        Some(
-            self.measured[0]
-                .iter()
-                .zip(&s[0])
-                .chain(self.measured[1].iter().zip(&s[1]))
-                .map(|(m, y)| (m - y) / self.norm)
-                .collect(),
-        )
+        Some(self.residual_of(&self.simulate(model)?))
+    }
+
+    /// Normalised residual of simulated (high-passed) speeds, both channels.
+    fn residual_of(&self, s: &[Vec<f64>; 2]) -> Vec<f64> {
+        self.measured[0]
+            .iter()
+            .zip(&s[0])
+            .chain(self.measured[1].iter().zip(&s[1]))
+            .map(|(m, y)| (m - y) / self.norm)
+            .collect()
     }
 }
 
@@ -278,8 +283,10 @@ pub fn diagnose(
         return Err(IdentError::Data(format!("a sweep of {n} samples is too short to diagnose (need 1000)")));
     }
     let dt = sweep.dt_s;
-    let measured =
-        [high_pass(&sweep.speed_m2_radps, dt, HIGH_PASS_HZ), high_pass(&sweep.speed_m3_radps, dt, HIGH_PASS_HZ)];
+    let measured = [
+        filtfilt_high_pass(&sweep.speed_m2_radps, dt, HIGH_PASS_HZ),
+        filtfilt_high_pass(&sweep.speed_m3_radps, dt, HIGH_PASS_HZ),
+    ];
     let norm = measured.iter().flatten().map(|v| v * v).sum::<f64>().sqrt();
     if norm.is_nan() || norm <= 0.0 {
         return Err(IdentError::Data("the load-machine speeds do not oscillate: nothing to compare".into()));
@@ -287,9 +294,10 @@ pub fn diagnose(
     let speed0 = 0.5 * (sweep.speed_m2_radps[0] + sweep.speed_m3_radps[0]);
     let problem = Problem { sweep, declared: rig.clone(), variant, speed0, measured, norm };
     let declared = TorsionalModel { rig: rig.clone(), variant, effects: DriveEffects::default() };
-    let r0 = problem
-        .residual(&declared)
+    let sim0 = problem
+        .simulate(&declared)
         .ok_or_else(|| IdentError::Data("the declared model cannot be simulated (check its parameters)".into()))?;
+    let r0 = problem.residual_of(&sim0);
     let error_before = r0.iter().map(|v| v * v).sum::<f64>().sqrt();
     let evidence = evidence(&problem, &r0);
     let shuffle_hz = Powertrain::new(rig, variant, &DriveEffects::default())
@@ -358,9 +366,11 @@ pub fn diagnose(
         }
         let c = &cands[i];
         let m = (c.build)(&problem, &x);
-        let r = problem.residual(&m).unwrap_or_default();
-        let rho = lag1_autocorrelation(&r);
-        let n_eff = effective_count(nres, rho);
+        // One simulation per fitted candidate: its residual's whiteness and, for the best,
+        // the plotted trace.
+        let sim = problem.simulate(&m);
+        let rho = sim.as_ref().map_or(0.0, |s| lag1_autocorrelation(&problem.residual_of(s)));
+        let trace = sim.map(|[w2, _]| w2).unwrap_or_default();
         scored.push(CandidateScore {
             effect: c.name.to_string(),
             parameters: (c.report)(&m),
@@ -368,7 +378,7 @@ pub fn diagnose(
             score: 0.0,
             fitted_parameters: x.len(),
         });
-        models.push((m, rho, n_eff, cost));
+        models.push((m, rho, trace, cost));
     }
     // One effective count for all (the declared model's residual), so the scores compare.
     let n_eff = effective_count(nres, evidence.residual_lag1.max(lag1_autocorrelation(&r0)));
@@ -387,13 +397,13 @@ pub fn diagnose(
             best = i;
         }
     }
-    let (model, rho, _, _) = models[best].clone();
+    let (model, rho, after, _) = models.swap_remove(best);
     let structured_residual = rho.abs() > 0.5 && scored[best].error_after > 0.02;
     let traces = Traces {
         time_s: (0..n).map(|k| k as f64 * dt).collect(),
         measured: problem.measured[0].clone(),
-        before: problem.simulate(&declared).map(|s| s[0].clone()).unwrap_or_default(),
-        after: problem.simulate(&model).map(|s| s[0].clone()).unwrap_or_default(),
+        before: sim0[0].clone(),
+        after,
     };
     let mut candidates = scored.clone();
     // A candidate the data cannot show scores as the re-fitted declared model with one more
@@ -436,7 +446,7 @@ fn evidence(p: &Problem, r: &[f64]) -> Evidence {
         rs.iter().enumerate().skip(lo).fold((lo, 0.0), |b, (k, c)| if c.norm() > b.1 { (k, c.norm()) } else { b });
     let residual_peak_ratio = rs[k].norm() / ms[k].norm().max(1e-300);
     // Cross-correlation of the high-passed torque with the residual, lags within ±0.1 s.
-    let u = high_pass(&p.sweep.torque_nm, dt, HIGH_PASS_HZ);
+    let u = filtfilt_high_pass(&p.sweep.torque_nm, dt, HIGH_PASS_HZ);
     let max_lag = (0.1 / dt) as isize;
     let mut best = (0isize, 0.0f64);
     for lag in -max_lag..=max_lag {
