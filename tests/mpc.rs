@@ -26,7 +26,8 @@ fn rigtwin(args: &[&str]) -> std::process::Output {
 /// input is within the 1e-2 Nm of the exact optimum.
 #[test]
 fn json_contract_and_figures() {
-    let out = rigtwin(&["mpc", "--json", "--horizon", "50"]);
+    // a generous time limit: the figures must not depend on how loaded the test machine is
+    let out = rigtwin(&["mpc", "--json", "--horizon", "50", "--time-limit-us", "100000"]);
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     assert_eq!(v["horizon"], 50);

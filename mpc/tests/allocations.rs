@@ -14,7 +14,11 @@ fn a_step_allocates_only_inside_clarabel() {
     let ss = rig_plant(&plant::paper::damped_params(), plant::rig::Variant::V1).unwrap();
     let (x0, u0) = steady_spin(&ss, 10.0).unwrap();
     for horizon in [10, 50, 100] {
-        let mut c = Controller::new(&ss, &MpcSettings::powertrain(horizon)).unwrap();
+        let mut settings = MpcSettings::powertrain(horizon);
+        // Every step must run a full solve: a step cut short by the clock on a loaded machine
+        // (fallback) allocates differently, and this test is about allocations, not time.
+        settings.solver.time_limit_s = 1.0;
+        let mut c = Controller::new(&ss, &settings).unwrap();
         c.reset(&x0, &u0);
         let mut p = LinearPlant::new(&ss, 1e-3, &x0).unwrap();
         let mut y = vec![0.0; 5];
@@ -29,6 +33,7 @@ fn a_step_allocates_only_inside_clarabel() {
             counts.push(mpc::alloc_counter::allocations() - before);
             p.advance(&u).unwrap();
         }
-        assert!(counts[1..].iter().all(|&c| c == 1), "N = {horizon}: allocations per step {:?}", &counts[..10]);
+        let odd: Vec<(usize, u64)> = counts.iter().copied().enumerate().skip(1).filter(|&(_, c)| c != 1).collect();
+        assert!(odd.is_empty(), "N = {horizon}: steps with other than one allocation (step, count): {odd:?}");
     }
 }
