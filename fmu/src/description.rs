@@ -5,14 +5,14 @@
 use std::fmt::Write as _;
 
 use crate::params::FmuParams;
-use crate::variables::{parameter_values, table, variant_number, Causality, Kind, Slot, STATE_DERIVATIVES, VR_STATE};
+use crate::variables::{parameter_values, variant_number, Causality, Kind, Slot, Table};
 
 /// The model identifier: the shared library's name inside the FMU.
 pub const MODEL_IDENTIFIER: &str = "rigtwin";
 
 /// Units used by the table: (name, SI base-unit exponents kg, m, s, rad, the FMI 3 type and
 /// quantity that carries it).
-const UNITS: [(&str, [i32; 4], &str); 15] = [
+const UNITS: [(&str, [i32; 4], &str); 17] = [
     ("s", [0, 0, 1, 0], "Time"),
     ("rad", [0, 0, 0, 1], "Angle"),
     ("rad/s", [0, 0, -1, 1], "AngularVelocity"),
@@ -28,6 +28,8 @@ const UNITS: [(&str, [i32; 4], &str); 15] = [
     ("m", [0, 1, 0, 0], "Length"),
     ("m/s", [0, 1, -1, 0], "Velocity"),
     ("m/s2", [0, 1, -2, 0], "Acceleration"),
+    ("N.m/s", [1, 2, -3, 0], "TorqueRate"),
+    ("1", [0, 0, 0, 0], "Ratio"),
 ];
 
 /// The FMI 3 type declaring a unit.
@@ -91,29 +93,52 @@ pub fn describe(p: &FmuParams, version: Version) -> String {
 }
 
 fn describe_with(p: &FmuParams, version: Version, token: &str) -> String {
-    let vars = table();
+    let table = Table::new(p);
+    let vars = &table.variables;
     let mut x = String::new();
-    let desc = "Open-differential powertrain of a HIL test rig (Hübner & Prokop, Vehicles 2026) and a bearing K/C/M block on its support (San Andrés 2011); linear, exact zero-order-hold co-simulation step";
+    let e = &p.effects;
+    let mut desc = String::from("Open-differential powertrain of a HIL test rig (Hübner & Prokop, Vehicles 2026) and a bearing K/C/M block on its support (San Andrés 2011)");
+    let on: Vec<&str> = [
+        (e.time_delay_s > 0.0, "dead time of the drive torque"),
+        (e.actuator_lag_s > 0.0, "actuator lag"),
+        (e.backlash_rad > 0.0, "side-shaft backlash"),
+        (e.compliance_stiffness_nm_per_rad > 0.0, "drive compliance"),
+    ]
+    .into_iter()
+    .filter_map(|(on, name)| on.then_some(name))
+    .collect();
+    if on.is_empty() {
+        desc += "; linear, exact zero-order-hold co-simulation step";
+    } else {
+        let _ = write!(desc, "; with {}", on.join(", "));
+        desc += if e.backlash_rad > 0.0 {
+            "; co-simulation step by RK4 of at most 0.125 ms"
+        } else {
+            "; exact zero-order-hold co-simulation step"
+        };
+    }
+    // the dead time's history is pruned at accepted integrator steps
+    let needs_completed = e.time_delay_s > 0.0;
     let _ = writeln!(x, "<?xml version=\"1.0\" encoding=\"UTF-8\"?>");
     match version {
         Version::Fmi3 => {
             let _ = writeln!(
                 x,
                 "<fmiModelDescription fmiVersion=\"3.0\" modelName=\"rigtwin\" description=\"{}\" generationTool=\"rigtwin {}\" instantiationToken=\"{token}\" variableNamingConvention=\"structured\">",
-                xml_escape(desc),
+                xml_escape(&desc),
                 env!("CARGO_PKG_VERSION")
             );
-            let _ = writeln!(x, "  <ModelExchange modelIdentifier=\"{MODEL_IDENTIFIER}\" canGetAndSetFMUState=\"true\" canSerializeFMUState=\"true\" providesDirectionalDerivatives=\"true\" needsCompletedIntegratorStep=\"false\"/>");
+            let _ = writeln!(x, "  <ModelExchange modelIdentifier=\"{MODEL_IDENTIFIER}\" canGetAndSetFMUState=\"true\" canSerializeFMUState=\"true\" providesDirectionalDerivatives=\"true\" needsCompletedIntegratorStep=\"{needs_completed}\"/>");
             let _ = writeln!(x, "  <CoSimulation modelIdentifier=\"{MODEL_IDENTIFIER}\" canHandleVariableCommunicationStepSize=\"true\" canGetAndSetFMUState=\"true\" canSerializeFMUState=\"true\" providesDirectionalDerivatives=\"true\" hasEventMode=\"false\"/>");
         }
         Version::Fmi2 => {
             let _ = writeln!(
                 x,
                 "<fmiModelDescription fmiVersion=\"2.0\" modelName=\"rigtwin\" guid=\"{token}\" description=\"{}\" generationTool=\"rigtwin {}\" variableNamingConvention=\"structured\" numberOfEventIndicators=\"0\">",
-                xml_escape(desc),
+                xml_escape(&desc),
                 env!("CARGO_PKG_VERSION")
             );
-            let _ = writeln!(x, "  <ModelExchange modelIdentifier=\"{MODEL_IDENTIFIER}\" canGetAndSetFMUstate=\"true\" canSerializeFMUstate=\"true\" providesDirectionalDerivative=\"true\" completedIntegratorStepNotNeeded=\"true\"/>");
+            let _ = writeln!(x, "  <ModelExchange modelIdentifier=\"{MODEL_IDENTIFIER}\" canGetAndSetFMUstate=\"true\" canSerializeFMUstate=\"true\" providesDirectionalDerivative=\"true\" completedIntegratorStepNotNeeded=\"{}\"/>", !needs_completed);
             let _ = writeln!(x, "  <CoSimulation modelIdentifier=\"{MODEL_IDENTIFIER}\" canHandleVariableCommunicationStepSize=\"true\" canGetAndSetFMUstate=\"true\" canSerializeFMUstate=\"true\" providesDirectionalDerivative=\"true\"/>");
         }
     }
@@ -138,8 +163,8 @@ fn describe_with(p: &FmuParams, version: Version, token: &str) -> String {
     let _ = writeln!(x, "  <DefaultExperiment startTime=\"0\" stopTime=\"2\" stepSize=\"0.001\"/>");
     let _ = writeln!(x, "  <ModelVariables>");
     // FMI 2 refers to variables by their 1-based position; FMI 3 by value reference
-    let derivative_of = |state: usize| STATE_DERIVATIVES.iter().find(|d| d.1 == state).map(|d| d.0);
-    for v in &vars {
+    let derivative_of = |state: usize| table.derivative_state.iter().position(|d| *d == Some(state));
+    for v in vars {
         let caus = match v.causality {
             Causality::Parameter => "parameter",
             Causality::Input => "input",
@@ -180,11 +205,15 @@ fn describe_with(p: &FmuParams, version: Version, token: &str) -> String {
                 }
                 if v.kind == Kind::Float64 {
                     let _ = write!(attrs, " declaredType=\"{}\"", type_of_unit(v.unit));
+                    if v.causality == Causality::Parameter && v.unit == "1" {
+                        attrs += " min=\"0\" max=\"1\"";
+                    }
                 } else {
                     attrs += " min=\"1\" max=\"4\"";
                 }
                 if let Some(d) = der {
-                    let _ = write!(attrs, " derivative=\"{}\"", VR_STATE + d as u32);
+                    let vr = table.find(Slot::State(d)).expect("state in table").vr;
+                    let _ = write!(attrs, " derivative=\"{vr}\"");
                 }
                 if let Some(s) = &start {
                     let _ = write!(attrs, " start=\"{s}\"");
@@ -223,10 +252,10 @@ fn describe_with(p: &FmuParams, version: Version, token: &str) -> String {
     let outputs: Vec<usize> = (0..vars.len()).filter(|&i| vars[i].causality == Causality::Output).collect();
     // one derivative per state, in the state vector's order: that order defines the
     // continuous-state vector of GetContinuousStates and friends in both standards
-    let derivatives: Vec<usize> = (0..crate::variables::STATES.len())
+    let derivatives: Vec<usize> = (0..table.nx())
         .map(|s| {
-            let slot = match STATE_DERIVATIVES.iter().find(|d| d.0 == s) {
-                Some(&(_, d)) => Slot::State(d),
+            let slot = match table.derivative_state[s] {
+                Some(d) => Slot::State(d),
                 None => Slot::Derivative(s),
             };
             vars.iter().position(|v| v.slot == slot).expect("every state has a derivative variable")

@@ -65,8 +65,7 @@ pub(crate) unsafe fn set_state(inst: &mut Instance, state: *mut c_void, function
     if state.is_null() {
         return Err(null_argument(function));
     }
-    inst.restore(&*(state as *const Snapshot));
-    Ok(())
+    inst.restore(&*(state as *const Snapshot))
 }
 
 /// FreeFMUState: frees and nulls the state (a null state is fine).
@@ -78,24 +77,28 @@ pub(crate) unsafe fn free_state(state: *mut *mut c_void) -> Res<()> {
     Ok(())
 }
 
-/// SerializedFMUStateSize.
-pub(crate) unsafe fn state_size(size: *mut usize, function: &str) -> Res<()> {
-    if size.is_null() {
+/// SerializedFMUStateSize of `state`.
+pub(crate) unsafe fn state_size(state: *mut c_void, size: *mut usize, function: &str) -> Res<()> {
+    if size.is_null() || state.is_null() {
         return Err(null_argument(function));
     }
-    *size = Snapshot::BYTES;
+    *size = (*(state as *const Snapshot)).byte_len();
     Ok(())
 }
 
 /// SerializeFMUState into `size` bytes at `out`.
 pub(crate) unsafe fn serialize_state(state: *mut c_void, out: *mut u8, size: usize, function: &str) -> Res<()> {
-    if state.is_null() || size < Snapshot::BYTES {
+    if state.is_null() {
+        return Err(null_argument(function));
+    }
+    let snap = &*(state as *const Snapshot);
+    if size < snap.byte_len() {
         return Err(Failure {
             status: Status::Error,
-            message: format!("{function}: a state and {} bytes are needed", Snapshot::BYTES),
+            message: format!("{function}: {} bytes are needed, {size} given", snap.byte_len()),
         });
     }
-    let bytes = (*(state as *const Snapshot)).to_bytes();
+    let bytes = snap.to_bytes();
     slice_mut(out, size)?[..bytes.len()].copy_from_slice(&bytes);
     Ok(())
 }

@@ -10,7 +10,6 @@ use std::panic::{catch_unwind, AssertUnwindSafe};
 use fmi_sys::fmi2::*;
 
 use crate::instance::{Failure, Instance, Interface, Logger, Mode, Res, Status};
-use crate::model::NX;
 
 struct Fmi2Logger {
     functions: fmi2CallbackFunctions,
@@ -292,7 +291,7 @@ pub unsafe extern "C" fn fmi2SerializedFMUstateSize(
     _state: fmi2FMUstate,
     size: *mut usize,
 ) -> fmi2Status {
-    with(c, |_| ffi::state_size(size, "fmi2SerializedFMUstateSize"))
+    with(c, |_| ffi::state_size(_state, size, "fmi2SerializedFMUstateSize"))
 }
 
 #[no_mangle]
@@ -365,7 +364,7 @@ pub unsafe extern "C" fn fmi2CompletedIntegratorStep(
     terminate: *mut fmi2Boolean,
 ) -> fmi2Status {
     with(c, |comp| {
-        comp.inner.expect("fmi2CompletedIntegratorStep", &[Mode::ContinuousTimeMode])?;
+        comp.inner.completed_integrator_step()?;
         for p in [enter_event_mode, terminate] {
             if !p.is_null() {
                 *p = 0;
@@ -406,11 +405,11 @@ pub unsafe extern "C" fn fmi2GetNominalsOfContinuousStates(
     nominals: *mut fmi2Real,
     n: usize,
 ) -> fmi2Status {
-    with(c, |_| {
-        if n != NX {
+    with(c, |comp| {
+        if n != comp.inner.nx() {
             return Err(Failure {
                 status: Status::Error,
-                message: format!("{n} nominals asked for; the model has {NX} states"),
+                message: format!("{n} nominals asked for; the model has {} states", comp.inner.nx()),
             });
         }
         slice_mut(nominals, n)?.fill(1.0);

@@ -11,7 +11,6 @@ use std::path::Path;
 use fmi_sys::fmi3::*;
 
 use crate::instance::{Failure, Instance, Interface, Logger, Res, Status};
-use crate::model::NX;
 
 struct Fmi3Logger {
     callback: fmi3LogMessageCallback,
@@ -391,10 +390,10 @@ pub unsafe extern "C" fn fmi3FreeFMUState(instance: fmi3Instance, state: *mut fm
 #[no_mangle]
 pub unsafe extern "C" fn fmi3SerializedFMUStateSize(
     instance: fmi3Instance,
-    _state: fmi3FMUState,
+    state: fmi3FMUState,
     size: *mut usize,
 ) -> fmi3Status {
-    with(instance, |_| ffi::state_size(size, "fmi3SerializedFMUStateSize"))
+    with(instance, |_| ffi::state_size(state, size, "fmi3SerializedFMUStateSize"))
 }
 
 #[no_mangle]
@@ -545,7 +544,7 @@ pub unsafe extern "C" fn fmi3CompletedIntegratorStep(
     terminate: *mut fmi3Boolean,
 ) -> fmi3Status {
     with(instance, |i| {
-        i.expect("fmi3CompletedIntegratorStep", &[crate::instance::Mode::ContinuousTimeMode])?;
+        i.completed_integrator_step()?;
         for p in [enter_event_mode, terminate] {
             if !p.is_null() {
                 *p = false;
@@ -612,9 +611,9 @@ pub unsafe extern "C" fn fmi3GetNumberOfEventIndicators(instance: fmi3Instance, 
 
 #[no_mangle]
 pub unsafe extern "C" fn fmi3GetNumberOfContinuousStates(instance: fmi3Instance, n: *mut usize) -> fmi3Status {
-    with(instance, |_| {
+    with(instance, |i| {
         if !n.is_null() {
-            *n = NX;
+            *n = i.nx();
         }
         Ok(())
     })

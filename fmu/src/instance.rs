@@ -4,11 +4,12 @@
 
 use nalgebra::DVector;
 
-use crate::model::{LinearModel, NU, NX};
+use crate::model::{Model, DRIVE_INPUT, NU};
 use crate::params::FmuParams;
 use crate::variables::{
-    lookup, parameter_set, parameter_values, variant_number, Causality, Constraint, Kind, Slot, PARAMETERS,
+    parameter_set, parameter_values, variant_number, Causality, Kind, Slot, Table, NPARAMS, PARAMETERS,
 };
+use plant::effects::DelayLine;
 
 /// Whether the instance simulates itself (co-simulation) or lends its derivatives to the
 /// importer's solver (model exchange).
@@ -74,18 +75,21 @@ pub trait Logger {
     fn log(&self, status: Status, category: &str, message: &str);
 }
 
-/// A saved instance state (Get/SetFMUState).
+/// A saved instance state (Get/SetFMUState): with a dead time, the drive torque's history too.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Snapshot {
     mode: Mode,
     time: f64,
     x: Vec<f64>,
     u: Vec<f64>,
-    params: [f64; 29],
+    params: [f64; NPARAMS],
     variant: i32,
+    history: Vec<(f64, f64)>,
 }
 
-const SNAPSHOT_MAGIC: &[u8; 8] = b"RIGTWIN1";
+const SNAPSHOT_MAGIC: &[u8; 8] = b"RIGTWIN2";
+/// Magic, mode, variant, number of states, number of history records.
+const SNAPSHOT_HEADER: usize = 8 + 1 + 4 + 4 + 4;
 
 impl Snapshot {
     /// Bytes of the state (SerializeFMUState).
@@ -93,18 +97,31 @@ impl Snapshot {
         let mut b = SNAPSHOT_MAGIC.to_vec();
         b.push(self.mode as u8);
         b.extend(self.variant.to_le_bytes());
-        for v in std::iter::once(&self.time).chain(&self.x).chain(&self.u).chain(&self.params) {
+        b.extend((self.x.len() as u32).to_le_bytes());
+        b.extend((self.history.len() as u32).to_le_bytes());
+        let history = self.history.iter().flat_map(|r| [r.0, r.1]);
+        for v in std::iter::once(self.time).chain(self.x.iter().copied()).chain(self.u.iter().copied()) {
+            b.extend(v.to_le_bytes());
+        }
+        for v in self.params.iter().copied().chain(history) {
             b.extend(v.to_le_bytes());
         }
         b
     }
 
     /// Length of [`Snapshot::to_bytes`].
-    pub const BYTES: usize = 8 + 1 + 4 + 8 * (1 + NX + NU + 29);
+    pub fn byte_len(&self) -> usize {
+        SNAPSHOT_HEADER + 8 * (1 + self.x.len() + NU + NPARAMS + 2 * self.history.len())
+    }
 
     /// The state of serialized bytes, if they are one.
     pub fn from_bytes(b: &[u8]) -> Option<Snapshot> {
-        if b.len() != Self::BYTES || &b[..8] != SNAPSHOT_MAGIC {
+        if b.len() < SNAPSHOT_HEADER || &b[..8] != SNAPSHOT_MAGIC {
+            return None;
+        }
+        let nx = u32::from_le_bytes(b[13..17].try_into().ok()?) as usize;
+        let nh = u32::from_le_bytes(b[17..21].try_into().ok()?) as usize;
+        if nx > 64 || b.len() != SNAPSHOT_HEADER + 8 * (1 + nx + NU + NPARAMS + 2 * nh) {
             return None;
         }
         let mode = [
@@ -118,16 +135,21 @@ impl Snapshot {
         .get(b[8] as usize)
         .copied()?;
         let variant = i32::from_le_bytes(b[9..13].try_into().ok()?);
-        let f: Vec<f64> = b[13..].chunks_exact(8).map(|c| f64::from_le_bytes(c.try_into().expect("8 bytes"))).collect();
-        let mut params = [0.0; 29];
-        params.copy_from_slice(&f[1 + NX + NU..]);
+        let f: Vec<f64> =
+            b[SNAPSHOT_HEADER..].chunks_exact(8).map(|c| f64::from_le_bytes(c.try_into().expect("8 bytes"))).collect();
+        let mut params = [0.0; NPARAMS];
+        let p0 = 1 + nx + NU;
+        params.copy_from_slice(&f[p0..p0 + NPARAMS]);
+        let history = f[p0 + NPARAMS..].chunks_exact(2).map(|c| (c[0], c[1])).collect::<Vec<_>>();
+        DelayLine::from_records(history.clone())?;
         Some(Snapshot {
             mode,
             time: f[0],
-            x: f[1..1 + NX].to_vec(),
-            u: f[1 + NX..1 + NX + NU].to_vec(),
+            x: f[1..1 + nx].to_vec(),
+            u: f[1 + nx..1 + nx + NU].to_vec(),
             params,
             variant,
+            history,
         })
     }
 }
@@ -143,13 +165,16 @@ pub struct Instance {
     /// Whether informational messages are logged (errors and warnings always are).
     pub logging_on: bool,
     logger: Box<dyn Logger>,
-    params: [f64; 29],
+    table: Table,
+    params: [f64; NPARAMS],
     variant: i32,
-    start: ([f64; 29], i32),
+    start: ([f64; NPARAMS], i32),
     x: DVector<f64>,
     u: DVector<f64>,
+    /// History of the drive torque for its dead time.
+    delay: DelayLine,
     time: f64,
-    model: Option<LinearModel>,
+    model: Option<Model>,
 }
 
 impl Instance {
@@ -166,8 +191,10 @@ impl Instance {
             params,
             variant,
             start: (params, variant),
-            x: DVector::zeros(NX),
+            table: Table::new(p),
+            x: DVector::zeros(Table::new(p).nx()),
             u: DVector::zeros(NU),
+            delay: DelayLine::default(),
             time: 0.0,
             model: None,
         }
@@ -196,6 +223,35 @@ impl Instance {
         }
     }
 
+    /// The variable table of this instance.
+    pub fn table(&self) -> &Table {
+        &self.table
+    }
+
+    /// Number of continuous states.
+    pub fn nx(&self) -> usize {
+        self.x.len()
+    }
+
+    fn lookup(&self, vr: u32) -> Option<crate::variables::Variable> {
+        self.table.lookup(vr)
+    }
+
+    /// Dead time of the drive torque, s.
+    fn delay_s(&self) -> f64 {
+        self.params[crate::variables::FIRST_EFFECT]
+    }
+
+    /// The drive torque acting now: the input, or with a dead time its past value.
+    fn drive_now(&self) -> f64 {
+        let tau = self.delay_s();
+        if tau > 0.0 {
+            self.delay.value_at(self.time - tau, self.u[DRIVE_INPUT])
+        } else {
+            self.u[DRIVE_INPUT]
+        }
+    }
+
     fn params(&self) -> Res<FmuParams> {
         parameter_set(&self.params, self.variant).or_else(error)
     }
@@ -206,7 +262,7 @@ impl Instance {
         if self.model.is_none() {
             let p = self.params()?;
             self.model =
-                Some(LinearModel::new(&p).or_else(|e| error(format!("the parameters do not describe a model: {e}")))?);
+                Some(Model::new(&p).or_else(|e| error(format!("the parameters do not describe a model: {e}")))?);
         }
         Ok(())
     }
@@ -246,6 +302,7 @@ impl Instance {
         (self.params, self.variant) = self.start;
         self.x.fill(0.0);
         self.u.fill(0.0);
+        self.delay = DelayLine::default();
         self.time = 0.0;
         self.model = None;
         self.mode = Mode::Instantiated;
@@ -275,10 +332,17 @@ impl Instance {
         Ok(())
     }
 
+    /// Model exchange: an accepted integrator step; the dead time's history before it is dropped.
+    pub fn completed_integrator_step(&mut self) -> Res<()> {
+        self.expect("CompletedIntegratorStep", &[Mode::ContinuousTimeMode])?;
+        self.delay.forget_before(self.time, self.delay_s());
+        Ok(())
+    }
+
     /// Model exchange: the continuous states.
     pub fn continuous_states(&self, out: &mut [f64]) -> Res<()> {
-        if out.len() != NX {
-            return error(format!("{} continuous states asked for; the model has {NX}", out.len()));
+        if out.len() != self.nx() {
+            return error(format!("{} continuous states asked for; the model has {}", out.len(), self.nx()));
         }
         out.copy_from_slice(self.x.as_slice());
         Ok(())
@@ -287,8 +351,8 @@ impl Instance {
     /// Model exchange: set the continuous states.
     pub fn set_continuous_states(&mut self, x: &[f64]) -> Res<()> {
         self.expect("SetContinuousStates", &[Mode::ContinuousTimeMode])?;
-        if x.len() != NX {
-            return error(format!("{} continuous states given; the model has {NX}", x.len()));
+        if x.len() != self.nx() {
+            return error(format!("{} continuous states given; the model has {}", x.len(), self.nx()));
         }
         if let Some(i) = x.iter().position(|v| !v.is_finite()) {
             return error(format!("continuous state {i} is not finite ({})", x[i]));
@@ -303,12 +367,13 @@ impl Instance {
             "GetContinuousStateDerivatives",
             &[Mode::InitializationMode, Mode::EventMode, Mode::ContinuousTimeMode, Mode::Terminated],
         )?;
-        if out.len() != NX {
-            return error(format!("{} derivatives asked for; the model has {NX}", out.len()));
+        if out.len() != self.nx() {
+            return error(format!("{} derivatives asked for; the model has {}", out.len(), self.nx()));
         }
         self.ensure_model()?;
-        let m = self.model.as_ref().expect("built above");
-        out.copy_from_slice(m.derivatives(&self.x, &self.u).as_slice());
+        let drive = self.drive_now();
+        let m = self.model.as_mut().expect("built above");
+        m.derivatives(self.x.as_slice(), self.u.as_slice(), drive, out);
         Ok(())
     }
 
@@ -323,8 +388,9 @@ impl Instance {
         }
         self.ensure_model()?;
         let model = self.model.as_mut().expect("built above");
-        model.step(&mut self.x, &self.u, h);
+        model.step(&mut self.x, &self.u, self.time, h, &self.delay);
         self.time = t + h;
+        self.delay.forget_before(self.time, self.delay_s());
         Ok(())
     }
 
@@ -339,16 +405,19 @@ impl Instance {
             return error("the number of value references and values differ");
         }
         let needs_model =
-            vrs.iter().any(|&v| matches!(lookup(v).map(|x| x.slot), Some(Slot::Derivative(_) | Slot::Torque(_))));
+            vrs.iter().any(|&v| matches!(self.lookup(v).map(|x| x.slot), Some(Slot::Derivative(_) | Slot::Torque(_))));
         let computed = if needs_model {
             self.ensure_model()?;
-            let m = self.model.as_ref().expect("built above");
-            Some((m.derivatives(&self.x, &self.u), &m.torque * &self.x))
+            let drive = self.drive_now();
+            let m = self.model.as_mut().expect("built above");
+            let mut dx = vec![0.0; self.x.len()];
+            m.derivatives(self.x.as_slice(), self.u.as_slice(), drive, &mut dx);
+            Some((dx, m.torques(self.x.as_slice())))
         } else {
             None
         };
         for (&vr, o) in vrs.iter().zip(out.iter_mut()) {
-            let var = lookup(vr).filter(|v| v.kind == Kind::Float64);
+            let var = self.lookup(vr).filter(|v| v.kind == Kind::Float64);
             *o = match var.map(|v| v.slot) {
                 Some(Slot::Time) => self.time,
                 Some(Slot::Param(i)) => self.params[i],
@@ -370,7 +439,7 @@ impl Instance {
         let before_init = [Mode::Instantiated, Mode::InitializationMode];
         let mut changes = Vec::with_capacity(vrs.len());
         for (&vr, &v) in vrs.iter().zip(values) {
-            let Some(var) = lookup(vr).filter(|x| x.kind == Kind::Float64) else {
+            let Some(var) = self.lookup(vr).filter(|x| x.kind == Kind::Float64) else {
                 return error(format!("value reference {vr} is not a Float64 variable of this FMU"));
             };
             if !v.is_finite() {
@@ -379,13 +448,7 @@ impl Instance {
             match (var.causality, var.slot) {
                 (Causality::Parameter, Slot::Param(i)) => {
                     self.expect(&format!("setting the fixed parameter `{}`", var.name), &before_init)?;
-                    let ok = match PARAMETERS[i].3 {
-                        Constraint::Finite => true,
-                        Constraint::NonNegative => v >= 0.0,
-                        Constraint::Positive => v > 0.0,
-                    };
-                    if !ok {
-                        let want = if PARAMETERS[i].3 == Constraint::Positive { "> 0" } else { ">= 0" };
+                    if let Err(want) = PARAMETERS[i].3.check(v) {
                         return error(format!("`{}` = {v} {}: expected {want}", var.name, PARAMETERS[i].1));
                     }
                 }
@@ -412,7 +475,12 @@ impl Instance {
                     self.params[i] = v;
                     self.model = None;
                 }
-                Slot::Input(i) => self.u[i] = v,
+                Slot::Input(i) => {
+                    self.u[i] = v;
+                    if i == DRIVE_INPUT && self.delay_s() > 0.0 {
+                        self.delay.record(self.time, v);
+                    }
+                }
                 Slot::State(i) => self.x[i] = v,
                 _ => unreachable!("refused above"),
             }
@@ -426,7 +494,7 @@ impl Instance {
             return error("the number of value references and values differ");
         }
         for (&vr, o) in vrs.iter().zip(out.iter_mut()) {
-            match lookup(vr).map(|v| v.slot) {
+            match self.lookup(vr).map(|v| v.slot) {
                 Some(Slot::Variant) => *o = self.variant,
                 _ => return error(format!("value reference {vr} is not an integer variable of this FMU")),
             }
@@ -440,7 +508,7 @@ impl Instance {
             return error("the number of value references and values differ");
         }
         for (&vr, &v) in vrs.iter().zip(values) {
-            match lookup(vr).map(|x| x.slot) {
+            match self.lookup(vr).map(|x| x.slot) {
                 Some(Slot::Variant) => {
                     self.expect(
                         "setting the fixed parameter `variant`",
@@ -469,24 +537,34 @@ impl Instance {
             u: self.u.as_slice().to_vec(),
             params: self.params,
             variant: self.variant,
+            history: self.delay.records().to_vec(),
         }
     }
 
-    /// Restores a state (SetFMUState).
-    pub fn restore(&mut self, s: &Snapshot) {
+    /// Restores a state (SetFMUState); refuses a state of another FMU.
+    pub fn restore(&mut self, s: &Snapshot) -> Res<()> {
+        if s.x.len() != self.nx() {
+            return error(format!("the state has {} continuous states; this FMU has {}", s.x.len(), self.nx()));
+        }
+        let history = DelayLine::from_records(s.history.clone())
+            .ok_or_else(|| Failure { status: Status::Error, message: "the state's history is not ordered".into() })?;
         if s.params != self.params || s.variant != self.variant {
             self.model = None;
         }
+        self.delay = history;
         self.mode = s.mode;
         self.time = s.time;
         self.x.copy_from_slice(&s.x);
         self.u.copy_from_slice(&s.u);
         self.params = s.params;
         self.variant = s.variant;
+        Ok(())
     }
 
-    /// Directional derivative Σ_j ∂unknown_i/∂known_j · seed_j of the linear model: the
-    /// unknowns are derivatives or outputs, the knowns states or inputs.
+    /// Directional derivative Σ_j ∂unknown_i/∂known_j · seed_j at the present state (the linear
+    /// model, or with backlash that of the contact state): the unknowns are derivatives or
+    /// outputs, the knowns states or inputs. With a dead time the derivatives do not depend on
+    /// the present drive torque.
     pub fn directional_derivative(
         &mut self,
         unknowns: &[u32],
@@ -498,13 +576,16 @@ impl Instance {
             return error("the numbers of value references, seeds and results differ");
         }
         self.ensure_model()?;
+        let nx = self.nx();
+        let delayed = self.delay_s() > 0.0;
         let m = self.model.as_ref().expect("built above");
+        let (a, b, torque) = m.jacobians(self.x.as_slice());
         // column of a known in [x u]
         let cols = knowns
             .iter()
-            .map(|&vr| match lookup(vr).map(|v| v.slot) {
+            .map(|&vr| match self.lookup(vr).map(|v| v.slot) {
                 Some(Slot::State(i)) => Ok(i),
-                Some(Slot::Input(i)) => Ok(NX + i),
+                Some(Slot::Input(i)) => Ok(nx + i),
                 _ => {
                     error(format!("value reference {vr} is not a state or an input: no derivative with respect to it"))
                 }
@@ -512,12 +593,14 @@ impl Instance {
             .collect::<Res<Vec<usize>>>()?;
         for (&vr, o) in unknowns.iter().zip(out.iter_mut()) {
             let row = |col: usize| -> Res<f64> {
-                Ok(match lookup(vr).map(|v| v.slot) {
+                Ok(match self.lookup(vr).map(|v| v.slot) {
                     Some(Slot::Derivative(i)) => {
-                        if col < NX {
-                            m.a[(i, col)]
+                        if col < nx {
+                            a[(i, col)]
+                        } else if delayed && col - nx == DRIVE_INPUT {
+                            0.0
                         } else {
-                            m.b[(i, col - NX)]
+                            b[(i, col - nx)]
                         }
                     }
                     // a state that is an output and the derivative of another state
@@ -529,8 +612,8 @@ impl Instance {
                         }
                     }
                     Some(Slot::Torque(i)) => {
-                        if col < NX {
-                            m.torque[(i, col)]
+                        if col < nx {
+                            torque[(i, col)]
                         } else {
                             0.0
                         }

@@ -1,89 +1,248 @@
-//! The FMU's dynamics: the open-differential powertrain (6 states) beside the bearing block (4
-//! states), x' = A x + B u, from `plant`'s state spaces. The co-simulation step is exact for a
-//! linear model with inputs held over the step: x⁺ = Ad x + Bd u with (Ad, Bd) from the matrix
-//! exponential, cached per step size.
+//! The FMU's dynamics: the open-differential powertrain with its drive-path effects
+//! (`plant::effects::Powertrain`) beside the bearing block (4 states). Without backlash the model
+//! is linear, x' = A x + B u, and the co-simulation step is exact for inputs held over the step:
+//! x⁺ = Ad x + Bd u with (Ad, Bd) from the matrix exponential, cached per step length. A dead
+//! time splits the step where the delayed drive torque changes, each piece exact; backlash is
+//! integrated by RK4 with steps of at most `plant::effects::BACKLASH_STEP_S`.
 
 use nalgebra::{DMatrix, DVector};
 
 use crate::params::FmuParams;
-use plant::Output;
+use crate::variables::{powertrain_states, Table};
+use plant::effects::{DelayLine, Powertrain, BACKLASH_STEP_S};
 
-/// Number of continuous states.
-pub const NX: usize = 10;
-/// Number of inputs.
+/// Number of inputs: M_m2, M_drive, M_m3, bearing F_x, F_y.
 pub const NU: usize = 5;
+/// Index of the drive torque among the inputs (the one the dead time acts on).
+pub const DRIVE_INPUT: usize = 1;
+/// Number of states of the FMU without effects.
+pub const NX_BASE: usize = 10;
 
-/// The linear system and its discretisations.
+/// The model of one parameter set and its discretisations.
 #[derive(Debug, Clone)]
-pub struct LinearModel {
-    /// System matrix (10×10).
+pub struct Model {
+    /// System matrix with the side shafts engaged (the whole linear model without backlash).
     pub a: DMatrix<f64>,
-    /// Input matrix (10×5).
+    /// Input matrix (nx × 5).
     pub b: DMatrix<f64>,
-    /// Side-shaft torques from the states (2×10).
+    /// Side-shaft torques from the states (2 × nx), shafts engaged.
     pub torque: DMatrix<f64>,
+    /// System matrix and torques inside the backlash play (shafts carry nothing).
+    a_open: DMatrix<f64>,
+    torque_open: DMatrix<f64>,
+    powertrain: Powertrain,
+    /// State-vector index of each powertrain state.
+    map: Vec<usize>,
     cache: Vec<(f64, DMatrix<f64>, DMatrix<f64>)>,
     scratch: DVector<f64>,
+    u_eff: DVector<f64>,
+    pieces: Vec<(f64, f64)>,
+    work: [DVector<f64>; 5],
+    pt_x: Vec<f64>,
+    pt_dx: Vec<f64>,
 }
 
-/// Discretisations kept: a co-simulation master uses one or a few step sizes.
+/// Discretisations kept: a co-simulation master uses one or a few step sizes (a dead time
+/// adds two piece lengths per step size).
 const CACHE: usize = 8;
 
-impl LinearModel {
+impl Model {
     /// Builds the model; the error names the offending parameter.
     pub fn new(p: &FmuParams) -> Result<Self, String> {
-        let pt = p.powertrain.open_differential(p.variant).map_err(|e| e.to_string())?;
-        let pt = pt.state_space(&[Output::SpringTorques]).map_err(|e| e.to_string())?;
+        let powertrain = Powertrain::new(&p.powertrain, p.variant, &p.effects).map_err(|e| e.to_string())?;
         let br = p.bearing.state_space().map_err(|e| e.to_string())?;
-        let mut a = DMatrix::zeros(NX, NX);
-        let mut b = DMatrix::zeros(NX, NU);
-        a.view_mut((0, 0), (6, 6)).copy_from(&pt.a);
-        a.view_mut((6, 6), (4, 4)).copy_from(&br.a);
-        b.view_mut((0, 0), (6, 3)).copy_from(&pt.b);
-        b.view_mut((6, 3), (4, 2)).copy_from(&br.b);
-        let mut torque = DMatrix::zeros(2, NX);
-        torque.view_mut((0, 0), (2, 6)).copy_from(&pt.c);
+        let table = Table::new(p);
+        let nx = table.nx();
+        let map: Vec<usize> = powertrain_states(&p.effects)
+            .iter()
+            .map(|s| table.states.iter().position(|x| x == s).expect("every powertrain state is in the table"))
+            .collect();
+        let assemble = |contact: bool| {
+            let (pa, pb, pc) = powertrain.linear(contact);
+            let mut a = DMatrix::zeros(nx, nx);
+            let mut b = DMatrix::zeros(nx, NU);
+            let mut torque = DMatrix::zeros(2, nx);
+            for (i, &fi) in map.iter().enumerate() {
+                for (j, &fj) in map.iter().enumerate() {
+                    a[(fi, fj)] = pa[(i, j)];
+                }
+                for k in 0..3 {
+                    b[(fi, k)] = pb[(i, k)];
+                }
+                for k in 0..2 {
+                    torque[(k, fi)] = pc[(k, i)];
+                }
+            }
+            a.view_mut((6, 6), (4, 4)).copy_from(&br.a);
+            b.view_mut((6, 3), (4, 2)).copy_from(&br.b);
+            (a, b, torque)
+        };
+        let (a, b, torque) = assemble(true);
+        let (a_open, _, torque_open) = assemble(false);
         if a.iter().chain(b.iter()).any(|v| !v.is_finite()) {
             return Err("the parameters give a system matrix with non-finite entries".into());
         }
-        Ok(LinearModel { a, b, torque, cache: Vec::new(), scratch: DVector::zeros(NX) })
+        let npt = map.len();
+        Ok(Model {
+            a,
+            b,
+            torque,
+            a_open,
+            torque_open,
+            powertrain,
+            map,
+            cache: Vec::new(),
+            scratch: DVector::zeros(nx),
+            u_eff: DVector::zeros(NU),
+            pieces: Vec::new(),
+            work: std::array::from_fn(|_| DVector::zeros(nx)),
+            pt_x: vec![0.0; npt],
+            pt_dx: vec![0.0; npt],
+        })
     }
 
-    /// ẋ = A x + B u.
-    pub fn derivatives(&self, x: &DVector<f64>, u: &DVector<f64>) -> DVector<f64> {
-        &self.a * x + &self.b * u
+    /// Number of continuous states.
+    pub fn nx(&self) -> usize {
+        self.a.nrows()
     }
 
-    /// One exact step of length `h` with `u` held; allocates only when a new step size is
-    /// discretised.
-    pub fn step(&mut self, x: &mut DVector<f64>, u: &DVector<f64>, h: f64) {
-        let i = self.discretise(h);
-        let (_, ad, bd) = &self.cache[i];
-        self.scratch.gemv(1.0, ad, x, 0.0);
-        self.scratch.gemv(1.0, bd, u, 1.0);
-        x.copy_from(&self.scratch);
+    /// Dead time of the drive torque, s (0: none).
+    pub fn delay_s(&self) -> f64 {
+        self.powertrain.effects.time_delay_s
     }
 
-    /// (Ad, Bd) of step size `h`.
+    fn backlash(&self) -> bool {
+        self.powertrain.effects.backlash_rad > 0.0
+    }
+
+    /// Whether the side shafts are engaged in state `x`.
+    fn in_contact(&self, x: &[f64]) -> bool {
+        let pt_x: Vec<f64> = self.map.iter().map(|&i| x[i]).collect();
+        self.powertrain.in_contact(&pt_x)
+    }
+
+    /// ẋ into `out` for the inputs `u` with the drive torque replaced by `drive` (the delayed
+    /// value; `u[DRIVE_INPUT]` without a dead time).
+    pub fn derivatives(&mut self, x: &[f64], u: &[f64], drive: f64, out: &mut [f64]) {
+        let mut u_eff = [0.0; NU];
+        u_eff.copy_from_slice(u);
+        u_eff[DRIVE_INPUT] = drive;
+        rhs(self, x, &u_eff, out);
+    }
+
+    /// The side-shaft torques [T_short, T_long] in state `x`.
+    pub fn torques(&self, x: &[f64]) -> [f64; 2] {
+        if self.backlash() {
+            let pt_x: Vec<f64> = self.map.iter().map(|&i| x[i]).collect();
+            self.powertrain.shaft_torques(&pt_x)
+        } else {
+            let t = &self.torque * DVector::from_column_slice(x);
+            [t[0], t[1]]
+        }
+    }
+
+    /// The Jacobians (∂ẋ/∂x, ∂ẋ/∂u, ∂T/∂x) at state `x`: the linear model, or with backlash the
+    /// one of the contact state `x` is in. With a dead time, ẋ does not depend on the present
+    /// drive torque (its column of ∂ẋ/∂u is then to be taken as zero by the caller).
+    pub fn jacobians(&self, x: &[f64]) -> (&DMatrix<f64>, &DMatrix<f64>, &DMatrix<f64>) {
+        if self.backlash() && !self.in_contact(x) {
+            (&self.a_open, &self.b, &self.torque_open)
+        } else {
+            (&self.a, &self.b, &self.torque)
+        }
+    }
+
+    /// One step of length `h` from time `t` with `u` held (the drive torque delayed through
+    /// `delay`); the linear model allocates only when a new piece length is discretised.
+    pub fn step(&mut self, x: &mut DVector<f64>, u: &DVector<f64>, t: f64, h: f64, delay: &DelayLine) {
+        let mut pieces = std::mem::take(&mut self.pieces);
+        pieces.clear();
+        if self.delay_s() > 0.0 {
+            delay.segments(t, t + h, self.delay_s(), u[DRIVE_INPUT], &mut pieces);
+        } else {
+            pieces.push((h, u[DRIVE_INPUT]));
+        }
+        let mut u_eff = [0.0; NU];
+        u_eff.copy_from_slice(u.as_slice());
+        for &(len, drive) in &pieces {
+            u_eff[DRIVE_INPUT] = drive;
+            if self.backlash() {
+                let n = (len / BACKLASH_STEP_S - 1e-9).ceil().max(1.0) as usize;
+                for _ in 0..n {
+                    self.rk4(x, &u_eff, len / n as f64);
+                }
+            } else {
+                let i = self.discretise(len);
+                self.u_eff.copy_from_slice(&u_eff);
+                let (_, ad, bd) = &self.cache[i];
+                self.scratch.gemv(1.0, ad, x, 0.0);
+                self.scratch.gemv(1.0, bd, &self.u_eff, 1.0);
+                x.copy_from(&self.scratch);
+            }
+        }
+        self.pieces = pieces;
+    }
+
+    fn rk4(&mut self, x: &mut DVector<f64>, u: &[f64; NU], h: f64) {
+        let mut w = std::mem::replace(&mut self.work, std::array::from_fn(|_| DVector::zeros(0)));
+        let [k1, k2, k3, k4, tmp] = &mut w;
+        rhs(self, x.as_slice(), u, k1.as_mut_slice());
+        tmp.copy_from(&(&*x + &*k1 * (0.5 * h)));
+        rhs(self, tmp.as_slice(), u, k2.as_mut_slice());
+        tmp.copy_from(&(&*x + &*k2 * (0.5 * h)));
+        rhs(self, tmp.as_slice(), u, k3.as_mut_slice());
+        tmp.copy_from(&(&*x + &*k3 * h));
+        rhs(self, tmp.as_slice(), u, k4.as_mut_slice());
+        *x += (&*k1 + &*k2 * 2.0 + &*k3 * 2.0 + &*k4) * (h / 6.0);
+        self.work = w;
+    }
+
+    /// (Ad, Bd) of step size `h` (the linear model, shafts engaged).
     pub fn discretisation(&mut self, h: f64) -> (&DMatrix<f64>, &DMatrix<f64>) {
         let i = self.discretise(h);
         (&self.cache[i].1, &self.cache[i].2)
     }
 
     fn discretise(&mut self, h: f64) -> usize {
-        match self.cache.iter().position(|c| c.0 == h) {
+        // piece lengths from a dead time carry rounding: equal within 1e-12 is the same
+        match self.cache.iter().position(|c| (c.0 - h).abs() <= 1e-12 * h) {
             Some(i) => i,
             None => {
-                let mut aug = DMatrix::zeros(NX + NU, NX + NU);
-                aug.view_mut((0, 0), (NX, NX)).copy_from(&(&self.a * h));
-                aug.view_mut((0, NX), (NX, NU)).copy_from(&(&self.b * h));
+                let nx = self.nx();
+                let mut aug = DMatrix::zeros(nx + NU, nx + NU);
+                aug.view_mut((0, 0), (nx, nx)).copy_from(&(&self.a * h));
+                aug.view_mut((0, nx), (nx, NU)).copy_from(&(&self.b * h));
                 let e = aug.exp();
                 if self.cache.len() == CACHE {
                     self.cache.remove(0);
                 }
-                self.cache.push((h, e.view((0, 0), (NX, NX)).into_owned(), e.view((0, NX), (NX, NU)).into_owned()));
+                self.cache.push((h, e.view((0, 0), (nx, nx)).into_owned(), e.view((0, nx), (nx, NU)).into_owned()));
                 self.cache.len() - 1
             }
+        }
+    }
+}
+
+/// ẋ = A x + B u, the powertrain's rows from its own (nonlinear) derivative with backlash.
+fn rhs(m: &mut Model, x: &[f64], u: &[f64; NU], out: &mut [f64]) {
+    let nx = m.nx();
+    for i in 0..nx {
+        let mut acc = 0.0;
+        for j in 0..nx {
+            acc += m.a[(i, j)] * x[j];
+        }
+        for (k, &uk) in u.iter().enumerate() {
+            acc += m.b[(i, k)] * uk;
+        }
+        out[i] = acc;
+    }
+    if m.backlash() {
+        for (k, &i) in m.map.iter().enumerate() {
+            m.pt_x[k] = x[i];
+        }
+        m.powertrain.derivative(&m.pt_x, [u[0], u[1], u[2]], &mut m.pt_dx);
+        for (k, &i) in m.map.iter().enumerate() {
+            out[i] = m.pt_dx[k];
         }
     }
 }
@@ -96,7 +255,7 @@ mod tests {
     #[test]
     fn shuffle_and_bearing_poles_survive_the_assembly() {
         let p = FmuParams::default();
-        let m = LinearModel::new(&p).unwrap();
+        let m = Model::new(&p).unwrap();
         let poles = plant::damp(&m.a).unwrap();
         let f_shuffle = p.powertrain.open_differential(p.variant).unwrap().modes().unwrap().frequencies_hz[2];
         assert!(poles.iter().any(|q| (q.natural_hz - f_shuffle).abs() < 0.01 * f_shuffle), "{poles:?}");
@@ -109,14 +268,15 @@ mod tests {
 
     #[test]
     fn two_half_steps_are_one_step() {
-        let mut m = LinearModel::new(&FmuParams::default()).unwrap();
+        let mut m = Model::new(&FmuParams::default()).unwrap();
         let u = DVector::from_vec(vec![1.0, 10.0, -2.0, 50.0, -20.0]);
-        let mut x1 = DVector::from_element(NX, 1e-3);
+        let mut x1 = DVector::from_element(NX_BASE, 1e-3);
         let mut x2 = x1.clone();
-        m.step(&mut x1, &u, 2e-3);
-        m.step(&mut x2, &u, 1e-3);
-        m.step(&mut x2, &u, 1e-3);
-        for i in 0..NX {
+        let d = DelayLine::default();
+        m.step(&mut x1, &u, 0.0, 2e-3, &d);
+        m.step(&mut x2, &u, 0.0, 1e-3, &d);
+        m.step(&mut x2, &u, 1e-3, 1e-3, &d);
+        for i in 0..NX_BASE {
             assert_relative_eq!(x1[i], x2[i], max_relative = 1e-9, epsilon = 1e-15);
         }
     }

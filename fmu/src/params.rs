@@ -1,7 +1,9 @@
-//! The parameter set an FMU is built from: the powertrain (with its variant) and the bearing.
+//! The parameter set an FMU is built from: the powertrain (with its variant and drive-path
+//! effects) and the bearing.
 
 use serde::{Deserialize, Serialize};
 
+use plant::effects::DriveEffects;
 use plant::{paper, BearingModel, Coefficients, RigParams, Support, Variant};
 
 /// Everything that sets the FMU's start values.
@@ -13,6 +15,10 @@ pub struct FmuParams {
     pub variant: Variant,
     /// The bearing block on its support.
     pub bearing: BearingModel,
+    /// Drive-path effects (dead time, actuator lag, backlash, drive compliance), all off by
+    /// default; the ones on add parameters and states to the FMU.
+    #[serde(default)]
+    pub effects: DriveEffects,
 }
 
 impl Default for FmuParams {
@@ -48,6 +54,7 @@ impl Default for FmuParams {
                 },
                 table: None,
             },
+            effects: DriveEffects::default(),
         }
     }
 }

@@ -55,6 +55,25 @@ pub enum Constraint {
     NonNegative,
     /// Finite and > 0.
     Positive,
+    /// Strictly between 0 and 1.
+    Fraction,
+}
+
+impl Constraint {
+    /// Whether `v` is accepted, and what is expected otherwise.
+    pub fn check(self, v: f64) -> Result<(), &'static str> {
+        let (ok, want) = match self {
+            Constraint::Finite => (v.is_finite(), "a finite number"),
+            Constraint::NonNegative => (v >= 0.0, ">= 0"),
+            Constraint::Positive => (v > 0.0, "> 0"),
+            Constraint::Fraction => (v > 0.0 && v < 1.0, "a value strictly between 0 and 1"),
+        };
+        if ok {
+            Ok(())
+        } else {
+            Err(want)
+        }
+    }
 }
 
 /// One row of the table.
@@ -76,8 +95,11 @@ pub struct Variable {
     pub description: &'static str,
 }
 
-/// Float parameters: (name, unit, description, constraint), in [`Slot::Param`] order.
-pub const PARAMETERS: [(&str, &str, &str, Constraint); 29] = [
+/// Float parameters: (name, unit, description, constraint), in [`Slot::Param`] order: the
+/// powertrain and the bearing, then the drive-path effects (`plant::effects::DriveEffects`),
+/// which appear in the table only when the parameter set has them on (they change the model's
+/// structure, so an FMU without them cannot switch them on, nor one with them off).
+pub const PARAMETERS: [(&str, &str, &str, Constraint); NPARAMS] = [
     ("j_m2", "kg.m2", "inertia of load machine M2 with adapters (left, short side shaft)", Constraint::Positive),
     ("j_drive", "kg.m2", "drive unit inertia reduced to the output (differential cage)", Constraint::Positive),
     ("j_m3", "kg.m2", "inertia of load machine M3 with adapters (right, long side shaft)", Constraint::Positive),
@@ -107,10 +129,22 @@ pub const PARAMETERS: [(&str, &str, &str, Constraint); 29] = [
     ("bearing.support.c_y", "N.s/m", "support damping y", Constraint::NonNegative),
     ("bearing.support.m_x", "kg", "support effective mass x", Constraint::Positive),
     ("bearing.support.m_y", "kg", "support effective mass y", Constraint::Positive),
+    ("drive.time_delay", "s", "dead time of the drive torque", Constraint::Positive),
+    ("drive.actuator_lag", "s", "time constant of a first-order lag of the drive torque", Constraint::Positive),
+    ("drive.backlash", "rad", "total play of each side shaft (output side)", Constraint::Positive),
+    ("drive.compliance_stiffness", "N.m/rad", "stiffness between the drive's motor and its cage", Constraint::Positive),
+    ("drive.compliance_motor_fraction", "1", "share of j_drive on the motor side of the compliance", Constraint::Fraction),
 ];
 
-/// Continuous states: (name, unit, description); the speeds are the angles' derivatives.
-pub const STATES: [(&str, &str, &str); 10] = [
+/// Number of float parameters, the effects included.
+pub const NPARAMS: usize = 34;
+/// Index of the first effect parameter in [`PARAMETERS`].
+pub const FIRST_EFFECT: usize = 29;
+
+/// Continuous states: (name, unit, description); the speeds are the angles' derivatives. The
+/// first 10 are always there; the motor's angle and speed come with a drive compliance, the
+/// lagged torque with an actuator lag.
+pub const STATES: [(&str, &str, &str); 13] = [
     ("phi_m2", "rad", "angle of load machine M2"),
     ("phi_drive", "rad", "angle of the drive (differential cage)"),
     ("phi_m3", "rad", "angle of load machine M3"),
@@ -121,19 +155,25 @@ pub const STATES: [(&str, &str, &str); 10] = [
     ("bearing.y", "m", "bearing displacement y"),
     ("bearing.vx", "m/s", "bearing velocity x"),
     ("bearing.vy", "m/s", "bearing velocity y"),
+    ("phi_motor", "rad", "angle of the drive's motor (drive compliance)"),
+    ("w_motor", "rad/s", "speed of the drive's motor (drive compliance)"),
+    ("M_drive_lagged", "N.m", "drive torque after the actuator lag"),
 ];
 
-/// States that are the derivative of another state: (state, its derivative state).
-pub const STATE_DERIVATIVES: [(usize, usize); 5] = [(0, 3), (1, 4), (2, 5), (6, 8), (7, 9)];
-
-/// Computed derivatives: (state index, name, unit).
-pub const DERIVATIVES: [(usize, &str, &str); 5] = [
+/// Computed derivatives: (index in [`STATES`], name, unit); the other states' derivatives
+/// are states themselves (the speeds).
+pub const DERIVATIVES: [(usize, &str, &str); 7] = [
     (3, "der(w_m2)", "rad/s2"),
     (4, "der(w_drive)", "rad/s2"),
     (5, "der(w_m3)", "rad/s2"),
     (8, "der(bearing.vx)", "m/s2"),
     (9, "der(bearing.vy)", "m/s2"),
+    (11, "der(w_motor)", "rad/s2"),
+    (12, "der(M_drive_lagged)", "N.m/s"),
 ];
+
+/// States that are the derivative of another: (index in [`STATES`], the index of its derivative).
+const STATE_DERIVATIVES: [(usize, usize); 6] = [(0, 3), (1, 4), (2, 5), (6, 8), (7, 9), (10, 11)];
 
 /// Inputs: (name, unit, description).
 pub const INPUTS: [(&str, &str, &str); 5] = [
@@ -148,7 +188,8 @@ pub const INPUTS: [(&str, &str, &str); 5] = [
 pub const TORQUES: [(&str, &str); 2] =
     [("T_short", "torque in the short side shaft"), ("T_long", "torque in the long side shaft")];
 
-/// First value reference of each group.
+/// First value reference of each group of the always-present variables; the effects'
+/// variables follow the inputs.
 pub const VR_PARAM: u32 = 1;
 /// The variant's value reference.
 pub const VR_VARIANT: u32 = 30;
@@ -161,92 +202,134 @@ pub const VR_TORQUE: u32 = 46;
 /// First input.
 pub const VR_INPUT: u32 = 48;
 
-/// The whole table, in modelDescription order.
-pub fn table() -> Vec<Variable> {
-    let mut v = vec![Variable {
-        vr: 0,
-        name: "time",
-        kind: Kind::Float64,
-        causality: Causality::Independent,
-        slot: Slot::Time,
-        unit: "s",
-        description: "simulation time",
-    }];
-    for (i, &(name, unit, description, _)) in PARAMETERS.iter().enumerate() {
-        v.push(Variable {
-            vr: VR_PARAM + i as u32,
-            name,
-            kind: Kind::Float64,
-            causality: Causality::Parameter,
-            slot: Slot::Param(i),
-            unit,
-            description,
-        });
-    }
-    v.push(Variable {
-        vr: VR_VARIANT,
-        name: "variant",
-        kind: Kind::Int32,
-        causality: Causality::Parameter,
-        slot: Slot::Variant,
-        unit: "",
-        description: "rig variant: 1 original, 2 spring both sides, 3 right (M3), 4 left (M2)",
-    });
-    for (i, &(name, unit, description)) in STATES.iter().enumerate() {
-        v.push(Variable {
-            vr: VR_STATE + i as u32,
-            name,
-            kind: Kind::Float64,
-            causality: Causality::Output,
-            slot: Slot::State(i),
-            unit,
-            description,
-        });
-    }
-    for (i, &(state, name, unit)) in DERIVATIVES.iter().enumerate() {
-        v.push(Variable {
-            vr: VR_DERIVATIVE + i as u32,
-            name,
-            kind: Kind::Float64,
-            causality: Causality::Local,
-            slot: Slot::Derivative(state),
-            unit,
-            description: "state derivative",
-        });
-    }
-    for (i, &(name, description)) in TORQUES.iter().enumerate() {
-        v.push(Variable {
-            vr: VR_TORQUE + i as u32,
-            name,
-            kind: Kind::Float64,
-            causality: Causality::Output,
-            slot: Slot::Torque(i),
-            unit: "N.m",
-            description,
-        });
-    }
-    for (i, &(name, unit, description)) in INPUTS.iter().enumerate() {
-        v.push(Variable {
-            vr: VR_INPUT + i as u32,
-            name,
-            kind: Kind::Float64,
-            causality: Causality::Input,
-            slot: Slot::Input(i),
-            unit,
-            description,
-        });
+/// The variable table of one parameter set: what the model description lists, in order, with
+/// the continuous-state vector it implies.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Table {
+    /// The variables; a variable's value reference is its index.
+    pub variables: Vec<Variable>,
+    /// [`STATES`] indices of the continuous states, in state-vector order.
+    pub states: Vec<usize>,
+    /// Per state (state-vector order): the state-vector index of the state that is its
+    /// derivative, if one is.
+    pub derivative_state: Vec<Option<usize>>,
+}
+
+/// [`STATES`] indices of a powertrain's states (`plant::effects::Powertrain` order: angles,
+/// speeds, lagged torque).
+pub fn powertrain_states(effects: &plant::effects::DriveEffects) -> Vec<usize> {
+    let mut v = if effects.compliance_stiffness_nm_per_rad > 0.0 { vec![0, 1, 2, 10, 3, 4, 5, 11] } else {
+        vec![0, 1, 2, 3, 4, 5]
+    };
+    if effects.actuator_lag_s > 0.0 {
+        v.push(12);
     }
     v
 }
 
-/// The variable with value reference `vr`: value references are the table's indices.
-pub fn lookup(vr: u32) -> Option<Variable> {
-    static TABLE: std::sync::OnceLock<Vec<Variable>> = std::sync::OnceLock::new();
-    TABLE.get_or_init(table).get(vr as usize).copied()
+impl Table {
+    /// The table of parameter set `p`.
+    pub fn new(p: &FmuParams) -> Table {
+        let e = &p.effects;
+        let compliant = e.compliance_stiffness_nm_per_rad > 0.0;
+        let effect_on = [e.time_delay_s > 0.0, e.actuator_lag_s > 0.0, e.backlash_rad > 0.0, compliant, compliant];
+        let params: Vec<usize> =
+            (0..NPARAMS).filter(|&i| i < FIRST_EFFECT || effect_on[i - FIRST_EFFECT]).collect();
+        let mut states: Vec<usize> = (0..10).collect();
+        states.extend(powertrain_states(e).into_iter().filter(|&s| s >= 10));
+        let mut v = vec![Variable {
+            vr: 0,
+            name: "time",
+            kind: Kind::Float64,
+            causality: Causality::Independent,
+            slot: Slot::Time,
+            unit: "s",
+            description: "simulation time",
+        }];
+        let push = |v: &mut Vec<Variable>, name, kind, causality, slot, unit, description| {
+            let vr = v.len() as u32;
+            v.push(Variable { vr, name, kind, causality, slot, unit, description });
+        };
+        let float = Kind::Float64;
+        // the always-present variables first, at fixed value references
+        for &i in params.iter().filter(|&&i| i < FIRST_EFFECT) {
+            let (name, unit, description, _) = PARAMETERS[i];
+            push(&mut v, name, float, Causality::Parameter, Slot::Param(i), unit, description);
+        }
+        push(
+            &mut v,
+            "variant",
+            Kind::Int32,
+            Causality::Parameter,
+            Slot::Variant,
+            "",
+            "rig variant: 1 original, 2 spring both sides, 3 right (M3), 4 left (M2)",
+        );
+        let derivative_rows = |v: &mut Vec<Variable>, states: &[usize], from: usize, to: usize| {
+            for &(s, name, unit) in DERIVATIVES.iter().filter(|d| d.0 >= from && d.0 < to) {
+                if let Some(k) = states.iter().position(|&x| x == s) {
+                    let vr = v.len() as u32;
+                    let slot = Slot::Derivative(k);
+                    v.push(Variable {
+                        vr,
+                        name,
+                        kind: float,
+                        causality: Causality::Local,
+                        slot,
+                        unit,
+                        description: "state derivative",
+                    });
+                }
+            }
+        };
+        for k in 0..10 {
+            let (name, unit, description) = STATES[states[k]];
+            push(&mut v, name, float, Causality::Output, Slot::State(k), unit, description);
+        }
+        derivative_rows(&mut v, &states, 0, 10);
+        for (i, &(name, description)) in TORQUES.iter().enumerate() {
+            push(&mut v, name, float, Causality::Output, Slot::Torque(i), "N.m", description);
+        }
+        for (i, &(name, unit, description)) in INPUTS.iter().enumerate() {
+            push(&mut v, name, float, Causality::Input, Slot::Input(i), unit, description);
+        }
+        // then the effects'
+        for &i in params.iter().filter(|&&i| i >= FIRST_EFFECT) {
+            let (name, unit, description, _) = PARAMETERS[i];
+            push(&mut v, name, float, Causality::Parameter, Slot::Param(i), unit, description);
+        }
+        for (k, &s) in states.iter().enumerate().skip(10) {
+            let (name, unit, description) = STATES[s];
+            push(&mut v, name, float, Causality::Output, Slot::State(k), unit, description);
+        }
+        derivative_rows(&mut v, &states, 10, STATES.len());
+        let derivative_state = states
+            .iter()
+            .map(|s| {
+                STATE_DERIVATIVES.iter().find(|d| d.0 == *s).and_then(|d| states.iter().position(|&x| x == d.1))
+            })
+            .collect();
+        Table { variables: v, states, derivative_state }
+    }
+
+    /// Number of continuous states.
+    pub fn nx(&self) -> usize {
+        self.states.len()
+    }
+
+    /// The variable with value reference `vr`: value references are the table's indices.
+    pub fn lookup(&self, vr: u32) -> Option<Variable> {
+        self.variables.get(vr as usize).copied()
+    }
+
+    /// The variable of `slot`.
+    pub fn find(&self, slot: Slot) -> Option<Variable> {
+        self.variables.iter().find(|v| v.slot == slot).copied()
+    }
 }
 
 /// The float parameters of a parameter set, in [`PARAMETERS`] order.
-pub fn parameter_values(p: &FmuParams) -> [f64; 29] {
+pub fn parameter_values(p: &FmuParams) -> [f64; NPARAMS] {
     let w = &p.powertrain;
     let b = &p.bearing;
     let (k, c, m) = (b.element.k_n_per_m, b.element.c_ns_per_m, b.element.m_kg);
@@ -281,11 +364,16 @@ pub fn parameter_values(p: &FmuParams) -> [f64; 29] {
         s.c_y,
         s.m_x,
         s.m_y,
+        p.effects.time_delay_s,
+        p.effects.actuator_lag_s,
+        p.effects.backlash_rad,
+        p.effects.compliance_stiffness_nm_per_rad,
+        p.effects.compliance_motor_fraction,
     ]
 }
 
 /// The parameter set of float parameters `v` (in [`PARAMETERS`] order) and variant 1..=4.
-pub fn parameter_set(v: &[f64; 29], variant: i32) -> Result<FmuParams, String> {
+pub fn parameter_set(v: &[f64; NPARAMS], variant: i32) -> Result<FmuParams, String> {
     use plant::{BearingModel, Coefficients, RigParams, Support, Variant};
     let variant = match variant {
         1 => Variant::V1,
@@ -319,6 +407,13 @@ pub fn parameter_set(v: &[f64; 29], variant: i32) -> Result<FmuParams, String> {
             support: Support { k_x: v[23], k_y: v[24], c_x: v[25], c_y: v[26], m_x: v[27], m_y: v[28] },
             table: None,
         },
+        effects: plant::effects::DriveEffects {
+            time_delay_s: v[29],
+            actuator_lag_s: v[30],
+            backlash_rad: v[31],
+            compliance_stiffness_nm_per_rad: v[32],
+            compliance_motor_fraction: v[33],
+        },
     })
 }
 
@@ -338,20 +433,57 @@ mod tests {
 
     #[test]
     fn value_references_are_unique_and_all_found() {
-        let t = table();
-        for (i, v) in t.iter().enumerate() {
+        let t = Table::new(&FmuParams::default());
+        assert_eq!(t.nx(), 10);
+        for (i, v) in t.variables.iter().enumerate() {
             assert_eq!(v.vr as usize, i, "value references are the table's indices");
+            assert_eq!(t.lookup(v.vr), Some(*v));
         }
-        for v in &t {
-            assert_eq!(lookup(v.vr), Some(*v));
-        }
-        assert_eq!(lookup(999), None);
+        assert_eq!(t.lookup(999), None);
+        // the always-present groups keep their value references
+        assert_eq!(t.find(Slot::Param(0)).unwrap().vr, VR_PARAM);
+        assert_eq!(t.find(Slot::Variant).unwrap().vr, VR_VARIANT);
+        assert_eq!(t.find(Slot::State(0)).unwrap().vr, VR_STATE);
+        assert_eq!(t.find(Slot::Derivative(3)).unwrap().vr, VR_DERIVATIVE);
+        assert_eq!(t.find(Slot::Torque(0)).unwrap().vr, VR_TORQUE);
+        assert_eq!(t.find(Slot::Input(0)).unwrap().vr, VR_INPUT);
+    }
+
+    #[test]
+    fn effects_add_their_parameters_and_states_after_the_rest() {
+        let mut p = FmuParams::default();
+        let base = Table::new(&p);
+        p.effects.actuator_lag_s = 0.004;
+        p.effects.compliance_stiffness_nm_per_rad = 2000.0;
+        let t = Table::new(&p);
+        assert_eq!(t.nx(), 13);
+        assert_eq!(&t.variables[..base.variables.len()], &base.variables[..]);
+        let names: Vec<&str> = t.variables[base.variables.len()..].iter().map(|v| v.name).collect();
+        assert_eq!(
+            names,
+            [
+                "drive.actuator_lag",
+                "drive.compliance_stiffness",
+                "drive.compliance_motor_fraction",
+                "phi_motor",
+                "w_motor",
+                "M_drive_lagged",
+                "der(w_motor)",
+                "der(M_drive_lagged)"
+            ]
+        );
+        // φ_motor's derivative is w_motor; the lagged torque's is computed
+        assert_eq!(t.derivative_state[10], Some(11));
+        assert_eq!(t.derivative_state[12], None);
     }
 
     #[test]
     fn parameters_round_trip() {
         let p = FmuParams::default();
+        let mut p = p;
+        p.effects.backlash_rad = 0.002;
         let back = parameter_set(&parameter_values(&p), variant_number(p.variant)).unwrap();
+        assert_eq!(back.effects, p.effects);
         assert_eq!(parameter_values(&back), parameter_values(&p));
         let a = p.powertrain.open_differential(p.variant).unwrap().stiffness_matrix();
         let b = back.powertrain.open_differential(back.variant).unwrap().stiffness_matrix();

@@ -3,7 +3,7 @@
 //! a compliance inside the drive unit (its inertia split into motor and cage). Used by the
 //! diagnosis (`ident::diagnose`) to extend a declared model; no I/O.
 
-use nalgebra::{DMatrix, DVector};
+use nalgebra::DMatrix;
 use serde::{Deserialize, Serialize};
 
 use crate::error::{non_negative, PlantError, Result};
@@ -72,19 +72,28 @@ impl DriveEffects {
     }
 }
 
-/// The open-differential powertrain (section 2.4) driven by the drive torque, with effects.
-/// Coordinates: φ_m2, φ_cage, φ_m3 and, with a compliance, φ_motor; then their speeds; then,
-/// with a lag, the lagged torque. The side shafts act through the generalised twist
-/// s = aᵀq, a = [−1, 2, −1] on (m2, cage, m3), as two springs in series (eq. (A1)).
+/// Largest integration step with backlash, s: the RK4 step of [`Powertrain::simulate`] (8 per
+/// 1 ms sample) and of the FMU's co-simulation step. Contact switching makes the response
+/// sensitive to the step: 4 sub-steps per ms left twice the misfit at the true play.
+pub const BACKLASH_STEP_S: f64 = 1.25e-4;
+
+/// The open-differential powertrain (section 2.4) with effects, driven by the load-machine and
+/// drive torques [M_m2, M_drive, M_m3]. Coordinates: φ_m2, φ_cage, φ_m3 and, with a
+/// compliance, φ_motor; then their speeds; then, with a lag, the lagged drive torque. The side
+/// shafts act through the generalised twist s = aᵀq, a = [−1, 2, −1] on (m2, cage, m3), as two
+/// springs in series (eq. (A1)); the drive torque acts on the motor (the cage when rigid).
 #[derive(Debug, Clone)]
 pub struct Powertrain {
-    inertia: DVector<f64>,
-    /// Stiffness and damping besides the side shafts (the compliance), and the drag.
-    k0: DMatrix<f64>,
-    d0: DMatrix<f64>,
-    a: DVector<f64>,
+    inertia: Vec<f64>,
+    /// Stiffness and damping besides the side shafts (the compliance), and the drag, row-major.
+    k0: Vec<f64>,
+    d0: Vec<f64>,
+    a: Vec<f64>,
     c_s: f64,
     d_s: f64,
+    /// Damping of each shaft's torque per unit twist rate (short, long): d_k times its share of
+    /// the twist, as `RigParams::open_differential` builds the spring torques.
+    d_shaft: [f64; 2],
     input_dof: usize,
     /// The effects.
     pub effects: DriveEffects,
@@ -99,40 +108,41 @@ impl Powertrain {
         let c_s = cl * cr / (cl + cr);
         // Damping of the series pair as open_differential builds it: each shaft's damping
         // acts on its share of the twist.
-        let d_s = e.d_left * (cr / (cl + cr)).powi(2) + e.d_right * (cl / (cl + cr)).powi(2);
+        let (share_l, share_r) = (cr / (cl + cr), cl / (cl + cr));
+        let d_s = e.d_left * share_l.powi(2) + e.d_right * share_r.powi(2);
         let compliant = effects.compliance_stiffness_nm_per_rad > 0.0;
         let n = if compliant { 4 } else { 3 };
-        let mut inertia = DVector::from_vec(vec![e.j_m2, e.j_drive, e.j_m3]);
-        let mut k0 = DMatrix::zeros(n, n);
-        let mut d0 = DMatrix::zeros(n, n);
-        d0[(0, 0)] = e.load_drag;
-        d0[(2, 2)] = e.load_drag;
-        let mut a = DVector::zeros(n);
-        a[0] = -1.0;
-        a[1] = 2.0;
-        a[2] = -1.0;
+        let mut inertia = vec![e.j_m2, e.j_drive, e.j_m3];
+        let mut k0 = vec![0.0; n * n];
+        let mut d0 = vec![0.0; n * n];
+        d0[0] = e.load_drag;
+        d0[2 * n + 2] = e.load_drag;
+        let mut a = vec![0.0; n];
+        a[..3].copy_from_slice(&[-1.0, 2.0, -1.0]);
         let input_dof = if compliant {
             let f = effects.compliance_motor_fraction;
-            inertia = DVector::from_vec(vec![e.j_m2, (1.0 - f) * e.j_drive, e.j_m3, f * e.j_drive]);
+            inertia = vec![e.j_m2, (1.0 - f) * e.j_drive, e.j_m3, f * e.j_drive];
             // The compliance gets the side shafts' stiffness-proportional damping, d = (d_s/c_s) k
             // (the generic damping of section 4.3): an undamped internal mode would be a
             // resonance no measurement shows.
             let k = effects.compliance_stiffness_nm_per_rad;
             let d = d_s / c_s * k;
             for (m, v) in [(&mut k0, k), (&mut d0, d)] {
-                m[(1, 1)] += v;
-                m[(3, 3)] += v;
-                m[(1, 3)] -= v;
-                m[(3, 1)] -= v;
+                m[n + 1] += v;
+                m[3 * n + 3] += v;
+                m[n + 3] -= v;
+                m[3 * n + 1] -= v;
             }
             3
         } else {
             1
         };
-        Ok(Powertrain { inertia, k0, d0, a, c_s, d_s, input_dof, effects: *effects })
+        let d_shaft = [e.d_left * share_l, e.d_right * share_r];
+        Ok(Powertrain { inertia, k0, d0, a, c_s, d_s, d_shaft, input_dof, effects: *effects })
     }
 
-    fn dofs(&self) -> usize {
+    /// Degrees of freedom: 3, or 4 with a compliance (φ_motor last).
+    pub fn dofs(&self) -> usize {
         self.inertia.len()
     }
 
@@ -141,46 +151,71 @@ impl Powertrain {
         2 * self.dofs() + usize::from(self.effects.actuator_lag_s > 0.0)
     }
 
+    /// Names of the states, in order.
+    pub fn state_names(&self) -> Vec<String> {
+        let n = self.dofs();
+        let mut names: Vec<String> =
+            ["phi_m2", "phi_cage", "phi_m3", "phi_motor"][..n].iter().map(|s| s.to_string()).collect();
+        names.extend(["w_m2", "w_cage", "w_m3", "w_motor"][..n].iter().map(|s| s.to_string()));
+        if self.nstates() > 2 * n {
+            names.push("M_drive_lagged".into());
+        }
+        names
+    }
+
+    /// The linear part with inputs [M_m2, M_drive, M_m3] and outputs the side-shaft torques
+    /// [T_short, T_long], the dead time left out: (A, B, C). `contact`: the shafts engaged
+    /// (backlash closed, eq. (A1)); false: inside the play, where they carry nothing.
+    pub fn linear(&self, contact: bool) -> (DMatrix<f64>, DMatrix<f64>, DMatrix<f64>) {
+        let n = self.dofs();
+        let ns = self.nstates();
+        let on = if contact { 1.0 } else { 0.0 };
+        let mut a = DMatrix::zeros(ns, ns);
+        let mut b = DMatrix::zeros(ns, 3);
+        for i in 0..n {
+            a[(i, n + i)] = 1.0;
+            for j in 0..n {
+                let k = self.k0[i * n + j] + on * self.c_s * self.a[i] * self.a[j];
+                let d = self.d0[i * n + j] + on * self.d_s * self.a[i] * self.a[j];
+                a[(n + i, j)] = -k / self.inertia[i];
+                a[(n + i, n + j)] = -d / self.inertia[i];
+            }
+        }
+        b[(n, 0)] = 1.0 / self.inertia[0];
+        b[(n + 2, 2)] = 1.0 / self.inertia[2];
+        if self.effects.actuator_lag_s > 0.0 {
+            let tau = self.effects.actuator_lag_s;
+            a[(n + self.input_dof, 2 * n)] = 1.0 / self.inertia[self.input_dof];
+            a[(2 * n, 2 * n)] = -1.0 / tau;
+            b[(2 * n, 1)] = 1.0 / tau;
+        } else {
+            b[(n + self.input_dof, 1)] = 1.0 / self.inertia[self.input_dof];
+        }
+        let mut c = DMatrix::zeros(2, ns);
+        for (k, &d) in self.d_shaft.iter().enumerate() {
+            for i in 0..n {
+                c[(k, i)] = on * self.c_s * self.a[i];
+                c[(k, n + i)] = on * d * self.a[i];
+            }
+        }
+        (a, b, c)
+    }
+
     /// The linear part (backlash closed, the dead time left out): input the drive torque,
     /// outputs w_m2 and w_m3.
     pub fn state_space(&self) -> StateSpace {
         let n = self.dofs();
         let ns = self.nstates();
-        let aat = &self.a * self.a.transpose();
-        let k = &self.k0 + &aat * self.c_s;
-        let d = &self.d0 + &aat * self.d_s;
-        let mut a = DMatrix::zeros(ns, ns);
-        let mut b = DMatrix::zeros(ns, 1);
-        for i in 0..n {
-            a[(i, n + i)] = 1.0;
-            for j in 0..n {
-                a[(n + i, j)] = -k[(i, j)] / self.inertia[i];
-                a[(n + i, n + j)] = -d[(i, j)] / self.inertia[i];
-            }
-        }
-        if self.effects.actuator_lag_s > 0.0 {
-            let tau = self.effects.actuator_lag_s;
-            a[(n + self.input_dof, 2 * n)] = 1.0 / self.inertia[self.input_dof];
-            a[(2 * n, 2 * n)] = -1.0 / tau;
-            b[(2 * n, 0)] = 1.0 / tau;
-        } else {
-            b[(n + self.input_dof, 0)] = 1.0 / self.inertia[self.input_dof];
-        }
+        let (a, b, _) = self.linear(true);
         let mut c = DMatrix::zeros(2, ns);
         c[(0, n)] = 1.0;
         c[(1, n + 2)] = 1.0;
-        let mut names: Vec<String> =
-            ["phi_m2", "phi_cage", "phi_m3", "phi_motor"][..n].iter().map(|s| s.to_string()).collect();
-        names.extend(["w_m2", "w_cage", "w_m3", "w_motor"][..n].iter().map(|s| s.to_string()));
-        if ns > 2 * n {
-            names.push("M_drive_lagged".into());
-        }
         StateSpace {
             a,
-            b,
+            b: b.columns(1, 1).into_owned(),
             c,
             d: DMatrix::zeros(2, 1),
-            state_names: names,
+            state_names: self.state_names(),
             input_names: vec!["M_drive".into()],
             output_names: vec!["w_m2".into(), "w_m3".into()],
         }
@@ -190,8 +225,9 @@ impl Powertrain {
     /// one above the shuffle).
     pub fn frequencies_hz(&self) -> Vec<f64> {
         let n = self.dofs();
-        let k = &self.k0 + &self.a * self.a.transpose() * self.c_s;
-        let s = DMatrix::from_fn(n, n, |i, j| k[(i, j)] / (self.inertia[i] * self.inertia[j]).sqrt());
+        let s = DMatrix::from_fn(n, n, |i, j| {
+            (self.k0[i * n + j] + self.c_s * self.a[i] * self.a[j]) / (self.inertia[i] * self.inertia[j]).sqrt()
+        });
         let mut f: Vec<f64> =
             s.symmetric_eigenvalues().iter().map(|&l| l.max(0.0).sqrt() / (2.0 * std::f64::consts::PI)).collect();
         f.sort_by(|a, b| a.total_cmp(b));
@@ -201,8 +237,7 @@ impl Powertrain {
     /// Load-machine speeds (w_m2, w_m3) for the drive torque `torque` sampled every `dt_s`
     /// (held between samples), from the steady state under `torque[0]` with every speed at
     /// `speed0`. Linear cases are exact (ZOH, the dead time by interpolating the torque);
-    /// backlash is integrated by RK4 with 8 sub-steps per sample (contact switching makes the
-    /// response sensitive to the step: 4 sub-steps left twice the misfit at the true play).
+    /// backlash is integrated by RK4 with steps of at most [`BACKLASH_STEP_S`].
     pub fn simulate(&self, torque: &[f64], dt_s: f64, speed0: f64) -> Result<(Vec<f64>, Vec<f64>)> {
         let u = delayed(torque, dt_s, self.effects.time_delay_s);
         let x0 = self.steady_state(u.first().copied().unwrap_or(0.0), speed0);
@@ -233,7 +268,7 @@ impl Powertrain {
     /// Equilibrium under a constant torque: speeds equal (`speed0`; the drag then needs a
     /// torque the constant input may not supply, but only the twist matters to the response)
     /// and the side shafts carrying their static share.
-    fn steady_state(&self, torque: f64, speed0: f64) -> Vec<f64> {
+    pub fn steady_state(&self, torque: f64, speed0: f64) -> Vec<f64> {
         let n = self.dofs();
         let mut x = vec![0.0; self.nstates()];
         for i in 0..n {
@@ -254,75 +289,174 @@ impl Powertrain {
         x
     }
 
-    /// Shaft torque of the series pair at twist s and rate ṡ: dead zone of half-width b (each
-    /// shaft's total play b/2 on either side, two in series), damping only in contact.
-    fn shaft_torque(&self, s: f64, sdot: f64) -> f64 {
+    /// Twist s = aᵀq and its rate.
+    fn twist(&self, x: &[f64]) -> (f64, f64) {
+        let n = self.dofs();
+        ((0..n).map(|i| self.a[i] * x[i]).sum(), (0..n).map(|i| self.a[i] * x[n + i]).sum())
+    }
+
+    /// Whether the side shafts are engaged (the twist beyond the play; always without backlash).
+    pub fn in_contact(&self, x: &[f64]) -> bool {
+        self.twist(x).0.abs() > self.effects.backlash_rad || self.effects.backlash_rad == 0.0
+    }
+
+    /// Elastic twist beyond the dead zone of half-width b (each shaft's total play b/2 on
+    /// either side, two in series), zero inside it.
+    fn beyond_play(&self, s: f64) -> f64 {
         let b = self.effects.backlash_rad;
         if s > b {
-            self.c_s * (s - b) + self.d_s * sdot
+            s - b
         } else if s < -b {
-            self.c_s * (s + b) + self.d_s * sdot
+            s + b
         } else {
             0.0
         }
     }
 
-    fn derivative(&self, x: &[f64], u: f64, dx: &mut [f64], k0: &[f64], d0: &[f64], a: &[f64]) {
+    /// Side-shaft torques [T_short, T_long] of state `x`: stiffness on the twist beyond the
+    /// play, damping only in contact.
+    pub fn shaft_torques(&self, x: &[f64]) -> [f64; 2] {
+        let (s, sdot) = self.twist(x);
+        if !self.in_contact(x) {
+            return [0.0; 2];
+        }
+        let e = self.c_s * self.beyond_play(s);
+        [e + self.d_shaft[0] * sdot, e + self.d_shaft[1] * sdot]
+    }
+
+    /// ẋ for the torques [M_m2, M_drive, M_m3] (the drive torque already delayed).
+    pub fn derivative(&self, x: &[f64], torques: [f64; 3], dx: &mut [f64]) {
         let n = self.dofs();
-        let s: f64 = (0..n).map(|i| a[i] * x[i]).sum();
-        let sdot: f64 = (0..n).map(|i| a[i] * x[n + i]).sum();
-        let t = self.shaft_torque(s, sdot);
-        let drive = if self.effects.actuator_lag_s > 0.0 { x[2 * n] } else { u };
+        let (s, sdot) = self.twist(x);
+        // generalised shaft force of the series pair
+        let t = if self.in_contact(x) { self.c_s * self.beyond_play(s) + self.d_s * sdot } else { 0.0 };
+        let drive = if self.effects.actuator_lag_s > 0.0 { x[2 * n] } else { torques[1] };
         for i in 0..n {
             dx[i] = x[n + i];
-            let mut f = -a[i] * t;
+            let mut f = -self.a[i] * t;
             for j in 0..n {
-                f -= k0[i * n + j] * x[j] + d0[i * n + j] * x[n + j];
+                f -= self.k0[i * n + j] * x[j] + self.d0[i * n + j] * x[n + j];
             }
             if i == self.input_dof {
                 f += drive;
             }
+            if i == 0 {
+                f += torques[0];
+            } else if i == 2 {
+                f += torques[2];
+            }
             dx[n + i] = f / self.inertia[i];
         }
         if self.effects.actuator_lag_s > 0.0 {
-            dx[2 * n] = (u - x[2 * n]) / self.effects.actuator_lag_s;
+            dx[2 * n] = (torques[1] - x[2 * n]) / self.effects.actuator_lag_s;
+        }
+    }
+
+    /// One classical RK4 step of length `h` with the torques held; `work` holds 5 scratch
+    /// vectors of the state's length.
+    pub fn rk4_step(&self, x: &mut [f64], torques: [f64; 3], h: f64, work: &mut [Vec<f64>; 5]) {
+        let ns = x.len();
+        let [k1, k2, k3, k4, tmp] = work;
+        self.derivative(x, torques, k1);
+        for i in 0..ns {
+            tmp[i] = x[i] + 0.5 * h * k1[i];
+        }
+        self.derivative(tmp, torques, k2);
+        for i in 0..ns {
+            tmp[i] = x[i] + 0.5 * h * k2[i];
+        }
+        self.derivative(tmp, torques, k3);
+        for i in 0..ns {
+            tmp[i] = x[i] + h * k3[i];
+        }
+        self.derivative(tmp, torques, k4);
+        for i in 0..ns {
+            x[i] += h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]);
         }
     }
 
     fn simulate_backlash(&self, u: &[f64], dt_s: f64, mut x: Vec<f64>) -> (Vec<f64>, Vec<f64>) {
         let n = self.dofs();
         let ns = x.len();
-        let sub = 8;
-        let k0: Vec<f64> = (0..n * n).map(|k| self.k0[(k / n, k % n)]).collect();
-        let d0: Vec<f64> = (0..n * n).map(|k| self.d0[(k / n, k % n)]).collect();
-        let a: Vec<f64> = self.a.iter().copied().collect();
+        let sub = (dt_s / BACKLASH_STEP_S - 1e-9).ceil().max(1.0) as usize;
         let h = dt_s / sub as f64;
-        let (mut k1, mut k2, mut k3, mut k4, mut tmp) =
-            (vec![0.0; ns], vec![0.0; ns], vec![0.0; ns], vec![0.0; ns], vec![0.0; ns]);
+        let mut work: [Vec<f64>; 5] = std::array::from_fn(|_| vec![0.0; ns]);
         let (mut w2, mut w3) = (Vec::with_capacity(u.len()), Vec::with_capacity(u.len()));
         for &uk in u {
             w2.push(x[n]);
             w3.push(x[n + 2]);
             for _ in 0..sub {
-                self.derivative(&x, uk, &mut k1, &k0, &d0, &a);
-                for i in 0..ns {
-                    tmp[i] = x[i] + 0.5 * h * k1[i];
-                }
-                self.derivative(&tmp, uk, &mut k2, &k0, &d0, &a);
-                for i in 0..ns {
-                    tmp[i] = x[i] + 0.5 * h * k2[i];
-                }
-                self.derivative(&tmp, uk, &mut k3, &k0, &d0, &a);
-                for i in 0..ns {
-                    tmp[i] = x[i] + h * k3[i];
-                }
-                self.derivative(&tmp, uk, &mut k4, &k0, &d0, &a);
-                for i in 0..ns {
-                    x[i] += h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]);
-                }
+                self.rk4_step(&mut x, [0.0, uk, 0.0], h, &mut work);
             }
         }
         (w2, w3)
+    }
+}
+
+/// The history of a piecewise-constant signal for a dead time: (time from which a value
+/// holds, value), times increasing. Feeds the FMU's delayed drive torque.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct DelayLine {
+    records: Vec<(f64, f64)>,
+}
+
+impl DelayLine {
+    /// The line of stored records (times increasing).
+    pub fn from_records(records: Vec<(f64, f64)>) -> Option<DelayLine> {
+        let ok = records.windows(2).all(|w| w[0].0 < w[1].0) && records.iter().all(|r| r.0.is_finite());
+        ok.then_some(DelayLine { records })
+    }
+
+    /// The stored records.
+    pub fn records(&self) -> &[(f64, f64)] {
+        &self.records
+    }
+
+    /// The signal takes `value` from time `t` on. Records after `t` are dropped: an importer
+    /// that goes back (a rejected solver step) overwrites what it set there.
+    pub fn record(&mut self, t: f64, value: f64) {
+        while self.records.last().is_some_and(|r| r.0 >= t) {
+            self.records.pop();
+        }
+        if self.records.last().is_none_or(|r| r.1 != value) {
+            self.records.push((t, value));
+        }
+    }
+
+    /// The value at time `s`: the first value held before the first record; `current` if
+    /// nothing was recorded.
+    pub fn value_at(&self, s: f64, current: f64) -> f64 {
+        match self.records.iter().rposition(|r| r.0 <= s) {
+            Some(i) => self.records[i].1,
+            None => self.records.first().map_or(current, |r| r.1),
+        }
+    }
+
+    /// The signal delayed by `delay_s` over [t0, t1) as pieces (length, value), appended to `out`.
+    pub fn segments(&self, t0: f64, t1: f64, delay_s: f64, current: f64, out: &mut Vec<(f64, f64)>) {
+        let mut start = t0;
+        let mut value = self.value_at(t0 - delay_s, current);
+        for &(t, v) in &self.records {
+            let at = t + delay_s;
+            // breakpoints closer than 1e-12 of the step to its ends are the ends
+            let tol = 1e-12 * (t1 - t0).abs().max(t1.abs());
+            if at > start + tol && at < t1 - tol {
+                out.push((at - start, value));
+                start = at;
+            }
+            if at <= start + tol {
+                value = v;
+            }
+        }
+        out.push((t1 - start, value));
+    }
+
+    /// Drops what is no longer needed once the time reached `t`: records before the one in
+    /// force at `t − delay_s`.
+    pub fn forget_before(&mut self, t: f64, delay_s: f64) {
+        if let Some(i) = self.records.iter().rposition(|r| r.0 <= t - delay_s) {
+            self.records.drain(..i);
+        }
     }
 }
 
@@ -342,4 +476,92 @@ pub fn delayed(x: &[f64], dt_s: f64, delay_s: f64) -> Vec<f64> {
             (1.0 - frac) * at(i) + frac * at(i - 1)
         })
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mechanical::Output;
+
+    fn rig() -> RigParams {
+        crate::paper::damped_params()
+    }
+
+    #[test]
+    fn linear_part_is_the_open_differential() {
+        // The same model assembled by MechanicalModel from the springs' elongation vectors.
+        for variant in [Variant::V1, Variant::V3] {
+            let p = Powertrain::new(&rig(), variant, &DriveEffects::default()).unwrap();
+            let (a, b, c) = p.linear(true);
+            let ss = rig().open_differential(variant).unwrap().state_space(&[Output::SpringTorques]).unwrap();
+            assert!((&a - &ss.a).abs().max() < 1e-9 * ss.a.abs().max(), "A differs");
+            assert!((&b - &ss.b).abs().max() < 1e-12 * ss.b.abs().max(), "B differs");
+            assert!((&c - &ss.c).abs().max() < 1e-9 * ss.c.abs().max(), "C differs");
+        }
+    }
+
+    #[test]
+    fn derivative_is_the_linear_part_in_contact_and_free_inside_the_play() {
+        let effects = DriveEffects {
+            backlash_rad: 0.01,
+            actuator_lag_s: 0.004,
+            compliance_stiffness_nm_per_rad: 2000.0,
+            ..Default::default()
+        };
+        let p = Powertrain::new(&rig(), Variant::V1, &effects).unwrap();
+        let ns = p.nstates();
+        assert_eq!(ns, 9);
+        let u = [3.0, 40.0, -5.0];
+        let mut dx = vec![0.0; ns];
+        for (twist, contact) in [(0.03, true), (0.004, false)] {
+            // s = 2 φ_cage
+            let mut x: Vec<f64> = (0..ns).map(|i| 1e-3 * (i as f64 - 3.0)).collect();
+            x[0] = 0.0;
+            x[2] = 0.0;
+            x[1] = twist / 2.0;
+            assert_eq!(p.in_contact(&x), contact);
+            p.derivative(&x, u, &mut dx);
+            let (a, b, c) = p.linear(true);
+            let (a_open, b_open, _) = p.linear(false);
+            let shift = DMatrix::from_fn(ns, 1, |i, _| if i == 1 { effects.backlash_rad / 2.0 } else { 0.0 });
+            let xv = DMatrix::from_column_slice(ns, 1, &x);
+            // the shafts' elastic term acts on s − b (beyond the play), the rest on x
+            let uv = DMatrix::from_column_slice(3, 1, &u);
+            let lin = if contact {
+                &a_open * &xv + &b_open * &uv + (&a - &a_open) * (&xv - &shift)
+            } else {
+                &a_open * &xv + &b_open * &uv
+            };
+            assert_eq!(b, b_open);
+            for i in 0..ns {
+                assert!((dx[i] - lin[i]).abs() < 1e-9 * lin.abs().max(), "state {i}: {} vs {}", dx[i], lin[i]);
+            }
+            let t = p.shaft_torques(&x);
+            let t_lin = if contact { &c * (&xv - &shift) } else { DMatrix::zeros(2, 1) };
+            assert!((t[0] - t_lin[0]).abs() < 1e-9 && (t[1] - t_lin[1]).abs() < 1e-9);
+        }
+    }
+
+    #[test]
+    fn delay_line_shifts_a_held_signal() {
+        let mut d = DelayLine::default();
+        assert_eq!(d.value_at(5.0, 7.0), 7.0, "nothing recorded: the current value");
+        d.record(0.0, 1.0);
+        d.record(1e-3, 2.0);
+        d.record(2e-3, 2.0); // unchanged: no new record
+        assert_eq!(d.records().len(), 2);
+        let mut out = Vec::new();
+        // u(s − 1.5 ms) over [2 ms, 3 ms): 1 until 2.5 ms, then 2
+        d.segments(2e-3, 3e-3, 1.5e-3, 2.0, &mut out);
+        assert_eq!(out.len(), 2);
+        assert!((out[0].0 - 0.5e-3).abs() < 1e-15 && out[0].1 == 1.0);
+        assert!((out[1].0 - 0.5e-3).abs() < 1e-15 && out[1].1 == 2.0);
+        // before the first record the first value holds
+        assert_eq!(d.value_at(-1.0, 9.0), 1.0);
+        // a rejected step: setting at an earlier time drops the later records
+        d.record(0.5e-3, 4.0);
+        assert_eq!(d.records(), &[(0.0, 1.0), (0.5e-3, 4.0)]);
+        d.forget_before(10.0, 1e-3);
+        assert_eq!(d.records(), &[(0.5e-3, 4.0)]);
+    }
 }
