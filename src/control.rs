@@ -21,8 +21,16 @@ pub const SETTLING_BAND: f64 = 0.02;
 pub const CHECK_EVERY: usize = 25;
 
 /// The plant the controller is built on: the open-differential state space of `params`
-/// with speed and side-shaft torque outputs.
+/// with speed and side-shaft torque outputs. Drive-path effects are refused: the controller
+/// predicts with the linear model and would silently leave them out.
 pub fn plant_of(params: &rigtwin_fmu::FmuParams) -> anyhow::Result<StateSpace> {
+    if !params.effects.is_empty() {
+        anyhow::bail!(
+            "the rig file has an [effects] section (dead time, lag, backlash or drive compliance): \
+             rigtwin mpc predicts with the linear open-differential model, which has none of them; \
+             remove the section to control the model without them"
+        );
+    }
     Ok(mpc::closed_loop::rig_plant(&params.powertrain, params.variant)?)
 }
 

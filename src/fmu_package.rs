@@ -50,32 +50,16 @@ pub fn find_library() -> anyhow::Result<PathBuf> {
     )
 }
 
-/// The FMU parameter set of a rig: its reduced model and variant, and its bearing if it
-/// describes one (else the identified squeeze-film damper of the default).
+/// The FMU parameter set of a rig: its reduced model and variant, its drive-path effects, and
+/// its bearing if it describes one (else the identified squeeze-film damper of the default).
 pub fn params_of_rig(rig: &Rig) -> anyhow::Result<FmuParams> {
-    let e = &rig.effects;
-    let unsupported: Vec<&str> = [
-        (e.time_delay_s > 0.0, "time_delay_s"),
-        (e.actuator_lag_s > 0.0, "actuator_lag_s"),
-        (e.backlash_rad > 0.0, "backlash_rad"),
-        (e.compliance_stiffness_nm_per_rad > 0.0, "compliance_stiffness_nm_per_rad"),
-    ]
-    .into_iter()
-    .filter_map(|(on, k)| on.then_some(k))
-    .collect();
-    if !unsupported.is_empty() {
-        anyhow::bail!(
-            "{}: [effects] {} cannot be exported yet: the FMU carries the linear open-differential model \
-             (re-fitted parameters and shaft damping) and the bearing (added mass, cross coupling, damping)",
-            rig.name,
-            unsupported.join(", ")
-        );
-    }
+    rig.effects.validate().map_err(|e| anyhow::anyhow!("{}: {e}", rig.name))?;
     let default = FmuParams::default();
     Ok(FmuParams {
         powertrain: rig.model.clone(),
         variant: rig.variant,
         bearing: rig.bearing.clone().unwrap_or(default.bearing),
+        effects: rig.effects,
     })
 }
 
@@ -99,7 +83,7 @@ pub fn atomic_write(path: &Path, bytes: &[u8]) -> anyhow::Result<()> {
 /// Writes `rigtwin-fmi3.fmu` and `rigtwin-fmi2.fmu` into `out`; returns their paths.
 pub fn package(p: &FmuParams, library: &Path, out: &Path) -> anyhow::Result<[PathBuf; 2]> {
     // the parameters must describe a model before anything is written
-    rigtwin_fmu::model::LinearModel::new(p)
+    rigtwin_fmu::model::Model::new(p)
         .map_err(|e| anyhow::anyhow!("the parameter set does not describe a model: {e}"))?;
     let lib = std::fs::read(library).map_err(|e| anyhow::anyhow!("{}: {e}", library.display()))?;
     let (p3, p2) = platform_folders()?;

@@ -9,11 +9,11 @@ use fmi::fmi3::import::Fmi3Import;
 use fmi::fmi3::{CoSimulation, Common, Fmi3Model, GetSet};
 use mpc::closed_loop::{compare, LinearPlant, Plant, Probes, RigSignals, Scenario, ScenarioKind};
 use mpc::MpcSettings;
-use rigtwin_fmu::variables::table;
+use rigtwin_fmu::variables::Table;
 use rigtwin_fmu::FmuParams;
 
 fn vr(name: &str) -> u32 {
-    table().into_iter().find(|v| v.name == name).unwrap_or_else(|| panic!("no variable {name}")).vr
+    Table::new(&rigtwin_fmu::FmuParams::default()).variables.into_iter().find(|v| v.name == name).unwrap_or_else(|| panic!("no variable {name}")).vr
 }
 
 fn rigtwin(args: &[&str]) -> std::process::Output {

@@ -7,7 +7,7 @@ use std::process::Command;
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use rigtwin_fmu::fmi3::*;
-use rigtwin_fmu::model::{LinearModel, NU, NX};
+use rigtwin_fmu::model::{Model, NU, NX_BASE as NX};
 use rigtwin_fmu::variables::VR_STATE;
 use rigtwin_fmu::FmuParams;
 
@@ -58,7 +58,7 @@ fn fmu_step(c: &mut Criterion) {
         eprintln!("gcc is not available: no C reference");
         return;
     }
-    let mut m = LinearModel::new(&p).unwrap();
+    let mut m = Model::new(&p).unwrap();
     let (ad, bd) = m.discretisation(1e-3);
     let (ad, bd): (Vec<f64>, Vec<f64>) = (ad.transpose().as_slice().to_vec(), bd.transpose().as_slice().to_vec()); // row-major
     unsafe {
