@@ -554,7 +554,11 @@ fn fmu_carries_an_actuator_lag() {
 
 #[test]
 fn fmu_carries_backlash() {
-    fmu_reproduces_the_diagnosis(Truth { backlash_rad: 0.004, set_point_nm: 0.0, ..Default::default() }, 23, "backlash");
+    fmu_reproduces_the_diagnosis(
+        Truth { backlash_rad: 0.004, set_point_nm: 0.0, ..Default::default() },
+        23,
+        "backlash",
+    );
 }
 
 #[test]

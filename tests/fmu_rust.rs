@@ -13,7 +13,12 @@ use rigtwin_fmu::variables::Table;
 use rigtwin_fmu::FmuParams;
 
 fn vr(name: &str) -> u32 {
-    Table::new(&rigtwin_fmu::FmuParams::default()).variables.into_iter().find(|v| v.name == name).unwrap_or_else(|| panic!("no variable {name}")).vr
+    Table::new(&rigtwin_fmu::FmuParams::default())
+        .variables
+        .into_iter()
+        .find(|v| v.name == name)
+        .unwrap_or_else(|| panic!("no variable {name}"))
+        .vr
 }
 
 /// plant's free response of w_drive after an initial drive twist of 0.01 rad, at 1 ms.

@@ -282,6 +282,9 @@ impl Instance {
     pub fn exit_initialization_mode(&mut self) -> Res<()> {
         self.expect("ExitInitializationMode", &[Mode::InitializationMode])?;
         self.ensure_model()?;
+        // the drive torque of the initialisation is what the dead time delivers at first
+        self.delay = DelayLine::default();
+        self.delay.record(f64::NEG_INFINITY, self.u[DRIVE_INPUT]);
         self.mode = match self.interface {
             Interface::CoSimulation => Mode::StepMode,
             Interface::ModelExchange => Mode::EventMode,

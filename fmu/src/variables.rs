@@ -133,7 +133,12 @@ pub const PARAMETERS: [(&str, &str, &str, Constraint); NPARAMS] = [
     ("drive.actuator_lag", "s", "time constant of a first-order lag of the drive torque", Constraint::Positive),
     ("drive.backlash", "rad", "total play of each side shaft (output side)", Constraint::Positive),
     ("drive.compliance_stiffness", "N.m/rad", "stiffness between the drive's motor and its cage", Constraint::Positive),
-    ("drive.compliance_motor_fraction", "1", "share of j_drive on the motor side of the compliance", Constraint::Fraction),
+    (
+        "drive.compliance_motor_fraction",
+        "1",
+        "share of j_drive on the motor side of the compliance",
+        Constraint::Fraction,
+    ),
 ];
 
 /// Number of float parameters, the effects included.
@@ -218,7 +223,9 @@ pub struct Table {
 /// [`STATES`] indices of a powertrain's states (`plant::effects::Powertrain` order: angles,
 /// speeds, lagged torque).
 pub fn powertrain_states(effects: &plant::effects::DriveEffects) -> Vec<usize> {
-    let mut v = if effects.compliance_stiffness_nm_per_rad > 0.0 { vec![0, 1, 2, 10, 3, 4, 5, 11] } else {
+    let mut v = if effects.compliance_stiffness_nm_per_rad > 0.0 {
+        vec![0, 1, 2, 10, 3, 4, 5, 11]
+    } else {
         vec![0, 1, 2, 3, 4, 5]
     };
     if effects.actuator_lag_s > 0.0 {
@@ -233,8 +240,7 @@ impl Table {
         let e = &p.effects;
         let compliant = e.compliance_stiffness_nm_per_rad > 0.0;
         let effect_on = [e.time_delay_s > 0.0, e.actuator_lag_s > 0.0, e.backlash_rad > 0.0, compliant, compliant];
-        let params: Vec<usize> =
-            (0..NPARAMS).filter(|&i| i < FIRST_EFFECT || effect_on[i - FIRST_EFFECT]).collect();
+        let params: Vec<usize> = (0..NPARAMS).filter(|&i| i < FIRST_EFFECT || effect_on[i - FIRST_EFFECT]).collect();
         let mut states: Vec<usize> = (0..10).collect();
         states.extend(powertrain_states(e).into_iter().filter(|&s| s >= 10));
         let mut v = vec![Variable {
@@ -305,9 +311,7 @@ impl Table {
         derivative_rows(&mut v, &states, 10, STATES.len());
         let derivative_state = states
             .iter()
-            .map(|s| {
-                STATE_DERIVATIVES.iter().find(|d| d.0 == *s).and_then(|d| states.iter().position(|&x| x == d.1))
-            })
+            .map(|s| STATE_DERIVATIVES.iter().find(|d| d.0 == *s).and_then(|d| states.iter().position(|&x| x == d.1)))
             .collect();
         Table { variables: v, states, derivative_state }
     }

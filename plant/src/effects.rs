@@ -403,7 +403,9 @@ pub struct DelayLine {
 impl DelayLine {
     /// The line of stored records (times increasing).
     pub fn from_records(records: Vec<(f64, f64)>) -> Option<DelayLine> {
-        let ok = records.windows(2).all(|w| w[0].0 < w[1].0) && records.iter().all(|r| r.0.is_finite());
+        // the first record may start at −∞: the value held before the start
+        let ok = records.windows(2).all(|w| w[0].0 < w[1].0)
+            && records.iter().enumerate().all(|(i, r)| r.0.is_finite() || (i == 0 && r.0 == f64::NEG_INFINITY));
         ok.then_some(DelayLine { records })
     }
 
@@ -412,7 +414,8 @@ impl DelayLine {
         &self.records
     }
 
-    /// The signal takes `value` from time `t` on. Records after `t` are dropped: an importer
+    /// The signal takes `value` from time `t` on (`f64::NEG_INFINITY`: the value it had before
+    /// any recorded time, e.g. at initialisation). Records after `t` are dropped: an importer
     /// that goes back (a rejected solver step) overwrites what it set there.
     pub fn record(&mut self, t: f64, value: f64) {
         while self.records.last().is_some_and(|r| r.0 >= t) {
