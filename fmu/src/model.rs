@@ -225,16 +225,9 @@ impl Model {
 
 /// ẋ = A x + B u, the powertrain's rows from its own (nonlinear) derivative with backlash.
 fn rhs(m: &mut Model, x: &[f64], u: &[f64; NU], out: &mut [f64]) {
-    let nx = m.nx();
-    for i in 0..nx {
-        let mut acc = 0.0;
-        for j in 0..nx {
-            acc += m.a[(i, j)] * x[j];
-        }
-        for (k, &uk) in u.iter().enumerate() {
-            acc += m.b[(i, k)] * uk;
-        }
-        out[i] = acc;
+    for (i, o) in out.iter_mut().enumerate().take(m.nx()) {
+        *o = m.a.row(i).iter().zip(x).map(|(a, b)| a * b).sum::<f64>()
+            + m.b.row(i).iter().zip(u).map(|(b, v)| b * v).sum::<f64>();
     }
     if m.backlash() {
         for (k, &i) in m.map.iter().enumerate() {
