@@ -514,6 +514,8 @@ fn fmu_reproduces_the_diagnosis(truth: Truth, seed: u64, effect: &str) {
     let r: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&replay).unwrap()).unwrap();
     for version in ["fmi3", "fmi2"] {
         assert_eq!(r["validate"][version], serde_json::json!([]), "fmpy validate {version}");
+        let t = &r["fmutool"][version];
+        assert!(t["returncode"] == 0 && t["output"].as_str().unwrap().contains("No semantic error"), "fmutool: {t}");
     }
     let speeds = |key: &str, name: &str| -> Vec<f64> {
         r[key][name].as_array().unwrap().iter().map(|x| x.as_f64().unwrap()).collect()
