@@ -9,17 +9,9 @@ use fmi::fmi3::import::Fmi3Import;
 use fmi::fmi3::{CoSimulation, Common, Fmi3Model, GetSet};
 use nalgebra::{DMatrix, DVector};
 use plant::Output;
-use rigtwin_fmu::variables::Table;
 use rigtwin_fmu::FmuParams;
 
-fn vr(name: &str) -> u32 {
-    Table::new(&rigtwin_fmu::FmuParams::default())
-        .variables
-        .into_iter()
-        .find(|v| v.name == name)
-        .unwrap_or_else(|| panic!("no variable {name}"))
-        .vr
-}
+use common::vr;
 
 /// plant's free response of w_drive after an initial drive twist of 0.01 rad, at 1 ms.
 fn plant_w_drive(steps: usize) -> Vec<f64> {

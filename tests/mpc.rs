@@ -9,17 +9,9 @@ use fmi::fmi3::import::Fmi3Import;
 use fmi::fmi3::{CoSimulation, Common, Fmi3Model, GetSet};
 use mpc::closed_loop::{compare, LinearPlant, Plant, Probes, RigSignals, Scenario, ScenarioKind};
 use mpc::MpcSettings;
-use rigtwin_fmu::variables::Table;
 use rigtwin_fmu::FmuParams;
 
-fn vr(name: &str) -> u32 {
-    Table::new(&rigtwin_fmu::FmuParams::default())
-        .variables
-        .into_iter()
-        .find(|v| v.name == name)
-        .unwrap_or_else(|| panic!("no variable {name}"))
-        .vr
-}
+use common::vr;
 
 fn rigtwin(args: &[&str]) -> std::process::Output {
     Command::new(env!("CARGO_BIN_EXE_rigtwin")).args(args).output().unwrap()

@@ -40,3 +40,13 @@ pub fn python() -> PathBuf {
     );
     p
 }
+
+/// Value reference of the default FMU's variable `name`.
+pub fn vr(name: &str) -> u32 {
+    rigtwin_fmu::variables::Table::new(&rigtwin_fmu::FmuParams::default())
+        .variables
+        .into_iter()
+        .find(|v| v.name == name)
+        .unwrap_or_else(|| panic!("no variable {name}"))
+        .vr
+}
