@@ -94,6 +94,8 @@ pub struct Powertrain {
     /// Damping of each shaft's torque per unit twist rate (short, long): d_k times its share of
     /// the twist, as `RigParams::open_differential` builds the spring torques.
     d_shaft: [f64; 2],
+    /// Non-zero entries (i, j, k0_ij, d0_ij) of k0 and d0.
+    couplings: Vec<(usize, usize, f64, f64)>,
     input_dof: usize,
     /// The effects.
     pub effects: DriveEffects,
@@ -138,7 +140,9 @@ impl Powertrain {
             1
         };
         let d_shaft = [e.d_left * share_l, e.d_right * share_r];
-        Ok(Powertrain { inertia, k0, d0, a, c_s, d_s, d_shaft, input_dof, effects: *effects })
+        let couplings =
+            (0..n * n).filter(|&m| k0[m] != 0.0 || d0[m] != 0.0).map(|m| (m / n, m % n, k0[m], d0[m])).collect();
+        Ok(Powertrain { inertia, k0, d0, a, c_s, d_s, d_shaft, couplings, input_dof, effects: *effects })
     }
 
     /// Degrees of freedom: 3, or 4 with a compliance (φ_motor last).
@@ -330,27 +334,41 @@ impl Powertrain {
     /// ẋ for the torques [M_m2, M_drive, M_m3] (the drive torque already delayed).
     pub fn derivative(&self, x: &[f64], torques: [f64; 3], dx: &mut [f64]) {
         let n = self.dofs();
-        let (s, sdot) = self.twist(x);
-        // generalised shaft force of the series pair
-        let t = if self.in_contact(x) { self.c_s * self.beyond_play(s) + self.d_s * sdot } else { 0.0 };
-        let drive = if self.effects.actuator_lag_s > 0.0 { x[2 * n] } else { torques[1] };
+        let (q, w) = x.split_at(n);
+        let (mut s, mut sdot) = (0.0, 0.0);
         for i in 0..n {
-            dx[i] = x[n + i];
-            let mut f = -self.a[i] * t;
-            for j in 0..n {
-                f -= self.k0[i * n + j] * x[j] + self.d0[i * n + j] * x[n + j];
-            }
-            if i == self.input_dof {
-                f += drive;
-            }
-            if i == 0 {
-                f += torques[0];
-            } else if i == 2 {
-                f += torques[2];
-            }
-            dx[n + i] = f / self.inertia[i];
+            s += self.a[i] * q[i];
+            sdot += self.a[i] * w[i];
         }
-        if self.effects.actuator_lag_s > 0.0 {
+        // generalised shaft force of the series pair
+        let b = self.effects.backlash_rad;
+        let t = if s > b {
+            self.c_s * (s - b) + self.d_s * sdot
+        } else if s < -b {
+            self.c_s * (s + b) + self.d_s * sdot
+        } else if b == 0.0 {
+            self.c_s * s + self.d_s * sdot
+        } else {
+            0.0
+        };
+        let lagged = self.effects.actuator_lag_s > 0.0;
+        let drive = if lagged { x[2 * n] } else { torques[1] };
+        let mut f = [0.0; 4];
+        for i in 0..n {
+            dx[i] = w[i];
+            f[i] = -self.a[i] * t;
+        }
+        // the few couplings besides the shafts: drag, and the compliance
+        for &(i, j, k, d) in &self.couplings {
+            f[i] -= k * q[j] + d * w[j];
+        }
+        f[0] += torques[0];
+        f[2] += torques[2];
+        f[self.input_dof] += drive;
+        for i in 0..n {
+            dx[n + i] = f[i] / self.inertia[i];
+        }
+        if lagged {
             dx[2 * n] = (torques[1] - x[2 * n]) / self.effects.actuator_lag_s;
         }
     }
