@@ -182,6 +182,7 @@ impl Instance {
     pub fn new(name: &str, interface: Interface, logger: Box<dyn Logger>, logging_on: bool, p: &FmuParams) -> Instance {
         let params = parameter_values(p);
         let variant = variant_number(p.variant);
+        let table = Table::new(p);
         Instance {
             name: name.to_string(),
             interface,
@@ -191,8 +192,8 @@ impl Instance {
             params,
             variant,
             start: (params, variant),
-            table: Table::new(p),
-            x: DVector::zeros(Table::new(p).nx()),
+            x: DVector::zeros(table.nx()),
+            table,
             u: DVector::zeros(NU),
             delay: DelayLine::default(),
             time: 0.0,

@@ -115,10 +115,9 @@ impl Model {
         self.powertrain.effects.backlash_rad > 0.0
     }
 
-    /// Whether the side shafts are engaged in state `x`.
-    fn in_contact(&self, x: &[f64]) -> bool {
-        let pt_x: Vec<f64> = self.map.iter().map(|&i| x[i]).collect();
-        self.powertrain.in_contact(&pt_x)
+    /// The powertrain's states of state vector `x`, in its own order.
+    fn powertrain_part(&self, x: &[f64]) -> Vec<f64> {
+        self.map.iter().map(|&i| x[i]).collect()
     }
 
     /// ẋ into `out` for the inputs `u` with the drive torque replaced by `drive` (the delayed
@@ -133,8 +132,7 @@ impl Model {
     /// The side-shaft torques [T_short, T_long] in state `x`.
     pub fn torques(&self, x: &[f64]) -> [f64; 2] {
         if self.backlash() {
-            let pt_x: Vec<f64> = self.map.iter().map(|&i| x[i]).collect();
-            self.powertrain.shaft_torques(&pt_x)
+            self.powertrain.shaft_torques(&self.powertrain_part(x))
         } else {
             let t = &self.torque * DVector::from_column_slice(x);
             [t[0], t[1]]
@@ -145,7 +143,7 @@ impl Model {
     /// one of the contact state `x` is in. With a dead time, ẋ does not depend on the present
     /// drive torque (its column of ∂ẋ/∂u is then to be taken as zero by the caller).
     pub fn jacobians(&self, x: &[f64]) -> (&DMatrix<f64>, &DMatrix<f64>, &DMatrix<f64>) {
-        if self.backlash() && !self.in_contact(x) {
+        if self.backlash() && !self.powertrain.in_contact(&self.powertrain_part(x)) {
             (&self.a_open, &self.b, &self.torque_open)
         } else {
             (&self.a, &self.b, &self.torque)

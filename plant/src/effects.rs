@@ -299,24 +299,31 @@ impl Powertrain {
     /// Twist s = aᵀq and its rate.
     fn twist(&self, x: &[f64]) -> (f64, f64) {
         let n = self.dofs();
-        ((0..n).map(|i| self.a[i] * x[i]).sum(), (0..n).map(|i| self.a[i] * x[n + i]).sum())
+        let (mut s, mut sdot) = (0.0, 0.0);
+        for i in 0..n {
+            s += self.a[i] * x[i];
+            sdot += self.a[i] * x[n + i];
+        }
+        (s, sdot)
     }
 
     /// Whether the side shafts are engaged (the twist beyond the play; always without backlash).
     pub fn in_contact(&self, x: &[f64]) -> bool {
-        self.twist(x).0.abs() > self.effects.backlash_rad || self.effects.backlash_rad == 0.0
+        self.beyond_play(self.twist(x).0).is_some()
     }
 
     /// Elastic twist beyond the dead zone of half-width b (each shaft's total play b/2 on
-    /// either side, two in series), zero inside it.
-    fn beyond_play(&self, s: f64) -> f64 {
+    /// either side, two in series); `None` inside it, where the shafts carry nothing.
+    fn beyond_play(&self, s: f64) -> Option<f64> {
         let b = self.effects.backlash_rad;
         if s > b {
-            s - b
+            Some(s - b)
         } else if s < -b {
-            s + b
+            Some(s + b)
+        } else if b == 0.0 {
+            Some(s)
         } else {
-            0.0
+            None
         }
     }
 
@@ -324,33 +331,22 @@ impl Powertrain {
     /// play, damping only in contact.
     pub fn shaft_torques(&self, x: &[f64]) -> [f64; 2] {
         let (s, sdot) = self.twist(x);
-        if !self.in_contact(x) {
-            return [0.0; 2];
+        match self.beyond_play(s) {
+            Some(e) => {
+                let e = self.c_s * e;
+                [e + self.d_shaft[0] * sdot, e + self.d_shaft[1] * sdot]
+            }
+            None => [0.0; 2],
         }
-        let e = self.c_s * self.beyond_play(s);
-        [e + self.d_shaft[0] * sdot, e + self.d_shaft[1] * sdot]
     }
 
     /// ẋ for the torques [M_m2, M_drive, M_m3] (the drive torque already delayed).
     pub fn derivative(&self, x: &[f64], torques: [f64; 3], dx: &mut [f64]) {
         let n = self.dofs();
         let (q, w) = x.split_at(n);
-        let (mut s, mut sdot) = (0.0, 0.0);
-        for i in 0..n {
-            s += self.a[i] * q[i];
-            sdot += self.a[i] * w[i];
-        }
+        let (s, sdot) = self.twist(x);
         // generalised shaft force of the series pair
-        let b = self.effects.backlash_rad;
-        let t = if s > b {
-            self.c_s * (s - b) + self.d_s * sdot
-        } else if s < -b {
-            self.c_s * (s + b) + self.d_s * sdot
-        } else if b == 0.0 {
-            self.c_s * s + self.d_s * sdot
-        } else {
-            0.0
-        };
+        let t = self.beyond_play(s).map_or(0.0, |e| self.c_s * e + self.d_s * sdot);
         let lagged = self.effects.actuator_lag_s > 0.0;
         let drive = if lagged { x[2 * n] } else { torques[1] };
         let mut f = [0.0; 4];
