@@ -7,10 +7,9 @@ use std::path::{Path, PathBuf};
 use plant::Rig;
 use rigtwin_fmu::{describe, FmuParams, Version, MODEL_IDENTIFIER, PARAMS_RESOURCE};
 
-/// File name of the `fmu` crate's shared library on this platform.
-pub fn library_file_name() -> String {
-    format!("{}rigtwin_fmu{}", std::env::consts::DLL_PREFIX, std::env::consts::DLL_SUFFIX)
-}
+/// The FMU's shared library for this platform, built by build.rs (the `fmu` crate, profile
+/// `fmu`: optimised and stripped) and carried inside the `rigtwin` binary.
+static EMBEDDED_LIBRARY: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/rigtwin_fmu_library"));
 
 /// The FMI platform folders of this machine: (FMI 3, FMI 2).
 pub fn platform_folders() -> anyhow::Result<(&'static str, &'static str)> {
@@ -24,30 +23,17 @@ pub fn platform_folders() -> anyhow::Result<(&'static str, &'static str)> {
     }
 }
 
-/// The shared library: `RIGTWIN_FMU_LIB` if set, else beside the running executable (cargo puts
-/// both in target/<profile>/).
-pub fn find_library() -> anyhow::Result<PathBuf> {
-    if let Ok(p) = std::env::var("RIGTWIN_FMU_LIB") {
-        return Ok(PathBuf::from(p));
-    }
-    let exe = std::env::current_exe()?;
-    let name = library_file_name();
-    let mut dir = exe.parent();
-    while let Some(d) = dir {
-        let candidate = d.join(&name);
-        if candidate.exists() {
-            return Ok(candidate);
+/// The shared library the FMUs carry: the file `RIGTWIN_FMU_LIB` names if it is set (e.g. a
+/// debug build of the `fmu` crate), else the one inside this binary.
+pub fn library() -> anyhow::Result<std::borrow::Cow<'static, [u8]>> {
+    match std::env::var_os("RIGTWIN_FMU_LIB") {
+        Some(p) => {
+            let p = PathBuf::from(p);
+            let bytes = std::fs::read(&p).map_err(|e| anyhow::anyhow!("RIGTWIN_FMU_LIB={}: {e}", p.display()))?;
+            Ok(bytes.into())
         }
-        if d.file_name().map(|n| n == "target").unwrap_or(false) {
-            break;
-        }
-        dir = d.parent();
+        None => Ok(EMBEDDED_LIBRARY.into()),
     }
-    anyhow::bail!(
-        "the FMU library {name} was not found beside {}: build it with `cargo build --release --workspace` \
-         (or set RIGTWIN_FMU_LIB)",
-        exe.display()
-    )
 }
 
 /// The FMU parameter set of a rig: its reduced model and variant, its drive-path effects, and
@@ -81,11 +67,10 @@ pub fn atomic_write(path: &Path, bytes: &[u8]) -> anyhow::Result<()> {
 }
 
 /// Writes `rigtwin-fmi3.fmu` and `rigtwin-fmi2.fmu` into `out`; returns their paths.
-pub fn package(p: &FmuParams, library: &Path, out: &Path) -> anyhow::Result<[PathBuf; 2]> {
+pub fn package(p: &FmuParams, lib: &[u8], out: &Path) -> anyhow::Result<[PathBuf; 2]> {
     // the parameters must describe a model before anything is written
     rigtwin_fmu::model::Model::new(p)
         .map_err(|e| anyhow::anyhow!("the parameter set does not describe a model: {e}"))?;
-    let lib = std::fs::read(library).map_err(|e| anyhow::anyhow!("{}: {e}", library.display()))?;
     let (p3, p2) = platform_folders()?;
     std::fs::create_dir_all(out).map_err(|e| anyhow::anyhow!("{}: {e}", out.display()))?;
     let params_json = serde_json::to_vec_pretty(p)?;
@@ -99,7 +84,7 @@ pub fn package(p: &FmuParams, library: &Path, out: &Path) -> anyhow::Result<[Pat
             zip.start_file("modelDescription.xml", opts)?;
             zip.write_all(describe(p, version).as_bytes())?;
             zip.start_file(format!("binaries/{platform}/{MODEL_IDENTIFIER}{}", std::env::consts::DLL_SUFFIX), opts)?;
-            zip.write_all(&lib)?;
+            zip.write_all(lib)?;
             zip.start_file(format!("resources/{PARAMS_RESOURCE}"), opts)?;
             zip.write_all(&params_json)?;
             zip.finish()?;

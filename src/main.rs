@@ -370,7 +370,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             if let Some(d) = &descriptions {
                 rigtwin::fmu_package::write_descriptions(&p, d)?;
             }
-            let lib = rigtwin::fmu_package::find_library()?;
+            let lib = rigtwin::fmu_package::library()?;
             let [a, b] = rigtwin::fmu_package::package(&p, &lib, &out)?;
             outln!("wrote {} and {} (token {})", a.display(), b.display(), rigtwin_fmu::token(&p));
         }
@@ -451,7 +451,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             let summary = report::summary(&r, variant)?;
             // the FMUs of the same rig, in the variant asked for
             let params = rigtwin::fmu_package::params_of_rig(&Rig { variant, ..r.clone() })?;
-            let lib = rigtwin::fmu_package::find_library()?;
+            let lib = rigtwin::fmu_package::library()?;
             let [a, b] = rigtwin::fmu_package::package(&params, &lib, &out)?;
             if rig.json {
                 print_json(&summary)?;

@@ -8,7 +8,7 @@ use crate::ffi::{self, cstring, slice, slice_mut, str_of};
 use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::path::Path;
 
-use fmi_sys::fmi3::*;
+use crate::bindings::fmi3::*;
 
 use crate::instance::{Failure, Instance, Interface, Logger, Res, Status};
 
@@ -661,81 +661,5 @@ pub unsafe extern "C" fn fmi3DoStep(
     })
 }
 
-// Every export has the signature of the standard's header (fmi-sys' bindgen of fmi3Functions.h).
-const _: () = {
-    let _: fmi3GetVersionTYPE = Some(fmi3GetVersion);
-    let _: fmi3SetDebugLoggingTYPE = Some(fmi3SetDebugLogging);
-    let _: fmi3InstantiateModelExchangeTYPE = Some(fmi3InstantiateModelExchange);
-    let _: fmi3InstantiateCoSimulationTYPE = Some(fmi3InstantiateCoSimulation);
-    let _: fmi3InstantiateScheduledExecutionTYPE = Some(fmi3InstantiateScheduledExecution);
-    let _: fmi3FreeInstanceTYPE = Some(fmi3FreeInstance);
-    let _: fmi3EnterInitializationModeTYPE = Some(fmi3EnterInitializationMode);
-    let _: fmi3ExitInitializationModeTYPE = Some(fmi3ExitInitializationMode);
-    let _: fmi3EnterEventModeTYPE = Some(fmi3EnterEventMode);
-    let _: fmi3TerminateTYPE = Some(fmi3Terminate);
-    let _: fmi3ResetTYPE = Some(fmi3Reset);
-    let _: fmi3GetFloat32TYPE = Some(fmi3GetFloat32);
-    let _: fmi3GetFloat64TYPE = Some(fmi3GetFloat64);
-    let _: fmi3GetInt8TYPE = Some(fmi3GetInt8);
-    let _: fmi3GetUInt8TYPE = Some(fmi3GetUInt8);
-    let _: fmi3GetInt16TYPE = Some(fmi3GetInt16);
-    let _: fmi3GetUInt16TYPE = Some(fmi3GetUInt16);
-    let _: fmi3GetInt32TYPE = Some(fmi3GetInt32);
-    let _: fmi3GetUInt32TYPE = Some(fmi3GetUInt32);
-    let _: fmi3GetInt64TYPE = Some(fmi3GetInt64);
-    let _: fmi3GetUInt64TYPE = Some(fmi3GetUInt64);
-    let _: fmi3GetBooleanTYPE = Some(fmi3GetBoolean);
-    let _: fmi3GetStringTYPE = Some(fmi3GetString);
-    let _: fmi3GetBinaryTYPE = Some(fmi3GetBinary);
-    let _: fmi3GetClockTYPE = Some(fmi3GetClock);
-    let _: fmi3SetFloat32TYPE = Some(fmi3SetFloat32);
-    let _: fmi3SetFloat64TYPE = Some(fmi3SetFloat64);
-    let _: fmi3SetInt8TYPE = Some(fmi3SetInt8);
-    let _: fmi3SetUInt8TYPE = Some(fmi3SetUInt8);
-    let _: fmi3SetInt16TYPE = Some(fmi3SetInt16);
-    let _: fmi3SetUInt16TYPE = Some(fmi3SetUInt16);
-    let _: fmi3SetInt32TYPE = Some(fmi3SetInt32);
-    let _: fmi3SetUInt32TYPE = Some(fmi3SetUInt32);
-    let _: fmi3SetInt64TYPE = Some(fmi3SetInt64);
-    let _: fmi3SetUInt64TYPE = Some(fmi3SetUInt64);
-    let _: fmi3SetBooleanTYPE = Some(fmi3SetBoolean);
-    let _: fmi3SetStringTYPE = Some(fmi3SetString);
-    let _: fmi3SetBinaryTYPE = Some(fmi3SetBinary);
-    let _: fmi3SetClockTYPE = Some(fmi3SetClock);
-    let _: fmi3GetNumberOfVariableDependenciesTYPE = Some(fmi3GetNumberOfVariableDependencies);
-    let _: fmi3GetVariableDependenciesTYPE = Some(fmi3GetVariableDependencies);
-    let _: fmi3GetFMUStateTYPE = Some(fmi3GetFMUState);
-    let _: fmi3SetFMUStateTYPE = Some(fmi3SetFMUState);
-    let _: fmi3FreeFMUStateTYPE = Some(fmi3FreeFMUState);
-    let _: fmi3SerializedFMUStateSizeTYPE = Some(fmi3SerializedFMUStateSize);
-    let _: fmi3SerializeFMUStateTYPE = Some(fmi3SerializeFMUState);
-    let _: fmi3DeserializeFMUStateTYPE = Some(fmi3DeserializeFMUState);
-    let _: fmi3GetDirectionalDerivativeTYPE = Some(fmi3GetDirectionalDerivative);
-    let _: fmi3GetAdjointDerivativeTYPE = Some(fmi3GetAdjointDerivative);
-    let _: fmi3EnterConfigurationModeTYPE = Some(fmi3EnterConfigurationMode);
-    let _: fmi3ExitConfigurationModeTYPE = Some(fmi3ExitConfigurationMode);
-    let _: fmi3GetIntervalDecimalTYPE = Some(fmi3GetIntervalDecimal);
-    let _: fmi3GetIntervalFractionTYPE = Some(fmi3GetIntervalFraction);
-    let _: fmi3GetShiftDecimalTYPE = Some(fmi3GetShiftDecimal);
-    let _: fmi3GetShiftFractionTYPE = Some(fmi3GetShiftFraction);
-    let _: fmi3SetIntervalDecimalTYPE = Some(fmi3SetIntervalDecimal);
-    let _: fmi3SetIntervalFractionTYPE = Some(fmi3SetIntervalFraction);
-    let _: fmi3SetShiftDecimalTYPE = Some(fmi3SetShiftDecimal);
-    let _: fmi3SetShiftFractionTYPE = Some(fmi3SetShiftFraction);
-    let _: fmi3EvaluateDiscreteStatesTYPE = Some(fmi3EvaluateDiscreteStates);
-    let _: fmi3UpdateDiscreteStatesTYPE = Some(fmi3UpdateDiscreteStates);
-    let _: fmi3EnterContinuousTimeModeTYPE = Some(fmi3EnterContinuousTimeMode);
-    let _: fmi3CompletedIntegratorStepTYPE = Some(fmi3CompletedIntegratorStep);
-    let _: fmi3SetTimeTYPE = Some(fmi3SetTime);
-    let _: fmi3SetContinuousStatesTYPE = Some(fmi3SetContinuousStates);
-    let _: fmi3GetContinuousStateDerivativesTYPE = Some(fmi3GetContinuousStateDerivatives);
-    let _: fmi3GetEventIndicatorsTYPE = Some(fmi3GetEventIndicators);
-    let _: fmi3GetContinuousStatesTYPE = Some(fmi3GetContinuousStates);
-    let _: fmi3GetNominalsOfContinuousStatesTYPE = Some(fmi3GetNominalsOfContinuousStates);
-    let _: fmi3GetNumberOfEventIndicatorsTYPE = Some(fmi3GetNumberOfEventIndicators);
-    let _: fmi3GetNumberOfContinuousStatesTYPE = Some(fmi3GetNumberOfContinuousStates);
-    let _: fmi3EnterStepModeTYPE = Some(fmi3EnterStepMode);
-    let _: fmi3GetOutputDerivativesTYPE = Some(fmi3GetOutputDerivatives);
-    let _: fmi3DoStepTYPE = Some(fmi3DoStep);
-    let _: fmi3ActivateModelPartitionTYPE = Some(fmi3ActivateModelPartition);
-};
+include!("fmi3_signatures.rs");
+

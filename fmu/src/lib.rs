@@ -11,9 +11,12 @@
 //! - [`instance`]: the state machine every call goes through, version-independent;
 //! - [`fmi3`], [`fmi2`]: thin `extern "C"` glue, the exported C API. Every body runs under `catch_unwind`, so no panic
 //!   crosses into the importer; every signature is checked at compile time against the
-//!   standard's headers (fmi-sys). There is no global mutable state: instances run in parallel.
+//!   standard's headers (bindings generated once by `scripts/fmi_bindings.sh`; a test checks
+//!   them against fmi-sys). There is no global mutable state: instances run in parallel.
 #![warn(missing_docs)]
 
+#[doc(hidden)]
+pub mod bindings;
 pub mod description;
 mod ffi;
 pub mod fmi2;
