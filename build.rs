@@ -43,6 +43,5 @@ fn main() {
         _ => "librigtwin_fmu.so",
     };
     let built = lib_dir.join(name);
-    std::fs::copy(&built, out_dir.join("rigtwin_fmu_library"))
-        .unwrap_or_else(|e| panic!("{}: {e}", built.display()));
+    std::fs::copy(&built, out_dir.join("rigtwin_fmu_library")).unwrap_or_else(|e| panic!("{}: {e}", built.display()));
 }

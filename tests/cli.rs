@@ -87,6 +87,10 @@ fn shipped_rig_file_is_the_embedded_default() {
     assert_eq!(a.bodies.len() + sa.bodies.len(), b.bodies.len() + sb.bodies.len());
     // c_long_ratio is written with 16 digits in the file
     assert_abs_diff_eq!(rig.model.c_long(), default.model.c_long(), epsilon = 1e-9);
+    assert_eq!(
+        (rig.model.d_short, rig.model.d_long, rig.model.load_drag),
+        (default.model.d_short, default.model.d_long, default.model.load_drag)
+    );
     // `run` also writes the FMUs: the library must be built, and they go to a scratch folder
     let out = common::fmu_dir().join("run");
     let out = out.to_str().unwrap();
@@ -265,4 +269,38 @@ fn design_spring_checks_the_bending_of_a_described_shaft_line() {
     let out = rigtwin(&["design-spring", "--rig", f.to_str().unwrap()]);
     assert!(!out.status.success());
     assert!(String::from_utf8_lossy(&out.stderr).contains("bending.bearing_b_m"));
+}
+
+/// The README's command table lists every flag each command has (`--help` is clap's own list).
+#[test]
+fn readme_lists_every_flag() {
+    let readme = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("README.md")).unwrap();
+    let help = String::from_utf8(rigtwin(&["--help"]).stdout).unwrap();
+    // the subcommands: the indented names under "Commands:" (help excluded)
+    let commands: Vec<&str> = help
+        .lines()
+        .skip_while(|l| !l.starts_with("Commands:"))
+        .skip(1)
+        .take_while(|l| l.starts_with("  "))
+        .filter_map(|l| l.split_whitespace().next())
+        .filter(|c| *c != "help")
+        .collect();
+    assert!(commands.len() >= 9, "{help}");
+    for c in commands {
+        let rows: String = readme
+            .lines()
+            .filter(|l| l.starts_with(&format!("| `rigtwin {c} ")) || l.starts_with(&format!("| `rigtwin {c}`")))
+            .collect();
+        assert!(!rows.is_empty(), "README has no row for `rigtwin {c}`");
+        let sub = String::from_utf8(rigtwin(&[c, "--help"]).stdout).unwrap();
+        for flag in sub.split_whitespace().filter(|w| w.starts_with("--") && *w != "--help") {
+            let flag = flag.trim_end_matches(|ch: char| !ch.is_ascii_alphanumeric());
+            assert!(
+                rows.contains(&format!("{flag} "))
+                    || rows.contains(&format!("{flag}]"))
+                    || rows.contains(&format!("{flag}=")),
+                "README's row of `rigtwin {c}` lacks {flag}"
+            );
+        }
+    }
 }

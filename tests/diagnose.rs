@@ -491,9 +491,16 @@ fn fmu_reproduces_the_diagnosis(truth: Truth, seed: u64, effect: &str) {
     let speed0 = s.torque_nm[0] / (2.0 * rig.model.load_drag);
     let x0 = p.steady_state(s.torque_nm[0], speed0);
     let mut start = serde_json::Map::new();
-    for (name, value) in p.state_names().iter().zip(&x0) {
-        let name = name.replace("cage", "drive");
-        start.insert(name, (*value).into());
+    // the FMU's states are the twists, not the drive's and the motor's absolute angles
+    let names = p.state_names();
+    let of = |n: &str| names.iter().position(|x| x == n).map(|i| x0[i]).unwrap();
+    for (name, &value) in names.iter().zip(&x0) {
+        let (name, value) = match name.as_str() {
+            "phi_cage" => ("twist".to_string(), 2.0 * value - of("phi_m2") - of("phi_m3")),
+            "phi_motor" => ("twist_motor".to_string(), value - of("phi_cage")),
+            other => (other.replace("cage", "drive"), value),
+        };
+        start.insert(name, value.into());
     }
     start.insert("M_drive".into(), s.torque_nm[0].into());
     let start_file = dir.join("start.json");

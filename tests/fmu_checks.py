@@ -2,7 +2,11 @@
 
 Called by tests/fmu_python.rs, which compares the numbers with `plant`'s own solution:
 fmpy validate, fmutool -check, fmpy simulations (CS and ME, FMI 3 and 2) of a free response
-after an initial twist and of a drive-torque step, and OSP libcosim running the FMI 2 FMU.
+after an initial twist and of a drive-torque step, a step in model exchange at fmpy's default
+solver settings, OSP libcosim running the FMI 2 FMU and Ecos running both.
+
+Usage: fmu_checks.py DIR [EFFECTS_DIR]; EFFECTS_DIR holds FMUs with drive-path effects, which
+get the model-exchange check at default settings too.
 """
 import json
 import subprocess
@@ -30,12 +34,33 @@ for version, path in fmus.items():
         # free response after an initial twist of the drive: 4 s at 1 kHz (ME: CVode at rtol 1e-12,
         # so the importer's integrator stays below the 1e-6 the step is held to)
         free = fmpy.simulate_fmu(str(path), fmi_type=fmi_type, stop_time=4.0, output_interval=1e-3,
-                                 relative_tolerance=1e-12, start_values={"phi_drive": 0.01}, output=outputs)
+                                 relative_tolerance=1e-12, start_values={"twist": 0.02}, output=outputs)
         report["free"][key] = {"time": free["time"].tolist(), "w_drive": free["w_drive"].tolist()}
         # a 10 Nm drive-torque step from rest, 1 s
         step = fmpy.simulate_fmu(str(path), fmi_type=fmi_type, stop_time=1.0, output_interval=1e-3,
                                  relative_tolerance=1e-12, start_values={"M_drive": 10.0}, output=outputs)
         report["step"][key] = {name: step[name].tolist() for name in ["time"] + outputs}
+
+
+def step_at_defaults(path, fmi_type):
+    """A 10 Nm drive-torque step at 0.1 s, 4 s, output every 1 ms, at the importer's default
+    solver settings (no tolerance given): the ring in w_m2."""
+    signal = np.array([(0.0, 0.0), (0.1, 0.0), (0.1, 10.0), (4.0, 10.0)],
+                      dtype=[("time", np.float64), ("M_drive", np.float64)])
+    r = fmpy.simulate_fmu(str(path), fmi_type=fmi_type, stop_time=4.0, output_interval=1e-3,
+                          input=signal, output=["w_m2"])
+    return {"time": r["time"].tolist(), "w_m2": r["w_m2"].tolist()}
+
+
+report["defaults"] = {}
+sets = {"default": fmus}
+if len(sys.argv) > 2:
+    eff = Path(sys.argv[2])
+    sets["effects"] = {"fmi3": eff / "rigtwin-fmi3.fmu", "fmi2": eff / "rigtwin-fmi2.fmu"}
+for name, paths in sets.items():
+    for version, path in paths.items():
+        for kind, fmi_type in (("cs", "CoSimulation"), ("me", "ModelExchange")):
+            report["defaults"][f"{name}_{version}_{kind}"] = step_at_defaults(path, fmi_type)
 
 # FMU state and directional derivatives through the C calls of a real importer
 from fmpy import extract, read_model_description
@@ -60,7 +85,7 @@ for version, path in fmus.items():
         get, set_ = (lambda names: fmu.getReal([vrs[n] for n in names])), (lambda names, v: fmu.setReal([vrs[n] for n in names], v))
         save, load, ser, deser = fmu.getFMUstate, fmu.setFMUstate, fmu.serializeFMUstate, fmu.deSerializeFMUstate
         derivative = lambda u, k: fmu.getDirectionalDerivative([vrs[n] for n in u], [vrs[n] for n in k], [1.0] * len(k))
-    set_(["phi_drive"], [0.01])
+    set_(["twist"], [0.02])
     fmu.enterInitializationMode()
     fmu.exitInitializationMode()
     t, h = 0.0, 1e-3
@@ -86,11 +111,14 @@ for version, path in fmus.items():
         t += h
     from_bytes = get(["w_drive", "T_short"])
     report["state"][version] = {"first": list(first), "again": list(again), "from_bytes": list(from_bytes), "bytes": len(blob)}
-    # ∂ der(w_drive) / ∂ phi_drive and ∂ der(w_drive) / ∂ M_drive, ∂ T_short / ∂ phi_drive
+    # ∂ der(w_drive) / ∂ twist, ∂ der(w_drive) / ∂ M_drive, ∂ T_short / ∂ twist, and the
+    # computed angle ∂ phi_drive / ∂ (twist, phi_m2)
     report["derivative"][version] = {
-        "dwdot_dphi": list(derivative(["der(w_drive)"], ["phi_drive"])),
+        "dwdot_dtwist": list(derivative(["der(w_drive)"], ["twist"])),
         "dwdot_dM": list(derivative(["der(w_drive)"], ["M_drive"])),
-        "dT_dphi": list(derivative(["T_short"], ["phi_drive"])),
+        "dT_dtwist": list(derivative(["T_short"], ["twist"])),
+        "dphi_dtwist": list(derivative(["phi_drive"], ["twist"])),
+        "dphi_dphi_m2": list(derivative(["phi_drive"], ["phi_m2"])),
     }
     fmu.terminate()
     fmu.freeInstance()
@@ -103,11 +131,25 @@ from libcosimpy.CosimObserver import CosimObserver
 execution = CosimExecution.from_step_size(step_size=int(1e6))  # nanoseconds
 slave = execution.add_local_slave(CosimLocalSlave(fmu_path=str(fmus["fmi2"]), instance_name="rig"))
 variables = {v.name.decode() if isinstance(v.name, bytes) else v.name: v.reference for v in execution.slave_variables(slave)}
-execution.real_initial_value(slave, variables["phi_drive"], 0.01)
+execution.real_initial_value(slave, variables["twist"], 0.02)
 observer = CosimObserver.create_last_value()
 execution.add_observer(observer)
 ok = execution.simulate_until(target_time=int(0.5e9))
 values = observer.last_real_values(slave, [variables["w_drive"], variables["phi_drive"]])
 report["libcosim"] = {"ok": bool(ok), "w_drive": values[0], "phi_drive": values[1], "time_s": 0.5}
+
+# Ecos (ecospy) runs both FMUs: the same initial twist, 1 ms steps to 0.5 s
+from ecospy import EcosSimulation, EcosSimulationStructure
+
+report["ecos"] = {}
+for version, path in fmus.items():
+    structure = EcosSimulationStructure()
+    structure.add_model("rig", str(path))
+    structure.add_parameter_set("initial", {"rig::twist": 0.02})
+    with EcosSimulation(structure=structure, step_size=1e-3) as sim:
+        sim.init(parameter_set="initial")
+        sim.step_until(0.5)
+        report["ecos"][version] = {"time_s": sim.get_time(), "w_drive": sim.get_real("rig::w_drive")}
+        sim.terminate()
 
 (out / "report.json").write_text(json.dumps(report))

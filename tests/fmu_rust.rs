@@ -26,7 +26,8 @@ fn plant_w_drive(steps: usize) -> Vec<f64> {
 fn run_fmi3(steps: usize) -> Vec<f64> {
     let import: Fmi3Import = fmi::import::from_path(common::fmu_dir().join("rigtwin-fmi3.fmu")).unwrap();
     let mut inst = import.instantiate_cs("rig", false, true, false, false, &[]).unwrap();
-    inst.set_float64(&[vr("phi_drive")], &[0.01]).unwrap();
+    // a drive twist of 0.01 rad: the twist state 2φ_drive − φ_m2 − φ_m3
+    inst.set_float64(&[vr("twist")], &[0.02]).unwrap();
     inst.enter_initialization_mode(None, 0.0, None).unwrap();
     inst.exit_initialization_mode().unwrap();
     let mut out = Vec::with_capacity(steps + 1);
@@ -61,7 +62,7 @@ fn fmi2_co_simulation_steps_like_the_plant() {
     let import: Fmi2Import = fmi::import::from_path(common::fmu_dir().join("rigtwin-fmi2.fmu")).unwrap();
     let mut inst = import.instantiate_cs("rig", false, true).unwrap();
     inst.setup_experiment(None, 0.0, None).unwrap();
-    inst.set_real(&[vr("phi_drive")], &[0.01]).unwrap();
+    inst.set_real(&[vr("twist")], &[0.02]).unwrap();
     fmi::fmi2::instance::Common::enter_initialization_mode(&mut inst).unwrap();
     fmi::fmi2::instance::Common::exit_initialization_mode(&mut inst).unwrap();
     let mut out = Vec::new();

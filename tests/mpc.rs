@@ -58,9 +58,12 @@ impl FmuPlant {
         let import: &'static Fmi3Import =
             Box::leak(Box::new(fmi::import::from_path(common::fmu_dir().join("rigtwin-fmi3.fmu")).unwrap()));
         let mut inst = import.instantiate_cs("rig", false, true, false, false, &[]).unwrap();
-        let states = ["phi_m2", "phi_drive", "phi_m3", "w_m2", "w_drive", "w_m3"];
-        for (i, s) in states.iter().enumerate() {
-            inst.set_float64(&[vr(s)], &[x0[i]]).unwrap();
+        // plant's state [φ_m2, φ_drive, φ_m3, speeds] as the FMU's [φ_m2, twist, φ_m3, speeds]
+        let twist = 2.0 * x0[1] - x0[0] - x0[2];
+        let states = [("phi_m2", x0[0]), ("twist", twist), ("phi_m3", x0[2])];
+        for (s, v) in states.into_iter().chain(["w_m2", "w_drive", "w_m3"].into_iter().zip(x0.iter().skip(3).copied()))
+        {
+            inst.set_float64(&[vr(s)], &[v]).unwrap();
         }
         inst.enter_initialization_mode(None, 0.0, None).unwrap();
         inst.exit_initialization_mode().unwrap();

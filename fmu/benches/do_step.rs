@@ -8,7 +8,7 @@ use std::process::Command;
 use criterion::{criterion_group, criterion_main, Criterion};
 use rigtwin_fmu::fmi3::*;
 use rigtwin_fmu::model::{Model, NU, NX_BASE as NX};
-use rigtwin_fmu::variables::VR_STATE;
+use rigtwin_fmu::variables::VR_TWIST;
 use rigtwin_fmu::FmuParams;
 
 fn fmu_step(c: &mut Criterion) {
@@ -32,8 +32,8 @@ fn fmu_step(c: &mut Criterion) {
     };
     assert!(!inst.is_null());
     unsafe {
-        let vr = VR_STATE + 1; // phi_drive
-        assert_eq!(fmi3SetFloat64(inst, &vr, 1, &0.01, 1), 0);
+        let vr = VR_TWIST; // the side shafts' twist
+        assert_eq!(fmi3SetFloat64(inst, &vr, 1, &0.02, 1), 0);
         assert_eq!(fmi3EnterInitializationMode(inst, false, 0.0, 0.0, false, 0.0), 0);
         assert_eq!(fmi3ExitInitializationMode(inst), 0);
     }

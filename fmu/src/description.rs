@@ -5,7 +5,7 @@
 use std::fmt::Write as _;
 
 use crate::params::FmuParams;
-use crate::variables::{parameter_values, variant_number, Causality, Kind, Slot, Table};
+use crate::variables::{parameter_values, variant_number, Causality, Kind, Slot, Table, Variable};
 
 /// The model identifier: the shared library's name inside the FMU.
 pub const MODEL_IDENTIFIER: &str = "rigtwin";
@@ -164,7 +164,12 @@ fn describe_with(p: &FmuParams, version: Version, token: &str) -> String {
     let _ = writeln!(x, "  <ModelVariables>");
     // FMI 2 refers to variables by their 1-based position; FMI 3 by value reference
     let derivative_of = |state: usize| table.derivative_state.iter().position(|d| *d == Some(state));
-    for v in vars {
+    let nominals: Vec<f64> = table.nominals().collect();
+    // FMI 2 leaves the optional `time` out: older FMI Libraries (OSP libcosim's) ask an
+    // independent variable for a start value, which the standard forbids
+    let listed: Vec<&Variable> =
+        vars.iter().filter(|v| version == Version::Fmi3 || v.causality != Causality::Independent).collect();
+    for &v in &listed {
         let caus = match v.causality {
             Causality::Parameter => "parameter",
             Causality::Input => "input",
@@ -186,6 +191,10 @@ fn describe_with(p: &FmuParams, version: Version, token: &str) -> String {
             _ => None,
         };
         let start = start(p, v.slot);
+        let nominal = match v.slot {
+            Slot::State(i) => Some(format!("{:?}", nominals[i])),
+            _ => None,
+        };
         let unit = if v.unit.is_empty() { String::new() } else { format!(" unit=\"{}\"", v.unit) };
         match version {
             Version::Fmi3 => {
@@ -218,6 +227,9 @@ fn describe_with(p: &FmuParams, version: Version, token: &str) -> String {
                 if let Some(s) = &start {
                     let _ = write!(attrs, " start=\"{s}\"");
                 }
+                if let Some(n) = &nominal {
+                    let _ = write!(attrs, " nominal=\"{n}\"");
+                }
                 let _ = writeln!(x, "    <{tag} {attrs}/>");
             }
             Version::Fmi2 => {
@@ -237,11 +249,14 @@ fn describe_with(p: &FmuParams, version: Version, token: &str) -> String {
                 };
                 if let Some(d) = der {
                     // 1-based position of the state in ModelVariables
-                    let pos = vars.iter().position(|w| w.slot == Slot::State(d)).expect("state in table") + 1;
+                    let pos = listed.iter().position(|w| w.slot == Slot::State(d)).expect("state in table") + 1;
                     let _ = write!(inner, " derivative=\"{pos}\"");
                 }
                 if let Some(s) = &start {
                     let _ = write!(inner, " start=\"{s}\"");
+                }
+                if let Some(n) = &nominal {
+                    let _ = write!(inner, " nominal=\"{n}\"");
                 }
                 let _ = writeln!(x, "    <ScalarVariable {attrs}>{inner}/></ScalarVariable>");
             }
@@ -249,6 +264,7 @@ fn describe_with(p: &FmuParams, version: Version, token: &str) -> String {
     }
     let _ = writeln!(x, "  </ModelVariables>");
     let _ = writeln!(x, "  <ModelStructure>");
+    let vars = &listed;
     let outputs: Vec<usize> = (0..vars.len()).filter(|&i| vars[i].causality == Causality::Output).collect();
     // one derivative per state, in the state vector's order: that order defines the
     // continuous-state vector of GetContinuousStates and friends in both standards
@@ -261,8 +277,9 @@ fn describe_with(p: &FmuParams, version: Version, token: &str) -> String {
             vars.iter().position(|v| v.slot == slot).expect("every state has a derivative variable")
         })
         .collect();
-    let initial_unknowns: Vec<usize> =
-        (0..vars.len()).filter(|&i| matches!(vars[i].slot, Slot::Derivative(_) | Slot::Torque(_))).collect();
+    let initial_unknowns: Vec<usize> = (0..vars.len())
+        .filter(|&i| matches!(vars[i].slot, Slot::Derivative(_) | Slot::Torque(_) | Slot::Angle(_)))
+        .collect();
     match version {
         Version::Fmi3 => {
             for &i in &outputs {

@@ -593,10 +593,7 @@ pub unsafe extern "C" fn fmi3GetNominalsOfContinuousStates(
     nominals: *mut fmi3Float64,
     n: usize,
 ) -> fmi3Status {
-    with(instance, |_| {
-        slice_mut(nominals, n)?.fill(1.0);
-        Ok(())
-    })
+    with(instance, |i| i.nominals(slice_mut(nominals, n)?))
 }
 
 #[no_mangle]
@@ -662,4 +659,3 @@ pub unsafe extern "C" fn fmi3DoStep(
 }
 
 include!("fmi3_signatures.rs");
-

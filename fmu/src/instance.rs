@@ -87,7 +87,9 @@ pub struct Snapshot {
     history: Vec<(f64, f64)>,
 }
 
-const SNAPSHOT_MAGIC: &[u8; 8] = b"RIGTWIN2";
+/// Version 3: the states are the bounded ones (twists in place of the drive's and the motor's
+/// angles), so a state saved by an older FMU is refused rather than misread.
+const SNAPSHOT_MAGIC: &[u8; 8] = b"RIGTWIN3";
 /// Magic, mode, variant, number of states, number of history records.
 const SNAPSHOT_HEADER: usize = 8 + 1 + 4 + 4 + 4;
 
@@ -352,6 +354,17 @@ impl Instance {
         Ok(())
     }
 
+    /// Model exchange: the nominals of the continuous states.
+    pub fn nominals(&self, out: &mut [f64]) -> Res<()> {
+        if out.len() != self.nx() {
+            return error(format!("{} nominals asked for; the model has {} states", out.len(), self.nx()));
+        }
+        for (o, v) in out.iter_mut().zip(self.table.nominals()) {
+            *o = v;
+        }
+        Ok(())
+    }
+
     /// Model exchange: set the continuous states.
     pub fn set_continuous_states(&mut self, x: &[f64]) -> Res<()> {
         self.expect("SetContinuousStates", &[Mode::ContinuousTimeMode])?;
@@ -408,15 +421,16 @@ impl Instance {
         if vrs.len() != out.len() {
             return error("the number of value references and values differ");
         }
-        let needs_model =
-            vrs.iter().any(|&v| matches!(self.lookup(v).map(|x| x.slot), Some(Slot::Derivative(_) | Slot::Torque(_))));
+        let needs_model = vrs.iter().any(|&v| {
+            matches!(self.lookup(v).map(|x| x.slot), Some(Slot::Derivative(_) | Slot::Torque(_) | Slot::Angle(_)))
+        });
         let computed = if needs_model {
             self.ensure_model()?;
             let drive = self.drive_now();
             let m = self.model.as_mut().expect("built above");
             let mut dx = vec![0.0; self.x.len()];
             m.derivatives(self.x.as_slice(), self.u.as_slice(), drive, &mut dx);
-            Some((dx, m.torques(self.x.as_slice())))
+            Some((dx, m.torques(self.x.as_slice()), m.angles(self.x.as_slice())))
         } else {
             None
         };
@@ -429,6 +443,7 @@ impl Instance {
                 Some(Slot::Input(i)) => self.u[i],
                 Some(Slot::Derivative(i)) => computed.as_ref().expect("computed above").0[i],
                 Some(Slot::Torque(i)) => computed.as_ref().expect("computed above").1[i],
+                Some(Slot::Angle(i)) => computed.as_ref().expect("computed above").2[i],
                 _ => return error(format!("value reference {vr} is not a Float64 variable of this FMU")),
             };
         }
@@ -618,6 +633,13 @@ impl Instance {
                     Some(Slot::Torque(i)) => {
                         if col < nx {
                             torque[(i, col)]
+                        } else {
+                            0.0
+                        }
+                    }
+                    Some(Slot::Angle(i)) => {
+                        if col < nx {
+                            m.angle_gradient(i, col)
                         } else {
                             0.0
                         }

@@ -1,5 +1,9 @@
 //! The FMU's dynamics: the open-differential powertrain with its drive-path effects
-//! (`plant::effects::Powertrain`) beside the bearing block (4 states). Without backlash the model
+//! (`plant::effects::Powertrain`) beside the bearing block (4 states). The physics is written in
+//! absolute angles x (the powertrain's coordinates); the FMU's continuous states are z = T x, the
+//! same vector with the drive's angle replaced by the side shafts' twist 2φ_drive − φ_m2 − φ_m3
+//! and the motor's angle by the compliance's twist φ_motor − φ_drive (bounded states, see
+//! `variables::STATES`); every matrix below is in z unless its name says otherwise. Without backlash the model
 //! is linear, x' = A x + B u, and the co-simulation step is exact for inputs held over the step:
 //! x⁺ = Ad x + Bd u with (Ad, Bd) from the matrix exponential, cached per step length. A dead
 //! time splits the step where the delayed drive torque changes, each piece exact; backlash is
@@ -30,6 +34,16 @@ pub struct Model {
     /// System matrix and torques inside the backlash play (shafts carry nothing).
     a_open: DMatrix<f64>,
     torque_open: DMatrix<f64>,
+    /// The engaged system and input matrices in absolute angles (the backlash integrator's).
+    a_x: DMatrix<f64>,
+    b_x: DMatrix<f64>,
+    /// z = T x and x = T⁻¹ z.
+    t: DMatrix<f64>,
+    t_inv: DMatrix<f64>,
+    /// State-vector index of the motor's angle (drive compliance).
+    motor: Option<usize>,
+    /// Absolute angles of a state (scratch).
+    xs: DVector<f64>,
     powertrain: Powertrain,
     /// State-vector index of each powertrain state.
     map: Vec<usize>,
@@ -77,18 +91,43 @@ impl Model {
             b.view_mut((6, 3), (4, 2)).copy_from(&br.b);
             (a, b, torque)
         };
-        let (a, b, torque) = assemble(true);
-        let (a_open, _, torque_open) = assemble(false);
-        if a.iter().chain(b.iter()).any(|v| !v.is_finite()) {
+        let (a_x, b_x, torque_x) = assemble(true);
+        let (a_open_x, _, torque_open_x) = assemble(false);
+        if a_x.iter().chain(b_x.iter()).any(|v| !v.is_finite()) {
             return Err("the parameters give a system matrix with non-finite entries".into());
         }
+        // z = T x: the twist 2φ_drive − φ_m2 − φ_m3 in place of φ_drive, φ_motor − φ_drive in
+        // place of φ_motor; T⁻¹ written out (φ_drive = (twist + φ_m2 + φ_m3)/2), so exact
+        let (m2, drive, m3) = (map[0], map[1], map[2]);
+        let motor = (powertrain.dofs() == 4).then(|| map[3]);
+        let mut t = DMatrix::identity(nx, nx);
+        let mut t_inv = DMatrix::identity(nx, nx);
+        t[(drive, drive)] = 2.0;
+        t[(drive, m2)] = -1.0;
+        t[(drive, m3)] = -1.0;
+        for j in [drive, m2, m3] {
+            t_inv[(drive, j)] = 0.5;
+        }
+        if let Some(mo) = motor {
+            t[(mo, drive)] = -1.0;
+            for j in [drive, m2, m3] {
+                t_inv[(mo, j)] = 0.5;
+            }
+        }
+        let similar = |m: &DMatrix<f64>| &t * m * &t_inv;
         let npt = map.len();
         Ok(Model {
-            a,
-            b,
-            torque,
-            a_open,
-            torque_open,
+            a: similar(&a_x),
+            b: &t * &b_x,
+            torque: torque_x * &t_inv,
+            a_open: similar(&a_open_x),
+            torque_open: torque_open_x * &t_inv,
+            a_x,
+            b_x,
+            t,
+            t_inv,
+            motor,
+            xs: DVector::zeros(nx),
             powertrain,
             map,
             cache: Vec::new(),
@@ -115,44 +154,72 @@ impl Model {
         self.powertrain.effects.backlash_rad > 0.0
     }
 
-    /// The powertrain's states of state vector `x`, in its own order.
-    fn powertrain_part(&self, x: &[f64]) -> Vec<f64> {
+    /// The powertrain's states (absolute angles, its own order) of state vector `z`.
+    fn powertrain_part(&self, z: &[f64]) -> Vec<f64> {
+        let x = &self.t_inv * DVector::from_column_slice(z);
         self.map.iter().map(|&i| x[i]).collect()
     }
 
-    /// ẋ into `out` for the inputs `u` with the drive torque replaced by `drive` (the delayed
+    /// ż into `out` for the inputs `u` with the drive torque replaced by `drive` (the delayed
     /// value; `u[DRIVE_INPUT]` without a dead time).
-    pub fn derivatives(&mut self, x: &[f64], u: &[f64], drive: f64, out: &mut [f64]) {
+    pub fn derivatives(&mut self, z: &[f64], u: &[f64], drive: f64, out: &mut [f64]) {
         let mut u_eff = [0.0; NU];
         u_eff.copy_from_slice(u);
         u_eff[DRIVE_INPUT] = drive;
-        rhs(self, x, &u_eff, out);
+        if self.backlash() {
+            let mut xs = std::mem::take(&mut self.xs);
+            xs.gemv(1.0, &self.t_inv, &DVector::from_column_slice(z), 0.0);
+            let mut dx = DVector::zeros(z.len());
+            rhs(self, xs.as_slice(), &u_eff, dx.as_mut_slice());
+            out.copy_from_slice((&self.t * dx).as_slice());
+            self.xs = xs;
+        } else {
+            for (i, o) in out.iter_mut().enumerate() {
+                *o = self.a.row(i).iter().zip(z).map(|(a, b)| a * b).sum::<f64>()
+                    + self.b.row(i).iter().zip(&u_eff).map(|(b, v)| b * v).sum::<f64>();
+            }
+        }
     }
 
-    /// The side-shaft torques [T_short, T_long] in state `x`.
-    pub fn torques(&self, x: &[f64]) -> [f64; 2] {
+    /// The side-shaft torques [T_short, T_long] in state `z`.
+    pub fn torques(&self, z: &[f64]) -> [f64; 2] {
         if self.backlash() {
-            self.powertrain.shaft_torques(&self.powertrain_part(x))
+            self.powertrain.shaft_torques(&self.powertrain_part(z))
         } else {
-            let t = &self.torque * DVector::from_column_slice(x);
+            let t = &self.torque * DVector::from_column_slice(z);
             [t[0], t[1]]
         }
     }
 
-    /// The Jacobians (∂ẋ/∂x, ∂ẋ/∂u, ∂T/∂x) at state `x`: the linear model, or with backlash the
-    /// one of the contact state `x` is in. With a dead time, ẋ does not depend on the present
-    /// drive torque (its column of ∂ẋ/∂u is then to be taken as zero by the caller).
-    pub fn jacobians(&self, x: &[f64]) -> (&DMatrix<f64>, &DMatrix<f64>, &DMatrix<f64>) {
-        if self.backlash() && !self.powertrain.in_contact(&self.powertrain_part(x)) {
+    /// The absolute angles that are not states, [φ_drive, φ_motor] (φ_motor is φ_drive without
+    /// a compliance), in state `z`.
+    pub fn angles(&self, z: &[f64]) -> [f64; 2] {
+        let x = &self.t_inv * DVector::from_column_slice(z);
+        let drive = x[self.map[1]];
+        [drive, self.motor.map_or(drive, |m| x[m])]
+    }
+
+    /// ∂[φ_drive, φ_motor][i]/∂z_j: an entry of T⁻¹.
+    pub fn angle_gradient(&self, i: usize, j: usize) -> f64 {
+        let row = if i == 0 { self.map[1] } else { self.motor.unwrap_or(self.map[1]) };
+        self.t_inv[(row, j)]
+    }
+
+    /// The Jacobians (∂ż/∂z, ∂ż/∂u, ∂T/∂z) at state `z`: the linear model, or with backlash the
+    /// one of the contact state `z` is in. With a dead time, ż does not depend on the present
+    /// drive torque (its column of ∂ż/∂u is then to be taken as zero by the caller).
+    pub fn jacobians(&self, z: &[f64]) -> (&DMatrix<f64>, &DMatrix<f64>, &DMatrix<f64>) {
+        if self.backlash() && !self.powertrain.in_contact(&self.powertrain_part(z)) {
             (&self.a_open, &self.b, &self.torque_open)
         } else {
             (&self.a, &self.b, &self.torque)
         }
     }
 
-    /// One step of length `h` from time `t` with `u` held (the drive torque delayed through
-    /// `delay`); the linear model allocates only when a new piece length is discretised.
-    pub fn step(&mut self, x: &mut DVector<f64>, u: &DVector<f64>, t: f64, h: f64, delay: &DelayLine) {
+    /// One step of state `z` of length `h` from time `t` with `u` held (the drive torque delayed
+    /// through `delay`); the linear model allocates only when a new piece length is discretised.
+    /// Backlash is integrated in absolute angles, as the diagnosis integrates it.
+    pub fn step(&mut self, z: &mut DVector<f64>, u: &DVector<f64>, t: f64, h: f64, delay: &DelayLine) {
         let mut pieces = std::mem::take(&mut self.pieces);
         pieces.clear();
         if self.delay_s() > 0.0 {
@@ -162,22 +229,30 @@ impl Model {
         }
         let mut u_eff = [0.0; NU];
         u_eff.copy_from_slice(u.as_slice());
+        let mut x = std::mem::take(&mut self.xs);
+        if self.backlash() {
+            x.gemv(1.0, &self.t_inv, z, 0.0);
+        }
         for &(len, drive) in &pieces {
             u_eff[DRIVE_INPUT] = drive;
             if self.backlash() {
                 let n = (len / BACKLASH_STEP_S - 1e-9).ceil().max(1.0) as usize;
                 for _ in 0..n {
-                    self.rk4(x, &u_eff, len / n as f64);
+                    self.rk4(&mut x, &u_eff, len / n as f64);
                 }
             } else {
                 let i = self.discretise(len);
                 self.u_eff.copy_from_slice(&u_eff);
                 let (_, ad, bd) = &self.cache[i];
-                self.scratch.gemv(1.0, ad, x, 0.0);
+                self.scratch.gemv(1.0, ad, z, 0.0);
                 self.scratch.gemv(1.0, bd, &self.u_eff, 1.0);
-                x.copy_from(&self.scratch);
+                z.copy_from(&self.scratch);
             }
         }
+        if self.backlash() {
+            z.gemv(1.0, &self.t, &x, 0.0);
+        }
+        self.xs = x;
         self.pieces = pieces;
     }
 
@@ -221,11 +296,12 @@ impl Model {
     }
 }
 
-/// ẋ = A x + B u, the powertrain's rows from its own (nonlinear) derivative with backlash.
+/// ẋ = A x + B u in absolute angles, the powertrain's rows from its own (nonlinear) derivative
+/// with backlash.
 fn rhs(m: &mut Model, x: &[f64], u: &[f64; NU], out: &mut [f64]) {
     for (i, o) in out.iter_mut().enumerate().take(m.nx()) {
-        *o = m.a.row(i).iter().zip(x).map(|(a, b)| a * b).sum::<f64>()
-            + m.b.row(i).iter().zip(u).map(|(b, v)| b * v).sum::<f64>();
+        *o = m.a_x.row(i).iter().zip(x).map(|(a, b)| a * b).sum::<f64>()
+            + m.b_x.row(i).iter().zip(u).map(|(b, v)| b * v).sum::<f64>();
     }
     if m.backlash() {
         for (k, &i) in m.map.iter().enumerate() {

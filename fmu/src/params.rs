@@ -22,13 +22,15 @@ pub struct FmuParams {
 }
 
 impl Default for FmuParams {
-    /// The paper's V1/V2 parameter set (Table 4) with the shaft damping and load drag declared
-    /// in the example bundles (`../shared/DATA.md`), and the squeeze-film damper identified from
-    /// `sfd_shake` (KCM, full coupling, IVFM; `tests/fmu_defaults.rs` re-identifies it).
+    /// The embedded default rig (`plant::paper::rig`: the paper's V1/V2 parameter set, Table 4,
+    /// with the shaft damping and load drag declared in the example bundles) and the
+    /// squeeze-film damper identified from `sfd_shake` (KCM, full coupling, IVFM;
+    /// `tests/bearing.rs` re-identifies it and compares).
     fn default() -> Self {
+        let rig = paper::rig();
         FmuParams {
-            powertrain: paper::damped_params(),
-            variant: Variant::V1,
+            powertrain: rig.model,
+            variant: rig.variant,
             bearing: BearingModel {
                 element: Coefficients {
                     k_n_per_m: [

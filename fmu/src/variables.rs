@@ -44,6 +44,8 @@ pub enum Slot {
     Input(usize),
     /// Side-shaft torque `i` (computed).
     Torque(usize),
+    /// Absolute angle `i` of [`ANGLES`] that is not a state (computed from the states).
+    Angle(usize),
 }
 
 /// What values a parameter accepts.
@@ -146,39 +148,56 @@ pub const NPARAMS: usize = 34;
 /// Index of the first effect parameter in [`PARAMETERS`].
 pub const FIRST_EFFECT: usize = 29;
 
-/// Continuous states: (name, unit, description); the speeds are the angles' derivatives. The
-/// first 10 are always there; the motor's angle and speed come with a drive compliance, the
-/// lagged torque with an actuator lag.
-pub const STATES: [(&str, &str, &str); 13] = [
-    ("phi_m2", "rad", "angle of load machine M2"),
-    ("phi_drive", "rad", "angle of the drive (differential cage)"),
-    ("phi_m3", "rad", "angle of load machine M3"),
-    ("w_m2", "rad/s", "speed of load machine M2"),
-    ("w_drive", "rad/s", "speed of the drive"),
-    ("w_m3", "rad/s", "speed of load machine M3"),
-    ("bearing.x", "m", "bearing displacement x"),
-    ("bearing.y", "m", "bearing displacement y"),
-    ("bearing.vx", "m/s", "bearing velocity x"),
-    ("bearing.vy", "m/s", "bearing velocity y"),
-    ("phi_motor", "rad", "angle of the drive's motor (drive compliance)"),
-    ("w_motor", "rad/s", "speed of the drive's motor (drive compliance)"),
-    ("M_drive_lagged", "N.m", "drive torque after the actuator lag"),
+/// Continuous states: (name, unit, description, nominal). Their magnitudes stay bounded, so that
+/// an importer's tolerances mean something (model exchange): the side shafts enter through their
+/// twist, not through absolute angles that grow without bound under a torque (as Modelica's
+/// rotational springs prefer `phi_rel`). The load machines' absolute angles stay states, since
+/// model-exchange outputs are functions of the states, but no derivative depends on them, so
+/// their tolerance cannot reach the oscillation. The first 10 are always there; the
+/// compliance's twist and the motor's speed come with a drive compliance, the lagged torque with
+/// an actuator lag. The nominals are the sizes an importer's absolute tolerance is scaled by
+/// (fmpy: atol = rtol · nominal): 1 mrad of twist (the default rig twists 15 mrad at 20 N·m per
+/// shaft), 10 µm and 1 mm/s for the bearing (its displacements are tens of µm).
+pub const STATES: [(&str, &str, &str, f64); 13] = [
+    ("phi_m2", "rad", "angle of load machine M2", 1.0),
+    ("twist", "rad", "twist of the side shafts through the differential, 2 phi_drive - phi_m2 - phi_m3", 1e-3),
+    ("phi_m3", "rad", "angle of load machine M3", 1.0),
+    ("w_m2", "rad/s", "speed of load machine M2", 1.0),
+    ("w_drive", "rad/s", "speed of the drive", 1.0),
+    ("w_m3", "rad/s", "speed of load machine M3", 1.0),
+    ("bearing.x", "m", "bearing displacement x", 1e-5),
+    ("bearing.y", "m", "bearing displacement y", 1e-5),
+    ("bearing.vx", "m/s", "bearing velocity x", 1e-3),
+    ("bearing.vy", "m/s", "bearing velocity y", 1e-3),
+    ("twist_motor", "rad", "twist of the drive compliance, phi_motor - phi_drive", 1e-3),
+    ("w_motor", "rad/s", "speed of the drive's motor (drive compliance)", 1.0),
+    ("M_drive_lagged", "N.m", "drive torque after the actuator lag", 10.0),
 ];
 
 /// Computed derivatives: (index in [`STATES`], name, unit); the other states' derivatives
 /// are states themselves (the speeds).
-pub const DERIVATIVES: [(usize, &str, &str); 7] = [
+pub const DERIVATIVES: [(usize, &str, &str); 9] = [
     (3, "der(w_m2)", "rad/s2"),
     (4, "der(w_drive)", "rad/s2"),
     (5, "der(w_m3)", "rad/s2"),
     (8, "der(bearing.vx)", "m/s2"),
     (9, "der(bearing.vy)", "m/s2"),
+    (1, "der(twist)", "rad/s"),
+    (10, "der(twist_motor)", "rad/s"),
     (11, "der(w_motor)", "rad/s2"),
     (12, "der(M_drive_lagged)", "N.m/s"),
 ];
 
 /// States that are the derivative of another: (index in [`STATES`], the index of its derivative).
-const STATE_DERIVATIVES: [(usize, usize); 6] = [(0, 3), (1, 4), (2, 5), (6, 8), (7, 9), (10, 11)];
+const STATE_DERIVATIVES: [(usize, usize); 4] = [(0, 3), (2, 5), (6, 8), (7, 9)];
+
+/// Absolute angles that are outputs but not states: (name, description), computed from the
+/// states (the drive's from the twist and the load machines' angles, the motor's from the drive's
+/// and the compliance's twist).
+pub const ANGLES: [(&str, &str); 2] = [
+    ("phi_drive", "angle of the drive (differential cage)"),
+    ("phi_motor", "angle of the drive's motor (drive compliance)"),
+];
 
 /// Inputs: (name, unit, description).
 pub const INPUTS: [(&str, &str, &str); 5] = [
@@ -206,6 +225,8 @@ pub const VR_DERIVATIVE: u32 = 41;
 pub const VR_TORQUE: u32 = 46;
 /// First input.
 pub const VR_INPUT: u32 = 48;
+/// The side shafts' twist (a state).
+pub const VR_TWIST: u32 = 53;
 
 /// The variable table of one parameter set: what the model description lists, in order, with
 /// the continuous-state vector it implies.
@@ -271,44 +292,49 @@ impl Table {
             "",
             "rig variant: 1 original, 2 spring both sides, 3 right (M3), 4 left (M2)",
         );
-        let derivative_rows = |v: &mut Vec<Variable>, states: &[usize], from: usize, to: usize| {
-            for &(s, name, unit) in DERIVATIVES.iter().filter(|d| d.0 >= from && d.0 < to) {
+        let derivative_rows = |v: &mut Vec<Variable>, states: &[usize], which: &[usize]| {
+            for &(s, name, unit) in DERIVATIVES.iter().filter(|d| which.contains(&d.0)) {
                 if let Some(k) = states.iter().position(|&x| x == s) {
-                    let vr = v.len() as u32;
-                    let slot = Slot::Derivative(k);
-                    v.push(Variable {
-                        vr,
-                        name,
-                        kind: float,
-                        causality: Causality::Local,
-                        slot,
-                        unit,
-                        description: "state derivative",
-                    });
+                    push(v, name, float, Causality::Local, Slot::Derivative(k), unit, "state derivative");
                 }
             }
         };
-        for k in 0..10 {
-            let (name, unit, description) = STATES[states[k]];
-            push(&mut v, name, float, Causality::Output, Slot::State(k), unit, description);
+        let state_row = |v: &mut Vec<Variable>, k: usize| {
+            let (name, unit, description, _) = STATES[states[k]];
+            push(v, name, float, Causality::Output, Slot::State(k), unit, description);
+        };
+        let angle_row = |v: &mut Vec<Variable>, i: usize| {
+            let (name, description) = ANGLES[i];
+            push(v, name, float, Causality::Output, Slot::Angle(i), "rad", description);
+        };
+        // the value references of the absolute angles (phi_drive among them) are those of the
+        // rigtwin versions whose states they were; the twist states come after the inputs
+        state_row(&mut v, 0);
+        angle_row(&mut v, 0);
+        for k in 2..10 {
+            state_row(&mut v, k);
         }
-        derivative_rows(&mut v, &states, 0, 10);
+        derivative_rows(&mut v, &states, &[3, 4, 5, 8, 9]);
         for (i, &(name, description)) in TORQUES.iter().enumerate() {
             push(&mut v, name, float, Causality::Output, Slot::Torque(i), "N.m", description);
         }
         for (i, &(name, unit, description)) in INPUTS.iter().enumerate() {
             push(&mut v, name, float, Causality::Input, Slot::Input(i), unit, description);
         }
+        state_row(&mut v, 1);
+        derivative_rows(&mut v, &states, &[1]);
         // then the effects'
         for &i in params.iter().filter(|&&i| i >= FIRST_EFFECT) {
             let (name, unit, description, _) = PARAMETERS[i];
             push(&mut v, name, float, Causality::Parameter, Slot::Param(i), unit, description);
         }
-        for (k, &s) in states.iter().enumerate().skip(10) {
-            let (name, unit, description) = STATES[s];
-            push(&mut v, name, float, Causality::Output, Slot::State(k), unit, description);
+        if compliant {
+            angle_row(&mut v, 1);
         }
-        derivative_rows(&mut v, &states, 10, STATES.len());
+        for k in 10..states.len() {
+            state_row(&mut v, k);
+        }
+        derivative_rows(&mut v, &states, &[10, 11, 12]);
         let derivative_state = states
             .iter()
             .map(|s| STATE_DERIVATIVES.iter().find(|d| d.0 == *s).and_then(|d| states.iter().position(|&x| x == d.1)))
@@ -319,6 +345,11 @@ impl Table {
     /// Number of continuous states.
     pub fn nx(&self) -> usize {
         self.states.len()
+    }
+
+    /// The nominal of each continuous state, in state-vector order.
+    pub fn nominals(&self) -> impl Iterator<Item = f64> + '_ {
+        self.states.iter().map(|&s| STATES[s].3)
     }
 
     /// The variable with value reference `vr`: value references are the table's indices.
@@ -451,6 +482,10 @@ mod tests {
         assert_eq!(t.find(Slot::Derivative(3)).unwrap().vr, VR_DERIVATIVE);
         assert_eq!(t.find(Slot::Torque(0)).unwrap().vr, VR_TORQUE);
         assert_eq!(t.find(Slot::Input(0)).unwrap().vr, VR_INPUT);
+        assert_eq!(t.find(Slot::State(1)).unwrap().vr, VR_TWIST);
+        // the names of rigtwin's first FMUs keep their value references
+        assert_eq!(t.lookup(VR_STATE + 1).unwrap().name, "phi_drive");
+        assert_eq!(t.lookup(VR_STATE + 3).unwrap().name, "w_m2");
     }
 
     #[test]
@@ -470,15 +505,18 @@ mod tests {
                 "drive.compliance_stiffness",
                 "drive.compliance_motor_fraction",
                 "phi_motor",
+                "twist_motor",
                 "w_motor",
                 "M_drive_lagged",
+                "der(twist_motor)",
                 "der(w_motor)",
                 "der(M_drive_lagged)"
             ]
         );
-        // φ_motor's derivative is w_motor; the lagged torque's is computed
-        assert_eq!(t.derivative_state[10], Some(11));
+        // the twists' and the lagged torque's derivatives are computed; φ_m2's is w_m2
+        assert_eq!(t.derivative_state[10], None);
         assert_eq!(t.derivative_state[12], None);
+        assert_eq!(t.derivative_state[0], Some(3));
     }
 
     #[test]

@@ -70,7 +70,9 @@ pub fn params(j_drive: f64, c_short: f64) -> RigParams {
 
 /// The paper's V1/V2 set (Table 4) with the side-shaft dampings and load-machine drag declared
 /// in the example bundles (`../shared/DATA.md`): d_short 1.12, d_long 0.87 Nm s/rad, drag
-/// 0.5 Nm s/rad. The default plant of the FMU and the MPC.
+/// 0.5 Nm s/rad. The one default parameter set: the model of [`rig`], so of every command
+/// that writes or runs the model (the FMUs of `run` and `fmu`, the MPC's plant). The paper
+/// gives no damping values; without them a disturbance would ring for ever.
 pub fn damped_params() -> RigParams {
     RigParams { d_short: 1.12, d_long: 0.87, load_drag: 0.5, c_long: Some(1479.0 * 7.0 / 9.0), ..params(0.529, 1479.0) }
 }
@@ -92,7 +94,7 @@ pub fn rig() -> Rig {
     Rig {
         name: "Hübner & Prokop 2026 powertrain HIL rig (Tables A1, A2; parameter set V1/V2)".into(),
         variant: Variant::V1,
-        model: params(0.529, 1479.0),
+        model: damped_params(),
         chain: Some(chain()),
         bending: None, // the paper gives no geometry of its spring
         bearing: None,

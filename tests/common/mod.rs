@@ -6,18 +6,11 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::sync::OnceLock;
 
-/// Builds the `fmu` crate's shared library (`cargo test` builds only its rlib) and packages
-/// both FMUs with the default parameters into a temporary folder; returns that folder.
+/// Packages both FMUs with the default parameters into a temporary folder (the library is the
+/// one the `rigtwin` binary carries); returns that folder.
 pub fn fmu_dir() -> &'static Path {
     static DIR: OnceLock<PathBuf> = OnceLock::new();
     DIR.get_or_init(|| {
-        let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
-        let status = Command::new(cargo)
-            .args(["build", "-p", "fmu", "--lib"])
-            .current_dir(env!("CARGO_MANIFEST_DIR"))
-            .status()
-            .expect("run cargo build -p fmu");
-        assert!(status.success(), "building the FMU library failed");
         let dir =
             std::env::temp_dir().join(format!("rigtwin-fmus-{}-{:?}", std::process::id(), std::thread::current().id()));
         let out =

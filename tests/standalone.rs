@@ -1,0 +1,62 @@
+//! The `rigtwin` binary is the product: copied alone into an empty folder it writes both FMUs,
+//! with the stripped FMU library it carries, and `run` and `fmu` write the same parameter set.
+
+use std::io::Read;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn scratch(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("rigtwin-standalone-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn entry(fmu: &Path, name: &str) -> Vec<u8> {
+    let mut zip = zip::ZipArchive::new(std::fs::File::open(fmu).unwrap()).unwrap();
+    let mut e = zip.by_name(name).unwrap_or_else(|_| panic!("{}: no {name}", fmu.display()));
+    let mut bytes = Vec::new();
+    e.read_to_end(&mut bytes).unwrap();
+    bytes
+}
+
+#[test]
+fn a_binary_copied_alone_writes_both_fmus() {
+    let dir = scratch("alone");
+    let exe = dir.join("rigtwin");
+    std::fs::copy(env!("CARGO_BIN_EXE_rigtwin"), &exe).unwrap();
+    let out = Command::new(&exe)
+        .args(["fmu", "--out", "fmus"])
+        .current_dir(&dir)
+        .env_remove("RIGTWIN_FMU_LIB")
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let run = Command::new(&exe)
+        .args(["run", "--out", "run"])
+        .current_dir(&dir)
+        .env_remove("RIGTWIN_FMU_LIB")
+        .output()
+        .unwrap();
+    assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
+    for (fmu, lib) in
+        [("rigtwin-fmi3.fmu", "binaries/x86_64-linux/rigtwin.so"), ("rigtwin-fmi2.fmu", "binaries/linux64/rigtwin.so")]
+    {
+        if !cfg!(all(target_os = "linux", target_arch = "x86_64")) {
+            continue;
+        }
+        let bytes = entry(&dir.join("fmus").join(fmu), lib);
+        assert_eq!(&bytes[..4], b"\x7fELF", "{fmu}: {lib} is a shared library");
+        // stripped: small, and no DWARF sections (their names would stand in the section-name table)
+        assert!(bytes.len() < 3 << 20, "{fmu}: the library has {} bytes", bytes.len());
+        assert!(!bytes.windows(11).any(|w| w == b".debug_info"), "{fmu}: the library carries debug info");
+        // the exported functions stay in the dynamic symbol table
+        assert!(bytes.windows(11).any(|w| w == b"fmi3DoStep\0"), "{fmu}: fmi3DoStep is not exported");
+        // one default parameter set: run and fmu write the same params.json, byte for byte
+        let a = entry(&dir.join("fmus").join(fmu), "resources/params.json");
+        let b = entry(&dir.join("run").join(fmu), "resources/params.json");
+        assert_eq!(a, b, "{fmu}: params.json of `fmu` and `run` differ");
+        let p: serde_json::Value = serde_json::from_slice(&a).unwrap();
+        assert!(p["powertrain"]["d_short"].as_f64().unwrap() > 0.0, "the default is the damped rig: {p}");
+    }
+}
