@@ -37,6 +37,11 @@ fn type_of_unit(unit: &str) -> &'static str {
     UNITS.iter().find(|u| u.0 == unit).map(|u| u.2).expect("every unit of the table is declared")
 }
 
+/// The FMI 3 type of a state's unit with a nominal other than 1, e.g. `Angle_nominal_1e-3`.
+fn nominal_type(unit: &str, nominal: f64) -> String {
+    format!("{}_nominal_{nominal:e}", type_of_unit(unit))
+}
+
 fn base_unit(e: &[i32; 4]) -> String {
     let mut s = String::from("<BaseUnit");
     for (name, v) in ["kg", "m", "s", "rad"].iter().zip(e) {
@@ -153,6 +158,23 @@ fn describe_with(p: &FmuParams, version: Version, token: &str) -> String {
         for (unit, _, name) in UNITS {
             let _ = writeln!(x, "    <Float64Type name=\"{name}\" quantity=\"{name}\" unit=\"{unit}\"/>");
         }
+        // the states' nominals through types of their own (rust-fmi 0.8 reads `nominal` on a
+        // type, not on a variable)
+        let mut nominal_types: Vec<(&str, f64)> = Vec::new();
+        for (s, n) in table.nominals().enumerate() {
+            let unit = vars.iter().find(|v| v.slot == Slot::State(s)).expect("state in table").unit;
+            if n != 1.0 && !nominal_types.contains(&(unit, n)) {
+                nominal_types.push((unit, n));
+            }
+        }
+        for (unit, n) in nominal_types {
+            let quantity = type_of_unit(unit);
+            let _ = writeln!(
+                x,
+                "    <Float64Type name=\"{}\" quantity=\"{quantity}\" unit=\"{unit}\" nominal=\"{n:?}\"/>",
+                nominal_type(unit, n)
+            );
+        }
         let _ = writeln!(x, "  </TypeDefinitions>");
     }
     let _ = writeln!(x, "  <LogCategories>");
@@ -213,7 +235,11 @@ fn describe_with(p: &FmuParams, version: Version, token: &str) -> String {
                     let _ = write!(attrs, " initial=\"{i}\"");
                 }
                 if v.kind == Kind::Float64 {
-                    let _ = write!(attrs, " declaredType=\"{}\"", type_of_unit(v.unit));
+                    let declared = match v.slot {
+                        Slot::State(i) if nominals[i] != 1.0 => nominal_type(v.unit, nominals[i]),
+                        _ => type_of_unit(v.unit).to_string(),
+                    };
+                    let _ = write!(attrs, " declaredType=\"{declared}\"");
                     if v.causality == Causality::Parameter && v.unit == "1" {
                         attrs += " min=\"0\" max=\"1\"";
                     }
@@ -226,9 +252,6 @@ fn describe_with(p: &FmuParams, version: Version, token: &str) -> String {
                 }
                 if let Some(s) = &start {
                     let _ = write!(attrs, " start=\"{s}\"");
-                }
-                if let Some(n) = &nominal {
-                    let _ = write!(attrs, " nominal=\"{n}\"");
                 }
                 let _ = writeln!(x, "    <{tag} {attrs}/>");
             }
