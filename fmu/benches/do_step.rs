@@ -59,7 +59,7 @@ fn fmu_step(c: &mut Criterion) {
         return;
     }
     let mut m = Model::new(&p).unwrap();
-    let (ad, bd) = m.discretisation(1e-3);
+    let (ad, bd) = m.discretisation(1e-3).unwrap();
     let (ad, bd): (Vec<f64>, Vec<f64>) = (ad.transpose().as_slice().to_vec(), bd.transpose().as_slice().to_vec()); // row-major
     unsafe {
         let lib = libloading::Library::new(&lib).unwrap();

@@ -51,6 +51,7 @@ impl Logger for Fmi2Logger {
 struct Component {
     inner: Instance,
     start_time: f64,
+    stop_time: Option<f64>,
 }
 
 unsafe fn with(c: fmi2Component, f: impl FnOnce(&mut Component) -> Res<()>) -> fmi2Status {
@@ -130,7 +131,7 @@ pub unsafe extern "C" fn fmi2Instantiate(
     match result {
         Ok(Ok((interface, params))) => {
             let inner = Instance::new(str_of(name), interface, Box::new(logger), logging_on != 0, &params);
-            Box::into_raw(Box::new(Component { inner, start_time: 0.0 })) as fmi2Component
+            Box::into_raw(Box::new(Component { inner, start_time: 0.0, stop_time: None })) as fmi2Component
         }
         Ok(Err(message)) => {
             logger.log(Status::Error, "logStatusError", &message);
@@ -156,19 +157,26 @@ pub unsafe extern "C" fn fmi2SetupExperiment(
     _tolerance_defined: fmi2Boolean,
     _tolerance: fmi2Real,
     start_time: fmi2Real,
-    _stop_time_defined: fmi2Boolean,
-    _stop_time: fmi2Real,
+    stop_time_defined: fmi2Boolean,
+    stop_time: fmi2Real,
 ) -> fmi2Status {
     with(c, |comp| {
         comp.inner.expect("fmi2SetupExperiment", &[Mode::Instantiated])?;
+        if stop_time_defined != 0 && !(stop_time >= start_time) {
+            return Err(Failure {
+                status: Status::Error,
+                message: format!("fmi2SetupExperiment: stop time {stop_time} s is before the start time {start_time} s"),
+            });
+        }
         comp.start_time = start_time;
+        comp.stop_time = (stop_time_defined != 0).then_some(stop_time);
         Ok(())
     })
 }
 
 #[no_mangle]
 pub unsafe extern "C" fn fmi2EnterInitializationMode(c: fmi2Component) -> fmi2Status {
-    with(c, |comp| comp.inner.enter_initialization_mode(comp.start_time))
+    with(c, |comp| comp.inner.enter_initialization_mode(comp.start_time, comp.stop_time))
 }
 
 #[no_mangle]
@@ -186,6 +194,7 @@ pub unsafe extern "C" fn fmi2Reset(c: fmi2Component) -> fmi2Status {
     with(c, |comp| {
         comp.inner.reset();
         comp.start_time = 0.0;
+        comp.stop_time = None;
         Ok(())
     })
 }

@@ -181,10 +181,10 @@ pub unsafe extern "C" fn fmi3EnterInitializationMode(
     _tolerance_defined: fmi3Boolean,
     _tolerance: fmi3Float64,
     start_time: fmi3Float64,
-    _stop_time_defined: fmi3Boolean,
-    _stop_time: fmi3Float64,
+    stop_time_defined: fmi3Boolean,
+    stop_time: fmi3Float64,
 ) -> fmi3Status {
-    with(instance, |i| i.enter_initialization_mode(start_time))
+    with(instance, |i| i.enter_initialization_mode(start_time, stop_time_defined.then_some(stop_time)))
 }
 
 #[no_mangle]

@@ -36,6 +36,9 @@ pub enum Mode {
     StepMode,
     /// After Terminate.
     Terminated,
+    /// After a step or an evaluation whose state came out non-finite (or could not be taken):
+    /// every call but Reset, SetFMUState and FreeInstance is refused.
+    Failed,
 }
 
 /// Status escalation OK < Warning < Discard < Error < Fatal.
@@ -133,6 +136,7 @@ impl Snapshot {
             Mode::ContinuousTimeMode,
             Mode::StepMode,
             Mode::Terminated,
+            Mode::Failed,
         ]
         .get(b[8] as usize)
         .copied()?;
@@ -176,6 +180,9 @@ pub struct Instance {
     /// History of the drive torque for its dead time.
     delay: DelayLine,
     time: f64,
+    /// Model exchange: the last accepted time (initialisation, event, completed integrator
+    /// step); SetTime may not go back before it.
+    accepted_time: f64,
     model: Option<Model>,
 }
 
@@ -199,7 +206,18 @@ impl Instance {
             u: DVector::zeros(NU),
             delay: DelayLine::default(),
             time: 0.0,
+            accepted_time: 0.0,
             model: None,
+        }
+    }
+
+    /// The instance cannot go on: it refuses every call until it is reset or a saved state is
+    /// set. Returns the failure to report.
+    fn fail(&mut self, message: String) -> Failure {
+        self.mode = Mode::Failed;
+        Failure {
+            status: Status::Error,
+            message: format!("{message}; the instance stops (reset it, set a saved FMU state, or free it)"),
         }
     }
 
@@ -270,11 +288,16 @@ impl Instance {
         Ok(())
     }
 
-    /// Enter initialization mode at `start_time`.
-    pub fn enter_initialization_mode(&mut self, start_time: f64) -> Res<()> {
+    /// Enter initialization mode at `start_time` (with the experiment's stop time if defined).
+    pub fn enter_initialization_mode(&mut self, start_time: f64, stop_time: Option<f64>) -> Res<()> {
         self.expect("EnterInitializationMode", &[Mode::Instantiated])?;
         if !start_time.is_finite() {
             return error(format!("start time {start_time} is not finite"));
+        }
+        if let Some(stop) = stop_time {
+            if !(stop >= start_time) {
+                return error(format!("stop time {stop} s is before the start time {start_time} s"));
+            }
         }
         self.time = start_time;
         self.mode = Mode::InitializationMode;
@@ -288,6 +311,7 @@ impl Instance {
         // the drive torque of the initialisation is what the dead time delivers at first
         self.delay = DelayLine::default();
         self.delay.record(f64::NEG_INFINITY, self.u[DRIVE_INPUT]);
+        self.accepted_time = self.time;
         self.mode = match self.interface {
             Interface::CoSimulation => Mode::StepMode,
             Interface::ModelExchange => Mode::EventMode,
@@ -310,6 +334,7 @@ impl Instance {
         self.u.fill(0.0);
         self.delay = DelayLine::default();
         self.time = 0.0;
+        self.accepted_time = 0.0;
         self.model = None;
         self.mode = Mode::Instantiated;
     }
@@ -317,6 +342,7 @@ impl Instance {
     /// Model exchange: enter event mode.
     pub fn enter_event_mode(&mut self) -> Res<()> {
         self.expect("EnterEventMode", &[Mode::EventMode, Mode::ContinuousTimeMode])?;
+        self.accepted_time = self.time;
         self.mode = Mode::EventMode;
         Ok(())
     }
@@ -334,6 +360,10 @@ impl Instance {
         if !t.is_finite() {
             return error(format!("time {t} is not finite"));
         }
+        // an integrator may go back to retry a step, but never before the last accepted point
+        if t < self.accepted_time - 1e-12 * self.accepted_time.abs().max(1.0) {
+            return error(format!("time {t} s is before the last accepted time {} s", self.accepted_time));
+        }
         self.time = t;
         Ok(())
     }
@@ -341,6 +371,7 @@ impl Instance {
     /// Model exchange: an accepted integrator step; the dead time's history before it is dropped.
     pub fn completed_integrator_step(&mut self) -> Res<()> {
         self.expect("CompletedIntegratorStep", &[Mode::ContinuousTimeMode])?;
+        self.accepted_time = self.time;
         self.delay.forget_before(self.time, self.delay_s());
         Ok(())
     }
@@ -391,6 +422,9 @@ impl Instance {
         let drive = self.drive_now();
         let m = self.model.as_mut().expect("built above");
         m.derivatives(self.x.as_slice(), self.u.as_slice(), drive, out);
+        if let Some(i) = out.iter().position(|v| !v.is_finite()) {
+            return Err(self.fail(format!("the derivative of state {i} is {} at {} s", out[i], self.time)));
+        }
         Ok(())
     }
 
@@ -400,12 +434,17 @@ impl Instance {
         if !(h > 0.0 && h.is_finite()) {
             return error(format!("communication step size {h} s must be positive and finite"));
         }
+        if !t.is_finite() {
+            return error(format!("currentCommunicationPoint {t} s is not finite"));
+        }
         if (t - self.time).abs() > 1e-9 * self.time.abs().max(h) {
             return error(format!("currentCommunicationPoint {t} s differs from the FMU's time {} s", self.time));
         }
         self.ensure_model()?;
         let model = self.model.as_mut().expect("built above");
-        model.step(&mut self.x, &self.u, self.time, h, &self.delay);
+        if let Err(e) = model.step(&mut self.x, &self.u, self.time, h, &self.delay) {
+            return Err(self.fail(format!("DoStep from {t} s over {h} s: {e}")));
+        }
         self.time = t + h;
         self.delay.forget_before(self.time, self.delay_s());
         Ok(())
@@ -573,6 +612,7 @@ impl Instance {
         self.delay = history;
         self.mode = s.mode;
         self.time = s.time;
+        self.accepted_time = s.time;
         self.x.copy_from_slice(&s.x);
         self.u.copy_from_slice(&s.u);
         self.params = s.params;

@@ -42,8 +42,11 @@ pub struct Model {
     t_inv: DMatrix<f64>,
     /// State-vector index of the motor's angle (drive compliance).
     motor: Option<usize>,
-    /// Absolute angles of a state (scratch).
+    /// Absolute angles of a state, the state being stepped (scratch).
     xs: DVector<f64>,
+    next: DVector<f64>,
+    /// Longest exact piece, s: ‖[A B]‖₁ · piece = `plant::statespace::ZOH_MAX_NORM` / 2^10.
+    max_piece_s: f64,
     powertrain: Powertrain,
     /// State-vector index of each powertrain state.
     map: Vec<usize>,
@@ -59,6 +62,14 @@ pub struct Model {
 /// Discretisations kept: a co-simulation master uses one or a few step sizes (a dead time
 /// adds two piece lengths per step size).
 const CACHE: usize = 8;
+
+/// Most pieces (exact ZOH pieces, or RK4 sub-steps with backlash) one communication step is
+/// split into; a longer step is refused rather than taking unbounded time.
+pub const MAX_PIECES: usize = 1_000_000;
+
+/// Fastest time scale a model may have, s (‖[A B]‖₁ ≤ its inverse): below it the parameters are
+/// not a machine (an inertia of 1e-300 kg m², say) and no step could be taken.
+const FASTEST_TIME_SCALE_S: f64 = 1e-15;
 
 impl Model {
     /// Builds the model; the error names the offending parameter.
@@ -116,9 +127,19 @@ impl Model {
         }
         let similar = |m: &DMatrix<f64>| &t * m * &t_inv;
         let npt = map.len();
+        let (a, b) = (similar(&a_x), &t * &b_x);
+        let norm = a.column_iter().chain(b.column_iter()).map(|c| c.lp_norm(1)).fold(0.0, f64::max);
+        if !(norm * FASTEST_TIME_SCALE_S <= 1.0) {
+            return Err(format!(
+                "the parameters give time scales of {:.1e} s (an inertia, mass or stiffness far off)",
+                1.0 / norm
+            ));
+        }
         Ok(Model {
-            a: similar(&a_x),
-            b: &t * &b_x,
+            max_piece_s: plant::statespace::ZOH_MAX_NORM / 1024.0 / norm.max(1e-300),
+            next: DVector::zeros(nx),
+            a,
+            b,
             torque: torque_x * &t_inv,
             a_open: similar(&a_open_x),
             torque_open: torque_open_x * &t_inv,
@@ -218,8 +239,17 @@ impl Model {
 
     /// One step of state `z` of length `h` from time `t` with `u` held (the drive torque delayed
     /// through `delay`); the linear model allocates only when a new piece length is discretised.
-    /// Backlash is integrated in absolute angles, as the diagnosis integrates it.
-    pub fn step(&mut self, z: &mut DVector<f64>, u: &DVector<f64>, t: f64, h: f64, delay: &DelayLine) {
+    /// Backlash is integrated in absolute angles, as the diagnosis integrates it. A step longer
+    /// than the model can take exactly (linear: [`MAX_PIECES`] exact pieces, each within
+    /// `plant::statespace::ZOH_MAX_NORM` of the model's time scales; backlash: [`MAX_PIECES`]
+    /// RK4 sub-steps) is refused, and so is a step whose state comes out non-finite; `z` is
+    /// then left as it was.
+    pub fn step(&mut self, z: &mut DVector<f64>, u: &DVector<f64>, t: f64, h: f64, delay: &DelayLine) -> Result<(), String> {
+        let sub_steps = if self.backlash() { h / BACKLASH_STEP_S } else { h / self.max_piece_s };
+        if !(sub_steps <= MAX_PIECES as f64) {
+            let longest = MAX_PIECES as f64 * if self.backlash() { BACKLASH_STEP_S } else { self.max_piece_s };
+            return Err(format!("a step of {h} s is longer than this model integrates exactly (at most {longest:.4e} s)"));
+        }
         let mut pieces = std::mem::take(&mut self.pieces);
         pieces.clear();
         if self.delay_s() > 0.0 {
@@ -230,9 +260,12 @@ impl Model {
         let mut u_eff = [0.0; NU];
         u_eff.copy_from_slice(u.as_slice());
         let mut x = std::mem::take(&mut self.xs);
+        let mut out = std::mem::take(&mut self.next);
+        out.copy_from(z);
         if self.backlash() {
             x.gemv(1.0, &self.t_inv, z, 0.0);
         }
+        let mut result = Ok(());
         for &(len, drive) in &pieces {
             u_eff[DRIVE_INPUT] = drive;
             if self.backlash() {
@@ -241,19 +274,38 @@ impl Model {
                     self.rk4(&mut x, &u_eff, len / n as f64);
                 }
             } else {
-                let i = self.discretise(len);
+                // pieces short enough for an exact exponential, all of one length
+                let n = (len / self.max_piece_s).ceil().max(1.0) as usize;
+                let i = match self.discretise(len / n as f64) {
+                    Ok(i) => i,
+                    Err(e) => {
+                        result = Err(e);
+                        break;
+                    }
+                };
                 self.u_eff.copy_from_slice(&u_eff);
-                let (_, ad, bd) = &self.cache[i];
-                self.scratch.gemv(1.0, ad, z, 0.0);
-                self.scratch.gemv(1.0, bd, &self.u_eff, 1.0);
-                z.copy_from(&self.scratch);
+                for _ in 0..n {
+                    let (_, ad, bd) = &self.cache[i];
+                    self.scratch.gemv(1.0, ad, &out, 0.0);
+                    self.scratch.gemv(1.0, bd, &self.u_eff, 1.0);
+                    out.copy_from(&self.scratch);
+                }
             }
         }
         if self.backlash() {
-            z.gemv(1.0, &self.t, &x, 0.0);
+            out.gemv(1.0, &self.t, &x, 0.0);
+        }
+        if result.is_ok() {
+            if let Some(i) = out.iter().position(|v| !v.is_finite()) {
+                result = Err(format!("state {i} became {} over the step from {t} s", out[i]));
+            } else {
+                z.copy_from(&out);
+            }
         }
         self.xs = x;
+        self.next = out;
         self.pieces = pieces;
+        result
     }
 
     fn rk4(&mut self, x: &mut DVector<f64>, u: &[f64; NU], h: f64) {
@@ -271,26 +323,22 @@ impl Model {
     }
 
     /// (Ad, Bd) of step size `h` (the linear model, shafts engaged).
-    pub fn discretisation(&mut self, h: f64) -> (&DMatrix<f64>, &DMatrix<f64>) {
-        let i = self.discretise(h);
-        (&self.cache[i].1, &self.cache[i].2)
+    pub fn discretisation(&mut self, h: f64) -> Result<(&DMatrix<f64>, &DMatrix<f64>), String> {
+        let i = self.discretise(h)?;
+        Ok((&self.cache[i].1, &self.cache[i].2))
     }
 
-    fn discretise(&mut self, h: f64) -> usize {
+    fn discretise(&mut self, h: f64) -> Result<usize, String> {
         // piece lengths from a dead time carry rounding: equal within 1e-12 is the same
         match self.cache.iter().position(|c| (c.0 - h).abs() <= 1e-12 * h) {
-            Some(i) => i,
+            Some(i) => Ok(i),
             None => {
-                let nx = self.nx();
-                let mut aug = DMatrix::zeros(nx + NU, nx + NU);
-                aug.view_mut((0, 0), (nx, nx)).copy_from(&(&self.a * h));
-                aug.view_mut((0, nx), (nx, NU)).copy_from(&(&self.b * h));
-                let e = aug.exp();
+                let (ad, bd) = plant::zoh(&self.a, &self.b, h).map_err(|e| e.to_string())?;
                 if self.cache.len() == CACHE {
                     self.cache.remove(0);
                 }
-                self.cache.push((h, e.view((0, 0), (nx, nx)).into_owned(), e.view((0, nx), (nx, NU)).into_owned()));
-                self.cache.len() - 1
+                self.cache.push((h, ad, bd));
+                Ok(self.cache.len() - 1)
             }
         }
     }
@@ -340,9 +388,9 @@ mod tests {
         let mut x1 = DVector::from_element(NX_BASE, 1e-3);
         let mut x2 = x1.clone();
         let d = DelayLine::default();
-        m.step(&mut x1, &u, 0.0, 2e-3, &d);
-        m.step(&mut x2, &u, 0.0, 1e-3, &d);
-        m.step(&mut x2, &u, 1e-3, 1e-3, &d);
+        m.step(&mut x1, &u, 0.0, 2e-3, &d).unwrap();
+        m.step(&mut x2, &u, 0.0, 1e-3, &d).unwrap();
+        m.step(&mut x2, &u, 1e-3, 1e-3, &d).unwrap();
         for i in 0..NX_BASE {
             assert_relative_eq!(x1[i], x2[i], max_relative = 1e-9, epsilon = 1e-15);
         }

@@ -449,7 +449,7 @@ pub(crate) fn least_squares(a: &DMatrix<f64>, b: &DVector<f64>) -> Result<DVecto
     for (j, mut c) in an.column_iter_mut().enumerate() {
         c /= scale[j];
     }
-    let q = an.svd(true, true).solve(b, 1e-12).map_err(|e| IdentError::Data(format!("least squares failed: {e}")))?;
+    let q = plant::lstsq(&an, b, 1e-12).map_err(|e| IdentError::Data(format!("least squares failed: {e}")))?;
     Ok(q.component_div(&scale))
 }
 

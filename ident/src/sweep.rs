@@ -417,7 +417,7 @@ fn projected(d: &FitData, wn: f64, zeta: f64) -> (DVector<f64>, [Complex64; LINE
         b[2 * k] = d.y[k].re;
         b[2 * k + 1] = d.y[k].im;
     }
-    let x = a.clone().svd(true, true).solve(&b, 1e-12).unwrap_or_else(|_| DVector::zeros(2 * LINEAR));
+    let x = plant::lstsq(&a, &b, 1e-12).unwrap_or_else(|_| DVector::zeros(2 * LINEAR));
     let r = &a * &x - b;
     let mut coef = [Complex64::new(0.0, 0.0); LINEAR];
     for (j, c) in coef.iter_mut().enumerate() {

@@ -47,4 +47,4 @@ pub use reduce::{reduce, Reduction, ReductionStep};
 pub use rig::{AdditionalSpring, Effective, Rig, RigChain, RigParams, Variant};
 pub use segment::{bodies_from_segments, step_length_correction_m, Segment};
 pub use shuffle::{classify, ModeKind};
-pub use statespace::{DiscreteStateSpace, StateSpace};
+pub use statespace::{lstsq, zoh, DiscreteStateSpace, StateSpace};

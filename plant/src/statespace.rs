@@ -3,7 +3,7 @@
 use nalgebra::DMatrix;
 use serde::Serialize;
 
-use crate::error::Result;
+use crate::error::{PlantError, Result};
 use crate::modal::{damp, Pole};
 
 /// A continuous-time linear state-space system with named signals (SI units).
@@ -23,6 +23,57 @@ pub struct StateSpace {
     pub input_names: Vec<String>,
     /// Output names.
     pub output_names: Vec<String>,
+}
+
+/// Largest ‖[A B]·dt‖₁ [`zoh`] takes: the matrix exponential scales it down by 2^s and squares s
+/// times, and each squaring can double the relative round-off, so 2^30 keeps that below 1e-7
+/// (and keeps a step far longer than the model's time scales from looking like a result).
+pub const ZOH_MAX_NORM: f64 = (1u64 << 30) as f64;
+
+/// Zero-order-hold discretisation of x' = A x + B u over `dt_s`: (Ad, Bd) from the exponential of
+/// the augmented matrix [[A, B], [0, 0]]·dt. Refuses non-finite matrices and a step so long
+/// against the model's time scales (‖[A B]‖₁·dt > [`ZOH_MAX_NORM`]) that the exponential would
+/// be round-off, or — with non-finite entries — would square for ever.
+pub fn zoh(a: &DMatrix<f64>, b: &DMatrix<f64>, dt_s: f64) -> Result<(DMatrix<f64>, DMatrix<f64>)> {
+    crate::error::positive(|| "dt_s", dt_s, "s")?;
+    let (n, m) = (a.nrows(), b.ncols());
+    if a.iter().chain(b.iter()).any(|v| !v.is_finite()) {
+        return Err(PlantError::Numerical("the state-space matrices have non-finite entries".into()));
+    }
+    let mut aug = DMatrix::zeros(n + m, n + m);
+    aug.view_mut((0, 0), (n, n)).copy_from(&(a * dt_s));
+    aug.view_mut((0, n), (n, m)).copy_from(&(b * dt_s));
+    let norm = aug.column_iter().map(|c| c.lp_norm(1)).fold(0.0, f64::max);
+    if !(norm <= ZOH_MAX_NORM) {
+        return Err(PlantError::Numerical(format!(
+            "a step of {dt_s} s is {norm:.3e} times the model's fastest time scale: too long to discretise \
+             exactly (at most {ZOH_MAX_NORM:.3e})"
+        )));
+    }
+    let e = aug.exp();
+    if e.iter().any(|v| !v.is_finite()) {
+        return Err(PlantError::Numerical(format!("the discretisation over {dt_s} s overflows")));
+    }
+    Ok((e.view((0, 0), (n, n)).into_owned(), e.view((0, n), (n, m)).into_owned()))
+}
+
+/// Least-squares solution of a x ≈ b by SVD (singular values at or below `eps` dropped), with
+/// the SVD's iterations bounded: non-finite entries, or an SVD that does not converge (entries
+/// so large that its intermediates overflow), are errors instead of an endless loop.
+pub fn lstsq(a: &DMatrix<f64>, b: &nalgebra::DVector<f64>, eps: f64) -> Result<nalgebra::DVector<f64>> {
+    if a.is_empty() || a.nrows() != b.len() {
+        return Err(PlantError::Numerical(format!("a least-squares problem of {}×{} with {} right-hand sides", a.nrows(), a.ncols(), b.len())));
+    }
+    if a.iter().chain(b.iter()).any(|v| !v.is_finite()) {
+        return Err(PlantError::Numerical("a least-squares problem has non-finite entries".into()));
+    }
+    let svd = nalgebra::SVD::try_new(a.clone(), true, true, f64::EPSILON, 10_000)
+        .ok_or_else(|| PlantError::Numerical("the SVD of a least-squares problem did not converge".into()))?;
+    let x = svd.solve(b, eps).map_err(|e| PlantError::Numerical(e.to_string()))?;
+    if x.iter().any(|v| !v.is_finite()) {
+        return Err(PlantError::Numerical("a least-squares solution is not finite".into()));
+    }
+    Ok(x)
 }
 
 impl StateSpace {
@@ -57,19 +108,8 @@ impl StateSpace {
     /// of the augmented matrix [[A, B], [0, 0]]·dt holds Ad and Bd; exact for inputs held
     /// constant over each step.
     pub fn c2d(&self, dt_s: f64) -> Result<DiscreteStateSpace> {
-        crate::error::positive(|| "dt_s", dt_s, "s")?;
-        let (n, m) = (self.a.nrows(), self.b.ncols());
-        let mut aug = DMatrix::zeros(n + m, n + m);
-        aug.view_mut((0, 0), (n, n)).copy_from(&(&self.a * dt_s));
-        aug.view_mut((0, n), (n, m)).copy_from(&(&self.b * dt_s));
-        let e = aug.exp();
-        Ok(DiscreteStateSpace {
-            ad: e.view((0, 0), (n, n)).into_owned(),
-            bd: e.view((0, n), (n, m)).into_owned(),
-            c: self.c.clone(),
-            d: self.d.clone(),
-            dt_s,
-        })
+        let (ad, bd) = zoh(&self.a, &self.b, dt_s)?;
+        Ok(DiscreteStateSpace { ad, bd, c: self.c.clone(), d: self.d.clone(), dt_s })
     }
 
     /// Response to inputs sampled every `dt_s` and held between samples (python-control
