@@ -33,7 +33,7 @@ fn get(i: &mut Instance, name: &str) -> f64 {
 }
 
 fn start_cs(i: &mut Instance) {
-    i.enter_initialization_mode(0.0).unwrap();
+    i.enter_initialization_mode(0.0, None).unwrap();
     i.exit_initialization_mode().unwrap();
 }
 
@@ -95,7 +95,7 @@ fn me_instance(twist: f64) -> Instance {
     });
     let mut i = instance(&p, Interface::ModelExchange);
     assert_eq!(i.nx(), 13);
-    i.enter_initialization_mode(0.0).unwrap();
+    i.enter_initialization_mode(0.0, None).unwrap();
     i.exit_initialization_mode().unwrap();
     i.enter_continuous_time_mode().unwrap();
     let mut x: Vec<f64> = (0..13).map(|k| 0.01 * ((k * 7 % 5) as f64 - 2.0)).collect();
