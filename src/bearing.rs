@@ -2,7 +2,6 @@
 
 use serde::Serialize;
 use std::fmt::Write as _;
-use std::path::Path;
 
 use ident::bearing::{fit, Averaging};
 use ident::{Coupling, Impedances, IvfmSettings, Method, Structure, R2};
@@ -225,65 +224,61 @@ impl BearingReport {
 /// Measured and fitted real and imaginary parts of the four impedances against frequency
 /// (slides 42–44), as SVG.
 pub fn plot(
-    path: &Path,
+    target: &crate::files::Target,
     imp: &Impedances,
     support: &Support,
     element: &Coefficients,
     title: &str,
 ) -> anyhow::Result<()> {
+    use crate::plot::err;
     use plotters::prelude::*;
-    if path.extension().and_then(|e| e.to_str()).map(|e| e.eq_ignore_ascii_case("svg")) != Some(true) {
-        anyhow::bail!("{}: the plot is written as SVG; give a file name ending in .svg", path.display());
-    }
     let f = &imp.frequencies_hz;
     let (f0, f1) = (f[0], f[f.len() - 1]);
     let fine: Vec<f64> = (0..=400).map(|i| f0 + (f1 - f0) * i as f64 / 400.0).collect();
     let model = |w: f64| element.impedance(w) + support.coefficients().impedance(w);
-    let root = SVGBackend::new(path, (1400, 1500)).into_drawing_area();
-    root.fill(&WHITE).map_err(|e| anyhow::anyhow!("{e:?}"))?;
-    let root = root.titled(title, ("sans-serif", 22)).map_err(|e| anyhow::anyhow!("{e:?}"))?;
-    let panels = root.split_evenly((4, 2));
-    let terms = [((0, 0), "Hxx"), ((0, 1), "Hxy"), ((1, 0), "Hyx"), ((1, 1), "Hyy")];
-    for (idx, area) in panels.iter().enumerate() {
-        let ((i, j), name) = terms[idx / 2];
-        let re = idx % 2 == 0;
-        let part = |c: nalgebra::Complex<f64>| if re { c.re } else { c.im };
-        let meas: Vec<(f64, f64)> = f.iter().zip(&imp.h).map(|(&x, h)| (x, part(h[(i, j)]))).collect();
-        let fit: Vec<(f64, f64)> =
-            fine.iter().map(|&x| (x, part(model(2.0 * std::f64::consts::PI * x)[(i, j)]))).collect();
-        let (lo, hi) =
-            meas.iter().chain(&fit).fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), p| (a.min(p.1), b.max(p.1)));
-        let pad = 0.05 * (hi - lo).max(1.0);
-        let mut chart = ChartBuilder::on(area)
-            .caption(format!("{} {name} [N/m]", if re { "Re" } else { "Im" }), ("sans-serif", 16))
-            .margin(10)
-            .x_label_area_size(35)
-            .y_label_area_size(80)
-            .build_cartesian_2d(f0..f1, (lo - pad)..(hi + pad))
-            .map_err(|e| anyhow::anyhow!("{e:?}"))?;
-        chart
-            .configure_mesh()
-            .x_desc("frequency [Hz]")
-            .y_label_formatter(&|v| format!("{v:.2e}"))
-            .draw()
-            .map_err(|e| anyhow::anyhow!("{e:?}"))?;
-        chart
-            .draw_series(meas.iter().map(|&p| Circle::new(p, 3, BLUE.filled())))
-            .map_err(|e| anyhow::anyhow!("{e:?}"))?
-            .label("measured")
-            .legend(|(x, y)| Circle::new((x, y), 3, BLUE.filled()));
-        chart
-            .draw_series(LineSeries::new(fit, RED.stroke_width(2)))
-            .map_err(|e| anyhow::anyhow!("{e:?}"))?
-            .label("identified model")
-            .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], RED.stroke_width(2)));
-        chart
-            .configure_series_labels()
-            .border_style(BLACK)
-            .background_style(WHITE.mix(0.8))
-            .draw()
-            .map_err(|e| anyhow::anyhow!("{e:?}"))?;
+    let mut svg = String::new();
+    {
+        let root = SVGBackend::with_string(&mut svg, (1400, 1500)).into_drawing_area();
+        root.fill(&WHITE).map_err(err)?;
+        let root = root.titled(title, ("sans-serif", 22)).map_err(err)?;
+        let panels = root.split_evenly((4, 2));
+        let terms = [((0, 0), "Hxx"), ((0, 1), "Hxy"), ((1, 0), "Hyx"), ((1, 1), "Hyy")];
+        for (idx, area) in panels.iter().enumerate() {
+            let ((i, j), name) = terms[idx / 2];
+            let re = idx % 2 == 0;
+            let part = |c: nalgebra::Complex<f64>| if re { c.re } else { c.im };
+            let meas: Vec<(f64, f64)> = f.iter().zip(&imp.h).map(|(&x, h)| (x, part(h[(i, j)]))).collect();
+            let fit: Vec<(f64, f64)> =
+                fine.iter().map(|&x| (x, part(model(2.0 * std::f64::consts::PI * x)[(i, j)]))).collect();
+            let (lo, hi) =
+                meas.iter().chain(&fit).fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), p| (a.min(p.1), b.max(p.1)));
+            let pad = 0.05 * (hi - lo).max(1.0);
+            let mut chart = ChartBuilder::on(area)
+                .caption(format!("{} {name} [N/m]", if re { "Re" } else { "Im" }), ("sans-serif", 16))
+                .margin(10)
+                .x_label_area_size(35)
+                .y_label_area_size(80)
+                .build_cartesian_2d(f0..f1, (lo - pad)..(hi + pad))
+                .map_err(err)?;
+            chart
+                .configure_mesh()
+                .x_desc("frequency [Hz]")
+                .y_label_formatter(&|v| format!("{v:.2e}"))
+                .draw()
+                .map_err(err)?;
+            chart
+                .draw_series(meas.iter().map(|&p| Circle::new(p, 3, BLUE.filled())))
+                .map_err(err)?
+                .label("measured")
+                .legend(|(x, y)| Circle::new((x, y), 3, BLUE.filled()));
+            chart
+                .draw_series(LineSeries::new(fit, RED.stroke_width(2)))
+                .map_err(err)?
+                .label("identified model")
+                .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], RED.stroke_width(2)));
+            chart.configure_series_labels().border_style(BLACK).background_style(WHITE.mix(0.8)).draw().map_err(err)?;
+        }
+        root.present().map_err(err)?;
     }
-    root.present().map_err(|e| anyhow::anyhow!("{}: {e:?}", path.display()))?;
-    Ok(())
+    crate::files::write(target, svg.as_bytes())
 }

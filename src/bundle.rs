@@ -25,6 +25,22 @@ fn error(file: &Path, line: Option<usize>, message: impl Into<String>) -> Bundle
     BundleError { file: file.to_path_buf(), line, message: message.into() }
 }
 
+/// The files a bundle reads: the TOML itself and the data files it names (as far as they can
+/// be read from it), so that no output is written over them.
+pub fn input_files(file: &Path) -> Vec<PathBuf> {
+    #[derive(Deserialize)]
+    struct Names {
+        data: Option<String>,
+        tests: Option<Vec<String>>,
+    }
+    let mut out = vec![file.to_path_buf()];
+    let dir = file.parent().unwrap_or(Path::new("."));
+    if let Some(names) = crate::files::read_text(file).ok().and_then(|t| toml::from_str::<Names>(&t).ok()) {
+        out.extend(names.data.into_iter().chain(names.tests.unwrap_or_default()).map(|n| dir.join(n)));
+    }
+    out
+}
+
 /// A `torsional_sweep` bundle, loaded.
 #[derive(Debug, Clone)]
 pub struct TorsionalBundle {
@@ -42,20 +58,99 @@ pub struct TorsionalBundle {
 struct Header {
     kind: String,
     data: Option<String>,
+    variant: Option<toml::Value>,
+}
+
+/// Reads a bundle's TOML (a regular file of sane size).
+fn read_toml(file: &Path) -> Result<String, BundleError> {
+    crate::files::read_text(file)
+        .map_err(|e| error(file, None, format!("{e:#}").replace(&format!("{}: ", file.display()), "")))
+}
+
+/// The data file a bundle names in `key`, relative to the bundle.
+fn data_path(file: &Path, key: &str, name: &str) -> Result<PathBuf, BundleError> {
+    if name.trim().is_empty() {
+        return Err(error(
+            file,
+            None,
+            format!("`{key}` is empty: expected the name of the CSV file, relative to this file"),
+        ));
+    }
+    Ok(file.parent().unwrap_or(Path::new(".")).join(name))
+}
+
+/// Every sample of every column a measurement (no overflowed values or glitches orders of
+/// magnitude off the rest): the error names the line and the column.
+fn check_glitches(path: &Path, names: &[&str], cols: &[Vec<f64>]) -> Result<(), BundleError> {
+    for (name, col) in names.iter().zip(cols).skip(1) {
+        if let Some((i, why)) = ident::signal::implausible_sample(col) {
+            return Err(error(path, Some(i + 2), format!("`{name}` = {why}")));
+        }
+    }
+    Ok(())
+}
+
+/// A column that must vary for the analysis (an excitation, a response).
+fn check_varies(path: &Path, name: &str, col: &[f64], why: &str) -> Result<(), BundleError> {
+    match ident::signal::median_and_spread(col) {
+        Some((_, spread)) if spread > 0.0 => Ok(()),
+        _ => Err(error(
+            path,
+            None,
+            format!("`{name}` does not vary (constant {}): {why}", col.first().copied().unwrap_or(0.0)),
+        )),
+    }
+}
+
+/// The sampling against what the analysis needs; names a time column written in milliseconds.
+fn check_sampling(path: &Path, t: &[f64], dt_s: f64, needs: &ident::signal::SamplingNeeds) -> Result<(), BundleError> {
+    if let Some(problem) = needs.problem(dt_s, t.len()) {
+        let integral = t.iter().all(|v| v.fract() == 0.0);
+        let hint = if integral && dt_s >= 0.5 {
+            format!("`time_s` looks like milliseconds (step {dt_s} s): time must be in seconds; ")
+        } else {
+            String::new()
+        };
+        return Err(error(path, None, format!("{hint}{problem}")));
+    }
+    Ok(())
 }
 
 /// Reads a `torsional_sweep` bundle and its CSV.
 pub fn load_torsional(file: &Path) -> Result<TorsionalBundle, BundleError> {
-    let text = std::fs::read_to_string(file).map_err(|e| error(file, None, format!("cannot read: {e}")))?;
+    let text = read_toml(file)?;
     let header: Header = toml::from_str(&text).map_err(|e| error(file, None, e.to_string().trim_end().to_string()))?;
     if header.kind != "torsional_sweep" {
         return Err(error(file, None, format!("`kind` = \"{}\": expected \"torsional_sweep\"", header.kind)));
     }
     let data = header.data.ok_or_else(|| error(file, None, "missing key `data`: the CSV file of the sweep"))?;
+    if header.variant.is_none() {
+        return Err(error(file, None, "missing key `variant`: the rig variant of the run (V1, V2, V3 or V4)"));
+    }
     // the TOML is a rig description too: [model] and variant, validated with named keys
     let rig = parse_rig(&text, file).map_err(|e| error(file, None, e.message))?;
-    let csv_path = file.parent().unwrap_or(Path::new(".")).join(&data);
-    let sweep = read_sweep_csv(&csv_path)?;
+    let csv_path = data_path(file, "data", &data)?;
+    // the declared model's modes must be resolved: 8 samples per period of its highest
+    // natural frequency, a record of 10 periods of its lowest
+    let f = rig
+        .model
+        .open_differential(rig.variant)
+        .and_then(|m| m.modes())
+        .map(|m| m.frequencies_hz.into_iter().filter(|f| *f > 0.01).collect::<Vec<f64>>())
+        .map_err(|e| error(file, None, e.to_string()))?;
+    let (lo, hi) = (f.iter().copied().fold(f64::INFINITY, f64::min), f.iter().copied().fold(0.0, f64::max));
+    let needs = (hi > 0.0).then_some(ident::signal::SamplingNeeds {
+        max_frequency_hz: hi,
+        samples_per_period: 8.0,
+        min_duration_s: 10.0 / lo,
+    });
+    let sweep = read_sweep_csv(&csv_path, needs.as_ref())?;
+    check_varies(
+        &csv_path,
+        "torque_drive_Nm",
+        &sweep.torque_nm,
+        "nothing excites the rig, so nothing can be identified",
+    )?;
     Ok(TorsionalBundle { file: file.to_path_buf(), variant: rig.variant, model: rig.model, sweep })
 }
 
@@ -64,6 +159,8 @@ pub const SWEEP_COLUMNS: [&str; 4] = ["time_s", "torque_drive_Nm", "speed_m2_rad
 
 /// Reads named columns of a numeric CSV with a header line; returns them in the order asked.
 pub fn read_columns(path: &Path, names: &[&str]) -> Result<Vec<Vec<f64>>, BundleError> {
+    crate::files::check_input(path, crate::files::MAX_DATA_BYTES)
+        .map_err(|e| error(path, None, format!("{e:#}").replace(&format!("{}: ", path.display()), "")))?;
     let mut rdr = csv::ReaderBuilder::new()
         .trim(csv::Trim::All)
         .from_path(path)
@@ -73,7 +170,13 @@ pub fn read_columns(path: &Path, names: &[&str]) -> Result<Vec<Vec<f64>>, Bundle
         .iter()
         .map(|n| {
             headers.iter().position(|h| h == *n).ok_or_else(|| {
-                error(path, Some(1), format!("missing column `{n}`: expected the columns {}", names.join(", ")))
+                let line = headers.iter().collect::<Vec<_>>().join(",");
+                let hint = match [';', '\t'].into_iter().find(|d| line.contains(*d)) {
+                    Some(';') => " (the header is separated by semicolons: the file must be comma-separated)",
+                    Some(_) => " (the header is separated by tabs: the file must be comma-separated)",
+                    None => "",
+                };
+                error(path, Some(1), format!("missing column `{n}`: expected the columns {}{hint}", names.join(", ")))
             })
         })
         .collect::<Result<_, _>>()?;
@@ -130,9 +233,13 @@ pub fn uniform_sample_time(path: &Path, t: &[f64]) -> Result<f64, BundleError> {
     Ok((t[t.len() - 1] - t[0]) / (t.len() - 1) as f64)
 }
 
-fn read_sweep_csv(path: &Path) -> Result<Sweep, BundleError> {
+fn read_sweep_csv(path: &Path, needs: Option<&ident::signal::SamplingNeeds>) -> Result<Sweep, BundleError> {
     let mut cols = read_columns(path, &SWEEP_COLUMNS)?;
     let dt_s = uniform_sample_time(path, &cols[0])?;
+    if let Some(needs) = needs {
+        check_sampling(path, &cols[0], dt_s, needs)?;
+    }
+    check_glitches(path, &SWEEP_COLUMNS, &cols)?;
     let speed_m3_radps = cols.pop().expect("4 columns");
     let speed_m2_radps = cols.pop().expect("4 columns");
     let torque_nm = cols.pop().expect("4 columns");
@@ -179,7 +286,7 @@ pub const SHAKE_COLUMNS: [&str; 5] = ["time_s", "force_x_N", "force_y_N", "disp_
 
 /// Reads a `bearing_shake` bundle and its two CSVs.
 pub fn load_bearing(file: &Path) -> Result<BearingBundle, BundleError> {
-    let text = std::fs::read_to_string(file).map_err(|e| error(file, None, format!("cannot read: {e}")))?;
+    let text = read_toml(file)?;
     let header: Header = toml::from_str(&text).map_err(|e| error(file, None, e.to_string().trim_end().to_string()))?;
     if header.kind != "bearing_shake" {
         return Err(error(file, None, format!("`kind` = \"{}\": expected \"bearing_shake\"", header.kind)));
@@ -202,11 +309,38 @@ pub fn load_bearing(file: &Path) -> Result<BearingBundle, BundleError> {
         ));
     }
     raw.support.validate("support").map_err(|e| error(file, None, e.to_string()))?;
-    let dir = file.parent().unwrap_or(Path::new("."));
-    let read = |name: &str| -> Result<ident::ShakeTest, BundleError> {
-        let path = dir.join(name);
+    let paths = [data_path(file, "tests[0]", &raw.tests[0])?, data_path(file, "tests[1]", &raw.tests[1])?];
+    if let (Ok(a), Ok(b)) = (std::fs::canonicalize(&paths[0]), std::fs::canonicalize(&paths[1])) {
+        if a == b {
+            return Err(error(
+                file,
+                None,
+                format!(
+                    "`tests` names {} twice: expected two different runs (x then y excitation)",
+                    paths[0].display()
+                ),
+            ));
+        }
+    }
+    // the band must be resolved: 2.5 samples per period at f_max (Nyquist is 2), and five
+    // periods of its lower end (a tenth of f_max at least)
+    let needs = ident::signal::SamplingNeeds {
+        max_frequency_hz: raw.f_max_hz,
+        samples_per_period: 2.5,
+        min_duration_s: 5.0 / raw.f_min_hz.max(0.1 * raw.f_max_hz),
+    };
+    let read = |path: &Path| -> Result<ident::ShakeTest, BundleError> {
+        let path = path.to_path_buf();
         let mut cols = read_columns(&path, &SHAKE_COLUMNS)?;
         let dt_s = uniform_sample_time(&path, &cols[0])?;
+        check_glitches(&path, &SHAKE_COLUMNS, &cols)?;
+        check_sampling(&path, &cols[0], dt_s, &needs).map_err(|mut e| {
+            e.message = format!("{} (f_min_hz = {}, f_max_hz = {})", e.message, raw.f_min_hz, raw.f_max_hz);
+            e
+        })?;
+        for (name, col) in SHAKE_COLUMNS.iter().zip(&cols).skip(1) {
+            check_varies(&path, name, col, "each test must excite and move the element")?;
+        }
         let disp_y_m = cols.pop().expect("5 columns");
         let disp_x_m = cols.pop().expect("5 columns");
         let force_y_n = cols.pop().expect("5 columns");
@@ -215,7 +349,7 @@ pub fn load_bearing(file: &Path) -> Result<BearingBundle, BundleError> {
     };
     Ok(BearingBundle {
         file: file.to_path_buf(),
-        tests: [read(&raw.tests[0])?, read(&raw.tests[1])?],
+        tests: [read(&paths[0])?, read(&paths[1])?],
         band_hz: (raw.f_min_hz, raw.f_max_hz),
         support: raw.support,
         structure: raw.model.structure,

@@ -2,8 +2,6 @@
 //! controller's timing and allocations, its first input against the exact optimum, and the
 //! QPs for other solvers.
 
-use std::path::Path;
-
 use mpc::closed_loop::{
     compare, median_p99, step_figures, Comparison, LinearPlant, Plant, Probes, RigSignals, Scenario, ScenarioKind,
     StepFigures,
@@ -310,7 +308,12 @@ pub fn report(
 }
 
 /// SVG: side-shaft torque, load speed and the MPC's inputs over time.
-pub fn plot(path: &Path, params: &rigtwin_fmu::FmuParams, run: &Comparison, kind: ScenarioKind) -> anyhow::Result<()> {
+pub fn plot(
+    target: &crate::files::Target,
+    params: &rigtwin_fmu::FmuParams,
+    run: &Comparison,
+    kind: ScenarioKind,
+) -> anyhow::Result<()> {
     use crate::plot::{lines, Panel};
     let ss = plant_of(params)?;
     let sig = RigSignals::of(&ss)?;
@@ -353,5 +356,5 @@ pub fn plot(path: &Path, params: &rigtwin_fmu::FmuParams, run: &Comparison, kind
             ],
         },
     ];
-    lines(path, &format!("rigtwin mpc: {kind:?} scenario, MPC vs PI speed control"), &panels)
+    lines(target, &format!("rigtwin mpc: {kind:?} scenario, MPC vs PI speed control"), &panels)
 }

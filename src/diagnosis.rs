@@ -49,7 +49,7 @@ fn kind_of(file: &Path) -> anyhow::Result<String> {
     struct K {
         kind: Option<String>,
     }
-    let text = std::fs::read_to_string(file).map_err(|e| anyhow::anyhow!("{}: cannot read: {e}", file.display()))?;
+    let text = crate::files::read_text(file)?;
     let k: K =
         toml::from_str(&text).map_err(|e| anyhow::anyhow!("{}: {}", file.display(), e.to_string().trim_end()))?;
     k.kind.ok_or_else(|| anyhow::anyhow!("{}: missing key `kind` (torsional_sweep or bearing_shake)", file.display()))

@@ -52,17 +52,9 @@ pub fn params_of_rig(rig: &Rig) -> anyhow::Result<FmuParams> {
 /// Writes both modelDescription.xml files into `dir/fmi3/` and `dir/fmi2/`.
 pub fn write_descriptions(p: &FmuParams, dir: &Path) -> anyhow::Result<()> {
     for (version, sub) in [(Version::Fmi3, "fmi3"), (Version::Fmi2, "fmi2")] {
-        let d = dir.join(sub);
-        std::fs::create_dir_all(&d)?;
-        atomic_write(&d.join("modelDescription.xml"), describe(p, version).as_bytes())?;
+        let d = crate::files::output_dir(&dir.join(sub), "--descriptions")?;
+        crate::files::write_new(&d.join("modelDescription.xml"), "--descriptions", describe(p, version).as_bytes())?;
     }
-    Ok(())
-}
-
-pub fn atomic_write(path: &Path, bytes: &[u8]) -> anyhow::Result<()> {
-    let tmp = path.with_extension("partial");
-    std::fs::write(&tmp, bytes).map_err(|e| anyhow::anyhow!("{}: {e}", tmp.display()))?;
-    std::fs::rename(&tmp, path).map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
     Ok(())
 }
 
@@ -72,7 +64,7 @@ pub fn package(p: &FmuParams, lib: &[u8], out: &Path) -> anyhow::Result<[PathBuf
     rigtwin_fmu::model::Model::new(p)
         .map_err(|e| anyhow::anyhow!("the parameter set does not describe a model: {e}"))?;
     let (p3, p2) = platform_folders()?;
-    std::fs::create_dir_all(out).map_err(|e| anyhow::anyhow!("{}: {e}", out.display()))?;
+    let dir = crate::files::output_dir(out, "--out")?;
     let params_json = serde_json::to_vec_pretty(p)?;
     let mut written = Vec::new();
     for (version, platform, name) in [(Version::Fmi3, p3, "rigtwin-fmi3.fmu"), (Version::Fmi2, p2, "rigtwin-fmi2.fmu")]
@@ -89,9 +81,8 @@ pub fn package(p: &FmuParams, lib: &[u8], out: &Path) -> anyhow::Result<[PathBuf
             zip.write_all(&params_json)?;
             zip.finish()?;
         }
-        let path = out.join(name);
-        atomic_write(&path, buf.get_ref())?;
-        written.push(path);
+        crate::files::write_new(&dir.join(name), "--out", buf.get_ref())?;
+        written.push(out.join(name));
     }
     Ok([written.remove(0), written.remove(0)])
 }

@@ -4,6 +4,7 @@ pub mod bearing;
 pub mod bundle;
 pub mod control;
 pub mod diagnosis;
+pub mod files;
 pub mod fmu_package;
 pub mod identification;
 pub mod plot;

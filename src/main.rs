@@ -337,6 +337,9 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             }
         }
         Command::Bearing { bundle, structure, coupling, method, plot, json } => {
+            let inputs = rigtwin::bundle::input_files(&bundle);
+            let inputs: Vec<&std::path::Path> = inputs.iter().map(|p| p.as_path()).collect();
+            let plot = plot.map(|p| rigtwin::plot::svg_target(&p, "--plot", &inputs)).transpose()?;
             let b = rigtwin::bundle::load_bearing(&bundle)?;
             let structure = structure.map(|s| match s {
                 StructureArg::Kc => ident::Structure::KC,
@@ -392,6 +395,8 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                 ScenarioArg::Sweep => mpc::closed_loop::ScenarioKind::Sweep,
             };
             let mut qps = Vec::new();
+            let plot = plot.map(|f| rigtwin::plot::svg_target(&f, "--plot", &[])).transpose()?;
+            let export_qp = export_qp.map(|f| rigtwin::files::output(&f, "--export-qp", &[])).transpose()?;
             let (rep, run) = rigtwin::control::report(
                 &p,
                 &settings,
@@ -401,7 +406,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             )?;
             if let Some(f) = &export_qp {
                 let text = serde_json::to_string(&serde_json::json!({ "qps": qps }))?;
-                std::fs::write(f, text).map_err(|e| anyhow::anyhow!("{}: {e}", f.display()))?;
+                rigtwin::files::write(f, text.as_bytes())?;
             }
             if let Some(f) = &plot {
                 rigtwin::control::plot(f, &p, &run, kind)?;
@@ -413,6 +418,12 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             }
         }
         Command::Diagnose { bundle, json, plot, write_model } => {
+            // every output is checked before the diagnosis starts, none may be an input
+            let inputs = rigtwin::bundle::input_files(&bundle);
+            let inputs: Vec<&std::path::Path> = inputs.iter().map(|p| p.as_path()).collect();
+            let json = json.map(|f| rigtwin::files::output(&f, "--json", &inputs)).transpose()?;
+            let write_model = write_model.map(|f| rigtwin::files::output(&f, "--write-model", &inputs)).transpose()?;
+            let plot = plot.map(|f| rigtwin::plot::svg_target(&f, "--plot", &inputs)).transpose()?;
             let start = std::time::Instant::now();
             let show = std::io::IsTerminal::is_terminal(&std::io::stderr());
             let progress = |name: &str| {
@@ -423,10 +434,10 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             let d = rigtwin::diagnosis::diagnose(&bundle, &progress)?;
             if let Some(f) = &json {
                 let text = serde_json::to_string_pretty(&d.report)?;
-                rigtwin::fmu_package::atomic_write(f, text.as_bytes())?;
+                rigtwin::files::write(f, text.as_bytes())?;
             }
             if let Some(f) = &write_model {
-                rigtwin::fmu_package::atomic_write(f, d.model_toml.as_bytes())?;
+                rigtwin::files::write(f, d.model_toml.as_bytes())?;
             }
             if let Some(f) = &plot {
                 rigtwin::plot::lines(f, &format!("rigtwin diagnose {}", bundle.display()), &d.panels)?;

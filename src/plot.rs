@@ -3,6 +3,8 @@
 
 use std::path::Path;
 
+use crate::files::{self, Target};
+
 /// One panel of a plot.
 pub struct Panel {
     /// Caption.
@@ -17,48 +19,58 @@ pub struct Panel {
     pub series: Vec<(String, Vec<(f64, f64)>)>,
 }
 
-fn err<E: std::fmt::Debug>(e: E) -> anyhow::Error {
-    anyhow::anyhow!("{e:?}")
+pub(crate) fn err<E: std::fmt::Display>(e: E) -> anyhow::Error {
+    anyhow::anyhow!("drawing the plot failed: {e}")
 }
 
-/// Writes `panels` into the SVG file `path` under `title`.
-pub fn lines(path: &Path, title: &str, panels: &[Panel]) -> anyhow::Result<()> {
+/// Checks a `--plot` path before the computation: an SVG file name, writable, not an input.
+pub fn svg_target(path: &Path, option: &str, inputs: &[&Path]) -> anyhow::Result<Target> {
+    if path.extension().and_then(|e| e.to_str()).map(|e| e.eq_ignore_ascii_case("svg")) != Some(true)
+        && !path.starts_with("/dev")
+    {
+        anyhow::bail!("{option} {}: the plot is written as SVG; give a file name ending in .svg", path.display());
+    }
+    files::output(path, option, inputs)
+}
+
+/// Writes `panels` as SVG to `target` under `title` (drawn in memory, then written safely).
+pub fn lines(target: &Target, title: &str, panels: &[Panel]) -> anyhow::Result<()> {
     use plotters::prelude::*;
-    if path.extension().and_then(|e| e.to_str()).map(|e| e.eq_ignore_ascii_case("svg")) != Some(true) {
-        anyhow::bail!("{}: the plot is written as SVG; give a file name ending in .svg", path.display());
-    }
     let colours = [BLUE, RED, RGBColor(0, 140, 0), RGBColor(200, 120, 0), MAGENTA, BLACK];
-    let root = SVGBackend::new(path, (1200, 360 * panels.len().max(1) as u32)).into_drawing_area();
-    root.fill(&WHITE).map_err(err)?;
-    let root = root.titled(title, ("sans-serif", 22)).map_err(err)?;
-    let areas = root.split_evenly((panels.len().max(1), 1));
-    for (panel, area) in panels.iter().zip(areas.iter()) {
-        let pts = || {
-            panel
-                .series
-                .iter()
-                .flat_map(|(_, p)| p.iter())
-                .filter(|p| p.0.is_finite() && p.1.is_finite() && (!panel.log_y || p.1 > 0.0))
-        };
-        let (x0, x1) = pts().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), p| (a.min(p.0), b.max(p.0)));
-        let (y0, y1) = pts().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), p| (a.min(p.1), b.max(p.1)));
-        if !x0.is_finite() || !y0.is_finite() {
-            continue;
+    let mut svg = String::new();
+    {
+        let root = SVGBackend::with_string(&mut svg, (1200, 360 * panels.len().max(1) as u32)).into_drawing_area();
+        root.fill(&WHITE).map_err(err)?;
+        let root = root.titled(title, ("sans-serif", 22)).map_err(err)?;
+        let areas = root.split_evenly((panels.len().max(1), 1));
+        for (panel, area) in panels.iter().zip(areas.iter()) {
+            let pts = || {
+                panel
+                    .series
+                    .iter()
+                    .flat_map(|(_, p)| p.iter())
+                    .filter(|p| p.0.is_finite() && p.1.is_finite() && (!panel.log_y || p.1 > 0.0))
+            };
+            let (x0, x1) = pts().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), p| (a.min(p.0), b.max(p.0)));
+            let (y0, y1) = pts().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), p| (a.min(p.1), b.max(p.1)));
+            if !x0.is_finite() || !y0.is_finite() {
+                continue;
+            }
+            let x1 = if x1 > x0 { x1 } else { x0 + 1.0 };
+            let mut builder = ChartBuilder::on(area);
+            builder.caption(&panel.title, ("sans-serif", 16)).margin(10).x_label_area_size(35).y_label_area_size(80);
+            if panel.log_y {
+                let mut chart = builder.build_cartesian_2d(x0..x1, (y0..y1 * 1.5).log_scale()).map_err(err)?;
+                draw(&mut chart, panel, &colours)?;
+            } else {
+                let pad = 0.05 * (y1 - y0).max(1e-9);
+                let mut chart = builder.build_cartesian_2d(x0..x1, (y0 - pad)..(y1 + pad)).map_err(err)?;
+                draw(&mut chart, panel, &colours)?;
+            }
         }
-        let x1 = if x1 > x0 { x1 } else { x0 + 1.0 };
-        let mut builder = ChartBuilder::on(area);
-        builder.caption(&panel.title, ("sans-serif", 16)).margin(10).x_label_area_size(35).y_label_area_size(80);
-        if panel.log_y {
-            let mut chart = builder.build_cartesian_2d(x0..x1, (y0..y1 * 1.5).log_scale()).map_err(err)?;
-            draw(&mut chart, panel, &colours)?;
-        } else {
-            let pad = 0.05 * (y1 - y0).max(1e-9);
-            let mut chart = builder.build_cartesian_2d(x0..x1, (y0 - pad)..(y1 + pad)).map_err(err)?;
-            draw(&mut chart, panel, &colours)?;
-        }
+        root.present().map_err(err)?;
     }
-    root.present().map_err(|e| anyhow::anyhow!("{}: {e:?}", path.display()))?;
-    Ok(())
+    files::write(target, svg.as_bytes())
 }
 
 fn draw<'a, 'b: 'a, Y>(

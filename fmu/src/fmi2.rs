@@ -165,7 +165,9 @@ pub unsafe extern "C" fn fmi2SetupExperiment(
         if stop_time_defined != 0 && !(stop_time >= start_time) {
             return Err(Failure {
                 status: Status::Error,
-                message: format!("fmi2SetupExperiment: stop time {stop_time} s is before the start time {start_time} s"),
+                message: format!(
+                    "fmi2SetupExperiment: stop time {stop_time} s is before the start time {start_time} s"
+                ),
             });
         }
         comp.start_time = start_time;

@@ -244,11 +244,20 @@ impl Model {
     /// `plant::statespace::ZOH_MAX_NORM` of the model's time scales; backlash: [`MAX_PIECES`]
     /// RK4 sub-steps) is refused, and so is a step whose state comes out non-finite; `z` is
     /// then left as it was.
-    pub fn step(&mut self, z: &mut DVector<f64>, u: &DVector<f64>, t: f64, h: f64, delay: &DelayLine) -> Result<(), String> {
+    pub fn step(
+        &mut self,
+        z: &mut DVector<f64>,
+        u: &DVector<f64>,
+        t: f64,
+        h: f64,
+        delay: &DelayLine,
+    ) -> Result<(), String> {
         let sub_steps = if self.backlash() { h / BACKLASH_STEP_S } else { h / self.max_piece_s };
         if !(sub_steps <= MAX_PIECES as f64) {
             let longest = MAX_PIECES as f64 * if self.backlash() { BACKLASH_STEP_S } else { self.max_piece_s };
-            return Err(format!("a step of {h} s is longer than this model integrates exactly (at most {longest:.4e} s)"));
+            return Err(format!(
+                "a step of {h} s is longer than this model integrates exactly (at most {longest:.4e} s)"
+            ));
         }
         let mut pieces = std::mem::take(&mut self.pieces);
         pieces.clear();

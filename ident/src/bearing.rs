@@ -78,6 +78,12 @@ pub struct Impedances {
 /// tenth of the information of the stronger.
 pub const CONDITION_WARNING: f64 = 10.0;
 
+/// Above this condition number of [Z1 Z2] a line carries no usable information (the weaker
+/// direction is a millionth of the stronger: below any sensor's resolution) and is left out.
+/// Two tests that are one test twice, or a test that did not move, give infinity on every line;
+/// when more than half of the lines are left out the identification refuses the data.
+pub const CONDITION_UNUSABLE: f64 = 1e6;
+
 fn cond2(z: &Matrix2<Complex64>) -> f64 {
     // singular values of a 2×2 complex matrix from the eigenvalues of ZᴴZ
     let h = z.adjoint() * z;
@@ -254,23 +260,33 @@ impl Impedances {
         let df = 1.0 / (seg_len as f64 * dt);
         let mut out = Impedances { frequencies_hz: vec![], h: vec![], g: vec![], condition: vec![], averaging };
         for l in 0..m {
-            let Some(sffi) = sff[l].try_inverse() else { continue };
-            let g = szf[l] * sffi;
-            let Some(h) = g.try_inverse() else { continue };
-            out.frequencies_hz.push(seg_bins[l] as f64 * df);
-            out.h.push(h);
-            out.g.push(g);
             // slide 20 for periodic data (the averaged [Z1 Z2]); the H1 analogue √cond(Σ Z Zᴴ)
-            out.condition.push(match periods {
+            let condition = match periods {
                 Some(_) => cond2(&zmean[l]),
                 // Σ Z Zᴴ is Hermitian: its condition is the squared one of the motions
                 None => cond2(&szz[l]).sqrt(),
-            });
+            };
+            if !(condition <= CONDITION_UNUSABLE) {
+                continue;
+            }
+            let Some(sffi) = sff[l].try_inverse() else { continue };
+            let g = szf[l] * sffi;
+            let Some(h) = g.try_inverse() else { continue };
+            if g.iter().chain(h.iter()).any(|c| !(c.re.is_finite() && c.im.is_finite())) {
+                continue;
+            }
+            out.frequencies_hz.push(seg_bins[l] as f64 * df);
+            out.h.push(h);
+            out.g.push(g);
+            out.condition.push(condition);
         }
-        if out.h.is_empty() {
-            return Err(IdentError::Data(
-                "the tests' spectra are singular on every line: are both tests excited?".into(),
-            ));
+        if 2 * out.h.len() < m.max(1) {
+            return Err(IdentError::Data(format!(
+                "only {} of {m} excited lines separate the two tests (condition number of [Z1 Z2] at most {:.0e}): \
+                 the tests are not independent — are they two different runs, each excited and moving?",
+                out.h.len(),
+                CONDITION_UNUSABLE
+            )));
         }
         Ok(out)
     }

@@ -12,6 +12,113 @@ pub fn rfft(x: &[f64]) -> Vec<Complex64> {
     buf
 }
 
+/// Cross-correlation c[lag] = Σᵢ u[i]·r[i + lag] for |lag| ≤ `max_lag` (clamped to the data's
+/// length), by FFT: O(n log n) whatever the lag range. Returns (lag, c) pairs, lag ascending.
+pub fn cross_correlation(u: &[f64], r: &[f64], max_lag: usize) -> Vec<(isize, f64)> {
+    let n = u.len().min(r.len());
+    if n == 0 {
+        return Vec::new();
+    }
+    let max_lag = max_lag.min(n - 1);
+    let len = (2 * n).next_power_of_two();
+    let mut planner = FftPlanner::new();
+    let fwd = planner.plan_fft_forward(len);
+    let spectrum = |x: &[f64]| {
+        let mut b: Vec<Complex64> = x[..n]
+            .iter()
+            .map(|&v| Complex64::new(v, 0.0))
+            .chain(std::iter::repeat(Complex64::new(0.0, 0.0)))
+            .take(len)
+            .collect();
+        fwd.process(&mut b);
+        b
+    };
+    let (us, rs) = (spectrum(u), spectrum(r));
+    let mut c: Vec<Complex64> = us.iter().zip(&rs).map(|(a, b)| a.conj() * b).collect();
+    planner.plan_fft_inverse(len).process(&mut c);
+    (-(max_lag as isize)..=max_lag as isize)
+        .map(|lag| (lag, c[lag.rem_euclid(len as isize) as usize].re / len as f64))
+        .collect()
+}
+
+/// Largest magnitude a recorded SI value may have: beyond it a sample is no measurement (an
+/// overflowed or uninitialised value), and its square would overflow the sums every analysis
+/// forms.
+pub const MAX_PLAUSIBLE_MAGNITUDE: f64 = 1e100;
+
+/// How far a sample may lie from its channel's median, in units of the channel's spread (the
+/// range of its 1st to 99th percentile): farther is a glitch, not a measurement. A pulse that
+/// occupies under 1 % of a record with 0.1 % noise stands 1e3-1e4 spreads out; a glitch of an
+/// overflowed value many orders more.
+pub const GLITCH_SPREADS: f64 = 1e6;
+
+/// The first sample of `x` that is no measurement: beyond [`MAX_PLAUSIBLE_MAGNITUDE`], or more
+/// than [`GLITCH_SPREADS`] spreads from the median. Returns its index and why.
+pub fn implausible_sample(x: &[f64]) -> Option<(usize, String)> {
+    if let Some(i) = x.iter().position(|v| !(v.abs() <= MAX_PLAUSIBLE_MAGNITUDE)) {
+        return Some((i, format!("{} is beyond any measured value (|x| > {MAX_PLAUSIBLE_MAGNITUDE:e})", x[i])));
+    }
+    let (median, spread) = median_and_spread(x)?;
+    if spread > 0.0 {
+        if let Some(i) = x.iter().position(|v| (v - median).abs() > GLITCH_SPREADS * spread) {
+            return Some((
+                i,
+                format!(
+                    "{} lies {:.1e} times the signal's 1-99 % range ({spread:.4e}) from its median {median:.6}: a glitch, not a measurement",
+                    x[i],
+                    (x[i] - median).abs() / spread
+                ),
+            ));
+        }
+    }
+    None
+}
+
+/// The median and the 1st-to-99th-percentile range of `x`; None when empty.
+pub fn median_and_spread(x: &[f64]) -> Option<(f64, f64)> {
+    if x.is_empty() {
+        return None;
+    }
+    let mut s = x.to_vec();
+    s.sort_by(|a, b| a.total_cmp(b));
+    let at = |q: f64| s[((s.len() - 1) as f64 * q).round() as usize];
+    Some((at(0.5), at(0.99) - at(0.01)))
+}
+
+/// What an analysis needs of a record's sampling.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SamplingNeeds {
+    /// Highest frequency the analysis uses, Hz.
+    pub max_frequency_hz: f64,
+    /// Samples per period it needs at that frequency (Nyquist is 2).
+    pub samples_per_period: f64,
+    /// Shortest record, s.
+    pub min_duration_s: f64,
+}
+
+impl SamplingNeeds {
+    /// Why a record of `n` samples every `dt_s` cannot serve, if it cannot.
+    pub fn problem(&self, dt_s: f64, n: usize) -> Option<String> {
+        let have = 1.0 / (dt_s * self.max_frequency_hz);
+        if !(have >= self.samples_per_period) {
+            return Some(format!(
+                "a sample every {dt_s} s gives {have:.3} samples per period at {:.2} Hz; the analysis needs {} (a step of at most {:.3e} s)",
+                self.max_frequency_hz,
+                self.samples_per_period,
+                1.0 / (self.samples_per_period * self.max_frequency_hz)
+            ));
+        }
+        let duration = dt_s * n.saturating_sub(1) as f64;
+        if !(duration >= self.min_duration_s) {
+            return Some(format!(
+                "the record lasts {duration} s; the analysis needs at least {} s",
+                self.min_duration_s
+            ));
+        }
+        None
+    }
+}
+
 /// Removes the least-squares straight line (offset and drift).
 pub fn detrend(x: &[f64]) -> Vec<f64> {
     let n = x.len() as f64;
@@ -194,5 +301,46 @@ mod tests {
         let f = zero_crossing_frequency(&x, dt);
         let at = interpolate(&f, 5.0).unwrap();
         assert_relative_eq!(at, 11.0, max_relative = 1e-3);
+    }
+
+    #[test]
+    fn cross_correlation_by_fft_is_the_direct_sum() {
+        let u: Vec<f64> = (0..200).map(|i| ((i * 37 % 101) as f64 - 50.0) / 50.0).collect();
+        let r: Vec<f64> = (0..200).map(|i| ((i * 53 % 97) as f64 - 48.0) / 48.0).collect();
+        for (lag, c) in cross_correlation(&u, &r, 30) {
+            let direct: f64 = (0..200isize)
+                .filter_map(|i| {
+                    let j = i + lag;
+                    (0..200).contains(&j).then(|| u[i as usize] * r[j as usize])
+                })
+                .sum();
+            assert!((c - direct).abs() < 1e-9, "lag {lag}: {c} vs {direct}");
+        }
+        // a lag range beyond the data is clamped to it
+        assert_eq!(cross_correlation(&u[..5], &r[..5], 1_000_000).len(), 9);
+    }
+
+    #[test]
+    fn glitches_and_overflowed_values_are_found_pulses_are_not() {
+        let mut x: Vec<f64> = (0..1000).map(|i| 40.0 + (i as f64 * 0.1).sin()).collect();
+        assert_eq!(implausible_sample(&x), None);
+        x[500] = 1e200;
+        assert_eq!(implausible_sample(&x).map(|p| p.0), Some(500));
+        x[500] = 5e6; // 2.5e6 spreads of 2 from the median
+        assert_eq!(implausible_sample(&x).map(|p| p.0), Some(500));
+        // a pulse excitation: zero with 0.1 % noise, five pulses of 10
+        let mut p: Vec<f64> = (0..1000).map(|i| 1e-3 * ((i * 7919 % 200) as f64 / 100.0 - 1.0)).collect();
+        for k in [100, 300, 500, 700, 900] {
+            p[k] = 10.0;
+        }
+        assert_eq!(implausible_sample(&p), None);
+    }
+
+    #[test]
+    fn sampling_needs_name_the_step_they_need() {
+        let needs = SamplingNeeds { max_frequency_hz: 12.5, samples_per_period: 8.0, min_duration_s: 2.0 };
+        assert_eq!(needs.problem(1e-3, 60_001), None);
+        assert!(needs.problem(1.0, 60_001).unwrap().contains("at most 1.000e-2 s"));
+        assert!(needs.problem(1e-3, 1000).unwrap().contains("lasts"));
     }
 }

@@ -62,7 +62,12 @@ pub fn zoh(a: &DMatrix<f64>, b: &DMatrix<f64>, dt_s: f64) -> Result<(DMatrix<f64
 /// so large that its intermediates overflow), are errors instead of an endless loop.
 pub fn lstsq(a: &DMatrix<f64>, b: &nalgebra::DVector<f64>, eps: f64) -> Result<nalgebra::DVector<f64>> {
     if a.is_empty() || a.nrows() != b.len() {
-        return Err(PlantError::Numerical(format!("a least-squares problem of {}×{} with {} right-hand sides", a.nrows(), a.ncols(), b.len())));
+        return Err(PlantError::Numerical(format!(
+            "a least-squares problem of {}×{} with {} right-hand sides",
+            a.nrows(),
+            a.ncols(),
+            b.len()
+        )));
     }
     if a.iter().chain(b.iter()).any(|v| !v.is_finite()) {
         return Err(PlantError::Numerical("a least-squares problem has non-finite entries".into()));

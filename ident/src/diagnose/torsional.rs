@@ -441,26 +441,22 @@ fn evidence(p: &Problem, r: &[f64]) -> Evidence {
     let rs = rfft(&res);
     let ms = rfft(&p.measured[0].iter().map(|v| v / p.norm).collect::<Vec<_>>());
     let df = 1.0 / (n as f64 * dt);
-    let lo = (1.0 / df) as usize;
+    // from 1 Hz up (the high-pass's band), inside the spectrum
+    let lo = ((1.0 / df) as usize).min(rs.len() - 1);
     let (k, _) =
         rs.iter().enumerate().skip(lo).fold((lo, 0.0), |b, (k, c)| if c.norm() > b.1 { (k, c.norm()) } else { b });
     let residual_peak_ratio = rs[k].norm() / ms[k].norm().max(1e-300);
-    // Cross-correlation of the high-passed torque with the residual, lags within ±0.1 s.
+    // Cross-correlation of the high-passed torque with the residual, lags within ±0.1 s (and
+    // within the record), by FFT
     let u = filtfilt_high_pass(&p.sweep.torque_nm, dt, HIGH_PASS_HZ);
-    let max_lag = (0.1 / dt) as isize;
-    let mut best = (0isize, 0.0f64);
-    for lag in -max_lag..=max_lag {
-        let s: f64 = (0..n as isize)
-            .filter_map(|i| {
-                let j = i + lag;
-                (j >= 0 && (j as usize) < n).then(|| u[i as usize] * res[j as usize])
-            })
-            .step_by(4)
-            .sum();
-        if s.abs() > best.1.abs() {
-            best = (lag, s);
+    let max_lag = (0.1 / dt).min(n as f64) as usize;
+    let best = crate::signal::cross_correlation(&u, &res, max_lag).into_iter().fold((0isize, 0.0f64), |b, (lag, c)| {
+        if c.abs() > b.1.abs() {
+            (lag, c)
+        } else {
+            b
         }
-    }
+    });
     // Harmonics: residual spectrum at 2f and 3f of the torque's spectrum-weighted lines.
     let us = rfft(&u);
     let (mut p1, mut p23) = (0.0, 0.0);

@@ -1,0 +1,237 @@
+//! Reading inputs and writing outputs safely: an input must be a regular file of a sane size
+//! (not `/dev/zero`, not a FIFO, not 200 GB); an output is written to a unique temporary file
+//! beside it and renamed over a regular file or a new name, written through to a character
+//! device (`/dev/null`, a terminal), and refused when it is anything else or one of the inputs.
+//! Nothing half-written is left behind: a failed write removes its temporary file.
+
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicU64, Ordering};
+
+/// Largest TOML file read (a rig file or a bundle's header), bytes.
+pub const MAX_TEXT_BYTES: u64 = 16 << 20;
+/// Largest data file read (a CSV record), bytes: 4 GiB, far above a 200 s, 10 kHz, 8-channel
+/// record in CSV (≈ 0.3 GB).
+pub const MAX_DATA_BYTES: u64 = 4 << 30;
+
+/// Checks that `path` is a regular file of at most `max_bytes`; the error names the file.
+pub fn check_input(path: &Path, max_bytes: u64) -> anyhow::Result<()> {
+    if path.as_os_str().is_empty() {
+        anyhow::bail!("an empty file name was given");
+    }
+    let meta = std::fs::metadata(path).map_err(|e| anyhow::anyhow!("{}: cannot read: {e}", path.display()))?;
+    if !meta.is_file() {
+        anyhow::bail!("{}: not a regular file ({}): expected a file to read", path.display(), kind(&meta));
+    }
+    if meta.len() > max_bytes {
+        anyhow::bail!(
+            "{}: {} bytes is more than the {} bytes such a file may have",
+            path.display(),
+            meta.len(),
+            max_bytes
+        );
+    }
+    Ok(())
+}
+
+/// Reads a text input (TOML), checked first.
+pub fn read_text(path: &Path) -> anyhow::Result<String> {
+    check_input(path, MAX_TEXT_BYTES)?;
+    std::fs::read_to_string(path).map_err(|e| anyhow::anyhow!("{}: cannot read: {e}", path.display()))
+}
+
+#[cfg(unix)]
+fn kind(meta: &std::fs::Metadata) -> &'static str {
+    use std::os::unix::fs::FileTypeExt;
+    let t = meta.file_type();
+    if t.is_dir() {
+        "a directory"
+    } else if t.is_char_device() {
+        "a character device"
+    } else if t.is_block_device() {
+        "a block device"
+    } else if t.is_fifo() {
+        "a FIFO"
+    } else if t.is_socket() {
+        "a socket"
+    } else {
+        "not a regular file"
+    }
+}
+
+#[cfg(not(unix))]
+fn kind(meta: &std::fs::Metadata) -> &'static str {
+    if meta.is_dir() {
+        "a directory"
+    } else {
+        "not a regular file"
+    }
+}
+
+#[cfg(unix)]
+fn is_char_device(meta: &std::fs::Metadata) -> bool {
+    std::os::unix::fs::FileTypeExt::is_char_device(&meta.file_type())
+}
+
+#[cfg(not(unix))]
+fn is_char_device(_: &std::fs::Metadata) -> bool {
+    false
+}
+
+/// Where an output goes, decided before anything is computed.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum Target {
+    /// A regular file or a new name: written to a temporary file beside it, then renamed
+    /// over it (a symbolic link is followed, so the link stays and its target is replaced).
+    File(PathBuf),
+    /// A character device (`/dev/null`, `/dev/stdout` on a terminal): written through.
+    Device(PathBuf),
+}
+
+/// Checks an output path before the computation starts: its folder exists and is writable, it
+/// is a regular file, a new name or a character device, and it is none of `inputs`.
+pub fn output(path: &Path, option: &str, inputs: &[&Path]) -> anyhow::Result<Target> {
+    let named = || format!("{option} {}", path.display());
+    if path.as_os_str().is_empty() {
+        anyhow::bail!("{option}: an empty file name was given");
+    }
+    // the file a symbolic link points to (std::fs::metadata follows links)
+    let resolved = match std::fs::canonicalize(path) {
+        Ok(p) => p,
+        Err(_) => {
+            // a new name: its folder must exist
+            let parent = path.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
+            let dir = std::fs::canonicalize(parent)
+                .map_err(|e| anyhow::anyhow!("{}: the folder {} does not exist ({e})", named(), parent.display()))?;
+            dir.join(path.file_name().ok_or_else(|| anyhow::anyhow!("{}: not a file name", named()))?)
+        }
+    };
+    for input in inputs {
+        if std::fs::canonicalize(input).map(|i| i == resolved).unwrap_or(false) {
+            anyhow::bail!(
+                "{}: this is an input of the command ({}); refusing to overwrite it",
+                named(),
+                input.display()
+            );
+        }
+    }
+    match std::fs::metadata(&resolved) {
+        Ok(meta) if meta.is_file() => {}
+        Ok(meta) if is_char_device(&meta) => return Ok(Target::Device(resolved)),
+        Ok(meta) => anyhow::bail!("{}: {}; expected a file to write", named(), kind(&meta)),
+        Err(_) => {}
+    }
+    let dir = resolved.parent().unwrap_or(Path::new("."));
+    let probe = temporary(&resolved);
+    std::fs::OpenOptions::new()
+        .write(true)
+        .create_new(true)
+        .open(&probe)
+        .map_err(|e| anyhow::anyhow!("{}: cannot write in {}: {e}", named(), dir.display()))?;
+    let _ = std::fs::remove_file(&probe);
+    Ok(Target::File(resolved))
+}
+
+/// A folder for outputs (`--out`, `--descriptions`): created if missing; refused if it is not a
+/// folder or cannot be written.
+pub fn output_dir(dir: &Path, option: &str) -> anyhow::Result<PathBuf> {
+    std::fs::create_dir_all(dir)
+        .map_err(|e| anyhow::anyhow!("{option} {}: cannot create the folder: {e}", dir.display()))?;
+    let resolved = std::fs::canonicalize(dir).map_err(|e| anyhow::anyhow!("{option} {}: {e}", dir.display()))?;
+    if !resolved.is_dir() {
+        anyhow::bail!("{option} {}: not a folder", dir.display());
+    }
+    let probe = temporary(&resolved.join("probe"));
+    std::fs::OpenOptions::new()
+        .write(true)
+        .create_new(true)
+        .open(&probe)
+        .map_err(|e| anyhow::anyhow!("{option} {}: cannot write in the folder: {e}", dir.display()))?;
+    let _ = std::fs::remove_file(&probe);
+    Ok(resolved)
+}
+
+/// A temporary name beside `path`, unique to this process and call.
+fn temporary(path: &Path) -> PathBuf {
+    static COUNTER: AtomicU64 = AtomicU64::new(0);
+    let n = COUNTER.fetch_add(1, Ordering::Relaxed);
+    let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+    path.with_file_name(format!(".{name}.{}-{n}.partial", std::process::id()))
+}
+
+/// Writes `bytes` to a checked target: through a device, or to a unique temporary file that is
+/// renamed over the target; on any failure the temporary file is removed.
+pub fn write(target: &Target, bytes: &[u8]) -> anyhow::Result<()> {
+    match target {
+        Target::Device(p) => {
+            let mut f =
+                std::fs::OpenOptions::new().write(true).open(p).map_err(|e| anyhow::anyhow!("{}: {e}", p.display()))?;
+            f.write_all(bytes).map_err(|e| anyhow::anyhow!("{}: {e}", p.display()))
+        }
+        Target::File(p) => {
+            let tmp = temporary(p);
+            let result = (|| {
+                let mut f = std::fs::OpenOptions::new().write(true).create_new(true).open(&tmp)?;
+                f.write_all(bytes)?;
+                f.sync_all()?;
+                std::fs::rename(&tmp, p)
+            })();
+            result.map_err(|e| {
+                let _ = std::fs::remove_file(&tmp);
+                anyhow::anyhow!("{}: {e}", p.display())
+            })
+        }
+    }
+}
+
+/// Checks `path` as an output of `option` and writes `bytes` to it (for outputs decided and
+/// written at once, e.g. the FMUs into a checked folder).
+pub fn write_new(path: &Path, option: &str, bytes: &[u8]) -> anyhow::Result<()> {
+    write(&output(path, option, &[])?, bytes)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn scratch(name: &str) -> PathBuf {
+        let d = std::env::temp_dir().join(format!("rigtwin-files-{}-{name}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&d);
+        std::fs::create_dir_all(&d).unwrap();
+        d
+    }
+
+    #[test]
+    fn devices_are_written_through_and_symlinks_keep_their_link() {
+        assert_eq!(output(Path::new("/dev/null"), "--json", &[]).unwrap(), Target::Device("/dev/null".into()));
+        write(&output(Path::new("/dev/null"), "--json", &[]).unwrap(), b"x").unwrap();
+        assert!(is_char_device(&std::fs::metadata("/dev/null").unwrap()), "/dev/null is still a device");
+        let d = scratch("link");
+        std::fs::write(d.join("real.json"), "old").unwrap();
+        std::os::unix::fs::symlink(d.join("real.json"), d.join("link.json")).unwrap();
+        write(&output(&d.join("link.json"), "--json", &[]).unwrap(), b"new").unwrap();
+        assert!(std::fs::symlink_metadata(d.join("link.json")).unwrap().file_type().is_symlink());
+        assert_eq!(std::fs::read_to_string(d.join("real.json")).unwrap(), "new");
+        // nothing else is left in the folder
+        assert_eq!(std::fs::read_dir(&d).unwrap().count(), 2);
+    }
+
+    #[test]
+    fn inputs_fifos_folders_and_missing_folders_are_refused() {
+        let d = scratch("refuse");
+        let input = d.join("bundle.toml");
+        std::fs::write(&input, "x").unwrap();
+        let e = output(&input, "--write-model", &[&input]).unwrap_err().to_string();
+        assert!(e.contains("input"), "{e}");
+        let e = output(&d, "--json", &[]).unwrap_err().to_string();
+        assert!(e.contains("directory"), "{e}");
+        let e = output(&d.join("no/such/x.json"), "--json", &[]).unwrap_err().to_string();
+        assert!(e.contains("does not exist"), "{e}");
+        let fifo = d.join("fifo");
+        assert!(std::process::Command::new("mkfifo").arg(&fifo).status().unwrap().success());
+        let e = output(&fifo, "--json", &[]).unwrap_err().to_string();
+        assert!(e.contains("FIFO"), "{e}");
+        let e = check_input(Path::new("/dev/zero"), MAX_DATA_BYTES).unwrap_err().to_string();
+        assert!(e.contains("not a regular file"), "{e}");
+    }
+}
