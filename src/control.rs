@@ -29,6 +29,25 @@ pub fn plant_of(params: &rigtwin_fmu::FmuParams) -> anyhow::Result<StateSpace> {
              remove the section to control the model without them"
         );
     }
+    // the controller samples at 1 kHz: a rig whose modes lie beyond that loop's Nyquist
+    // frequency (an inertia or stiffness far off) cannot be controlled by it, and its Riccati
+    // equations would fail with a message about residuals instead of the parameters
+    let modes = params.powertrain.open_differential(params.variant)?.modes()?;
+    let top = modes.frequencies_hz.iter().copied().fold(0.0, f64::max);
+    let nyquist = 0.5 / mpc::MpcSettings::powertrain(1).dt_s;
+    if !(top < nyquist) {
+        let p = &params.powertrain;
+        anyhow::bail!(
+            "the rig's fastest mode is at {top:.4e} Hz, beyond the {nyquist} Hz a controller sampling every \
+             {} s can see: check [model] (j_m2 = {}, j_drive = {}, j_m3 = {} kg m^2, c_short = {}, c_long = {} Nm/rad)",
+            1.0 / (2.0 * nyquist),
+            p.j_m2,
+            p.j_drive,
+            p.j_m3,
+            p.c_short,
+            p.c_long()
+        );
+    }
     Ok(mpc::closed_loop::rig_plant(&params.powertrain, params.variant)?)
 }
 

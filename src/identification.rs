@@ -144,8 +144,14 @@ pub fn parametrise(
     settings: &ParametriseSettings,
 ) -> anyhow::Result<ParametriseReport> {
     let mut warnings = Vec::new();
+    settings.validate().map_err(|e| anyhow::anyhow!("--samples: {e}"))?;
     let (template, measurements) = match source {
         Source::Measured { rig, values, sigma_hz } => {
+            for (i, (v, _)) in values.iter().enumerate() {
+                if values[..i].iter().any(|(w, _)| w == v) {
+                    anyhow::bail!("--measured {v} is given twice: give each variant's frequency once");
+                }
+            }
             let m = values
                 .into_iter()
                 .map(|(variant, f)| MeasurementReport {
@@ -233,6 +239,15 @@ pub fn parametrise(
                 pairs.push(PairReport { variants: [a.variant, b.variant], solutions: problem.pair(a, b, settings)? });
             }
         }
+    }
+    // the estimate is only a result where some pair of variants admits a solution at all
+    if !pairs.is_empty() && pairs.iter().all(|p| p.solutions.is_empty()) {
+        let list: Vec<String> = measured_hz.iter().map(|(v, f)| format!("{v} = {f:.4} Hz")).collect();
+        anyhow::bail!(
+            "no pair of variants has a real positive (j_drive, c_short) that gives its frequencies ({}): the \
+             {model:?} model cannot explain these measurements, so there is nothing to estimate",
+            list.join(", ")
+        );
     }
     let e = problem.estimate(&meas, settings)?;
     let mc_ci = e.monte_carlo.as_ref().and_then(|m| m.confidence.clone());

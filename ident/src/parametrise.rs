@@ -65,6 +65,29 @@ impl Default for ParametriseSettings {
     }
 }
 
+/// Most Monte Carlo draws a parametrisation takes: 100 000 resolve a 95 % interval's ends to
+/// about 0.1 % of the interval; more only cost memory and time.
+pub const MAX_MONTE_CARLO_SAMPLES: usize = 100_000;
+
+impl ParametriseSettings {
+    /// Checks ranges; names the setting.
+    pub fn validate(&self) -> Result<()> {
+        if self.monte_carlo_samples > MAX_MONTE_CARLO_SAMPLES {
+            return Err(IdentError::Invalid(format!(
+                "monte_carlo_samples = {}: at most {MAX_MONTE_CARLO_SAMPLES}",
+                self.monte_carlo_samples
+            )));
+        }
+        if !(self.c_range.0 > 0.0 && self.c_range.1 > self.c_range.0 && self.c_range.1.is_finite()) {
+            return Err(IdentError::Invalid(format!("c_range = {:?}: expected 0 < lower < upper", self.c_range)));
+        }
+        if !(2..=1_000_000).contains(&self.scan_points) {
+            return Err(IdentError::Invalid(format!("scan_points = {}: expected 2 to 1 000 000", self.scan_points)));
+        }
+        Ok(())
+    }
+}
+
 /// Where a variant's measured frequency falls among the model's modes.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Placement {
