@@ -56,7 +56,7 @@ pub const GLITCH_SPREADS: f64 = 1e6;
 /// than [`GLITCH_SPREADS`] spreads from the median. Returns its index and why.
 pub fn implausible_sample(x: &[f64]) -> Option<(usize, String)> {
     if let Some(i) = x.iter().position(|v| !(v.abs() <= MAX_PLAUSIBLE_MAGNITUDE)) {
-        return Some((i, format!("{} is beyond any measured value (|x| > {MAX_PLAUSIBLE_MAGNITUDE:e})", x[i])));
+        return Some((i, format!("{:e} is beyond any measured value (|x| > {MAX_PLAUSIBLE_MAGNITUDE:e})", x[i])));
     }
     let (median, spread) = median_and_spread(x)?;
     if spread > 0.0 {

@@ -12,8 +12,10 @@ pub fn minimise(f: &dyn Fn(&[f64]) -> Option<Vec<f64>>, x0: &[f64], max_iter: us
     let mut cost: f64 = r.iter().map(|v| v * v).sum();
     let mut lambda = 1e-3;
     for _ in 0..max_iter {
-        // Jacobian by forward differences.
-        let mut jac = DMatrix::zeros(r.len(), p);
+        // Jacobian by forward differences, its columns kept in single precision (half the
+        // memory of a long record; a forward difference is good to a few digits anyway), JᵀJ
+        // and Jᵀr summed in double.
+        let mut columns: Vec<Vec<f32>> = Vec::with_capacity(p);
         let mut ok = true;
         for j in 0..p {
             // 0.1 % steps (log parameters): large enough to step over the roughness that
@@ -22,20 +24,30 @@ pub fn minimise(f: &dyn Fn(&[f64]) -> Option<Vec<f64>>, x0: &[f64], max_iter: us
             let mut xp = x.clone();
             xp[j] += h;
             match f(&xp) {
-                Some(rp) => {
-                    for i in 0..r.len() {
-                        jac[(i, j)] = (rp[i] - r[i]) / h;
-                    }
+                Some(rp) => columns.push(rp.iter().zip(&r).map(|(a, b)| ((a - b) / h) as f32).collect()),
+                None => {
+                    ok = false;
+                    break;
                 }
-                None => ok = false,
             }
         }
         if !ok {
             break;
         }
-        let jt = jac.transpose();
-        let jtj = &jt * &jac;
-        let g = &jt * DVector::from_column_slice(&r);
+        let mut jtj = DMatrix::zeros(p, p);
+        let mut g = DVector::zeros(p);
+        for j in 0..p {
+            g[j] = columns[j].iter().zip(&r).map(|(a, b)| *a as f64 * b).sum::<f64>();
+            for k in 0..=j {
+                let v = columns[j].iter().zip(&columns[k]).map(|(a, b)| *a as f64 * *b as f64).sum::<f64>();
+                jtj[(j, k)] = v;
+                jtj[(k, j)] = v;
+            }
+        }
+        if jtj.iter().chain(g.iter()).any(|v: &f64| !v.is_finite()) {
+            break;
+        }
+        drop(columns);
         let mut improved = false;
         for _ in 0..8 {
             let mut a = jtj.clone();

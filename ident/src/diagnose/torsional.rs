@@ -305,52 +305,54 @@ pub fn diagnose(
         .unwrap_or(10.0);
 
     let cands = candidates(&problem, shuffle_hz);
-    let fits: Vec<(usize, Vec<f64>, f64)> = std::thread::scope(|scope| {
-        let handles: Vec<_> = cands
-            .iter()
-            .enumerate()
-            .map(|(i, c)| {
-                let problem = &problem;
-                scope.spawn(move || {
-                    // Play only shows when the shaft torque changes sign: with a drive torque
-                    // that never does, backlash cannot be seen and is not fitted.
-                    let t = &problem.sweep.torque_nm;
-                    let crosses = t.iter().any(|&v| v > 0.0) && t.iter().any(|&v| v < 0.0);
-                    if c.name == "backlash" && !crosses {
-                        progress(c.name);
-                        return (i, Vec::new(), f64::NAN);
+    // Two workers take the candidates in turn (this is a 2-core machine's worth of threads):
+    // memory then holds two fits' Jacobians and simulations, not one per candidate.
+    let next = std::sync::atomic::AtomicUsize::new(0);
+    let fit_one = |i: usize| -> (usize, Vec<f64>, f64) {
+        let c = &cands[i];
+        let problem = &problem;
+        // Play only shows when the shaft torque changes sign: with a drive torque that never
+        // does, backlash cannot be seen and is not fitted.
+        let t = &problem.sweep.torque_nm;
+        let crosses = t.iter().any(|&v| v > 0.0) && t.iter().any(|&v| v < 0.0);
+        if c.name == "backlash" && !crosses {
+            progress(c.name);
+            return (i, Vec::new(), f64::NAN);
+        }
+        let f = |x: &[f64]| problem.residual(&(c.build)(problem, x));
+        // Grid over the effect's own parameters with the declared ones, then LM on all.
+        let cost_at = |s: &Vec<f64>| {
+            let mut x = vec![0.0, 0.0];
+            x.extend(s);
+            let cost = f(&x).map(|r| r.iter().map(|v| v * v).sum::<f64>());
+            (x, cost.unwrap_or(f64::INFINITY))
+        };
+        let best = c.starts.iter().map(cost_at).filter(|g| g.1.is_finite()).min_by(|p, q| p.1.total_cmp(&q.1));
+        let (x, cost) = match best {
+            Some((x0, _)) => lm::minimise(&f, &x0, 12),
+            None => (vec![], f64::INFINITY),
+        };
+        progress(c.name);
+        (i, x, cost)
+    };
+    let mut fits: Vec<(usize, Vec<f64>, f64)> = std::thread::scope(|scope| {
+        let workers: Vec<_> = (0..2)
+            .map(|_| {
+                scope.spawn(|| {
+                    let mut done = Vec::new();
+                    loop {
+                        let i = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+                        if i >= cands.len() {
+                            break done;
+                        }
+                        done.push(fit_one(i));
                     }
-                    let f = |x: &[f64]| problem.residual(&(c.build)(problem, x));
-                    // Grid over the effect's own parameters with the declared ones, then LM on all.
-                    // The grid's points run on two threads: the other candidates are done
-                    // long before the slow one (backlash) has finished its grid.
-                    let cost_at = |s: &Vec<f64>| {
-                        let mut x = vec![0.0, 0.0];
-                        x.extend(s);
-                        let cost = f(&x).map(|r| r.iter().map(|v| v * v).sum::<f64>());
-                        (x, cost.unwrap_or(f64::INFINITY))
-                    };
-                    let half = c.starts.len().div_ceil(2);
-                    let (a, b) = c.starts.split_at(half);
-                    let mut grid: Vec<(Vec<f64>, f64)> = std::thread::scope(|inner| {
-                        let other = inner.spawn(|| b.iter().map(cost_at).collect::<Vec<_>>());
-                        let mut mine: Vec<_> = a.iter().map(cost_at).collect();
-                        mine.extend(other.join().unwrap_or_default());
-                        mine
-                    });
-                    grid.retain(|g| g.1.is_finite());
-                    let best = grid.into_iter().min_by(|p, q| p.1.total_cmp(&q.1));
-                    let (x, cost) = match best {
-                        Some((x0, _)) => lm::minimise(&f, &x0, 12),
-                        None => (vec![], f64::INFINITY),
-                    };
-                    progress(c.name);
-                    (i, x, cost)
                 })
             })
             .collect();
-        handles.into_iter().filter_map(|h| h.join().ok()).collect()
+        workers.into_iter().filter_map(|h| h.join().ok()).flatten().collect()
     });
+    fits.sort_by_key(|f| f.0);
 
     let nres = 2 * n;
     let mut scored = Vec::new();
