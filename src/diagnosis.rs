@@ -82,6 +82,9 @@ fn spectrum(x: &[f64], dt: f64, f_max: f64) -> Vec<(f64, f64)> {
         .collect()
 }
 
+/// Most points of a plotted time series.
+const PLOT_POINTS: usize = 6000;
+
 fn torsional(file: &Path, progress: &(dyn Fn(&str) + Sync)) -> anyhow::Result<Diagnosis> {
     let b = load_torsional(file)?;
     let d = ident::diagnose::torsional::diagnose(&b.sweep, &b.model, b.variant, progress)
@@ -101,7 +104,9 @@ fn torsional(file: &Path, progress: &(dyn Fn(&str) + Sync)) -> anyhow::Result<Di
     let t = &d.traces;
     let res_before: Vec<f64> = t.measured.iter().zip(&t.before).map(|(a, b)| a - b).collect();
     let res_after: Vec<f64> = t.measured.iter().zip(&t.after).map(|(a, b)| a - b).collect();
-    let pts = |y: &[f64]| t.time_s.iter().zip(y).map(|(&a, &b)| (a, b)).collect::<Vec<_>>();
+    // an SVG line of more points than a screen has pixels only costs memory: every k-th sample
+    let stride = t.time_s.len().div_ceil(PLOT_POINTS).max(1);
+    let pts = |y: &[f64]| t.time_s.iter().zip(y).step_by(stride).map(|(&a, &b)| (a, b)).collect::<Vec<_>>();
     let panels = vec![
         crate::plot::Panel {
             title: "M2 speed (offsets and drift removed)".into(),

@@ -20,21 +20,25 @@ pub fn cross_correlation(u: &[f64], r: &[f64], max_lag: usize) -> Vec<(isize, f6
         return Vec::new();
     }
     let max_lag = max_lag.min(n - 1);
-    let len = (2 * n).next_power_of_two();
+    // zero padding to n + max_lag keeps the circular correlation's wrap-around out of the lags
+    // asked for; two buffers of that length are all the memory it takes
+    let len = (n + max_lag + 1).next_power_of_two();
     let mut planner = FftPlanner::new();
     let fwd = planner.plan_fft_forward(len);
     let spectrum = |x: &[f64]| {
-        let mut b: Vec<Complex64> = x[..n]
-            .iter()
-            .map(|&v| Complex64::new(v, 0.0))
-            .chain(std::iter::repeat(Complex64::new(0.0, 0.0)))
-            .take(len)
-            .collect();
+        let mut b: Vec<Complex64> = Vec::with_capacity(len);
+        b.extend(x[..n].iter().map(|&v| Complex64::new(v, 0.0)));
+        b.resize(len, Complex64::new(0.0, 0.0));
         fwd.process(&mut b);
         b
     };
-    let (us, rs) = (spectrum(u), spectrum(r));
-    let mut c: Vec<Complex64> = us.iter().zip(&rs).map(|(a, b)| a.conj() * b).collect();
+    let mut c = spectrum(u);
+    {
+        let rs = spectrum(r);
+        for (a, b) in c.iter_mut().zip(&rs) {
+            *a = a.conj() * b;
+        }
+    }
     planner.plan_fft_inverse(len).process(&mut c);
     (-(max_lag as isize)..=max_lag as isize)
         .map(|lag| (lag, c[lag.rem_euclid(len as isize) as usize].re / len as f64))
@@ -222,16 +226,23 @@ pub fn interpolate(table: &[(f64, f64)], x: f64) -> Option<f64> {
 /// backward): O(n), for removing offsets and drift from signals compared with each other
 /// through the same filter.
 pub fn filtfilt_high_pass(x: &[f64], dt_s: f64, cutoff_hz: f64) -> Vec<f64> {
+    let mut y = x.to_vec();
+    filtfilt_high_pass_in_place(&mut y, dt_s, cutoff_hz);
+    y
+}
+
+/// [`filtfilt_high_pass`] overwriting its input (no second buffer for a long record).
+pub fn filtfilt_high_pass_in_place(x: &mut [f64], dt_s: f64, cutoff_hz: f64) {
     let k = (std::f64::consts::PI * cutoff_hz * dt_s).tan();
     let q = std::f64::consts::FRAC_1_SQRT_2;
     let norm = 1.0 / (1.0 + k / q + k * k);
     let (b0, b1, b2) = (norm, -2.0 * norm, norm);
     let (a1, a2) = (2.0 * (k * k - 1.0) * norm, (1.0 - k / q + k * k) * norm);
-    let run = |input: &mut dyn Iterator<Item = f64>| -> Vec<f64> {
+    let run = |values: &mut dyn Iterator<Item = &mut f64>| {
         let (mut x1, mut x2, mut y1, mut y2) = (0.0, 0.0, 0.0, 0.0);
-        let mut out = Vec::with_capacity(x.len());
         let mut first = true;
-        for v in input {
+        for slot in values {
+            let v = *slot;
             if first {
                 // start from rest at the first value: no step into the filter
                 x1 = v;
@@ -243,14 +254,11 @@ pub fn filtfilt_high_pass(x: &[f64], dt_s: f64, cutoff_hz: f64) -> Vec<f64> {
             x1 = v;
             y2 = y1;
             y1 = y;
-            out.push(y);
+            *slot = y;
         }
-        out
     };
-    let forward = run(&mut x.iter().copied());
-    let mut back = run(&mut forward.iter().rev().copied());
-    back.reverse();
-    back
+    run(&mut x.iter_mut());
+    run(&mut x.iter_mut().rev());
 }
 
 #[cfg(test)]

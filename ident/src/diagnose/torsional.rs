@@ -9,7 +9,7 @@ use serde::Serialize;
 
 use super::{bic, effective_count, lag1_autocorrelation, lm, CandidateScore};
 use crate::error::{IdentError, Result};
-use crate::signal::{filtfilt_high_pass, rfft};
+use crate::signal::{filtfilt_high_pass, filtfilt_high_pass_in_place, rfft};
 use crate::sweep::Sweep;
 
 /// The torsional vocabulary.
@@ -113,18 +113,25 @@ impl Problem<'_> {
         {
             return None;
         }
-        let (a, b) = p.simulate(&self.sweep.torque_nm, self.sweep.dt_s, self.speed0).ok()?;
+        let (mut a, mut b) = p.simulate(&self.sweep.torque_nm, self.sweep.dt_s, self.speed0).ok()?;
         if !a.iter().chain(&b).all(|v| v.is_finite()) {
             return None;
         }
-        Some([
-            filtfilt_high_pass(&a, self.sweep.dt_s, HIGH_PASS_HZ),
-            filtfilt_high_pass(&b, self.sweep.dt_s, HIGH_PASS_HZ),
-        ])
+        filtfilt_high_pass_in_place(&mut a, self.sweep.dt_s, HIGH_PASS_HZ);
+        filtfilt_high_pass_in_place(&mut b, self.sweep.dt_s, HIGH_PASS_HZ);
+        Some([a, b])
     }
 
+    /// The normalised residual, written over the simulation's first channel (the second
+    /// appended), so a long record holds one buffer per fit, not three.
     fn residual(&self, model: &TorsionalModel) -> Option<Vec<f64>> {
-        Some(self.residual_of(&self.simulate(model)?))
+        let [mut a, b] = self.simulate(model)?;
+        for (y, m) in a.iter_mut().zip(&self.measured[0]) {
+            *y = (m - *y) / self.norm;
+        }
+        a.reserve_exact(b.len());
+        a.extend(b.iter().zip(&self.measured[1]).map(|(y, m)| (m - y) / self.norm));
+        Some(a)
     }
 
     /// Normalised residual of simulated (high-passed) speeds, both channels.
