@@ -1,0 +1,199 @@
+//! Property test of the input readers: random and mutated rig files and bundles (TOML and CSV)
+//! give a clean error or a valid model and finite data — never a panic. The cases start from
+//! the example bundles and the shipped rig file and mutate them: bytes flipped, lines dropped
+//! or repeated, numbers replaced by NaN, inf, 1e308, -1, 0 or text, delimiters changed,
+//! files truncated. A fixed number of cases per property (see CASES) runs in CI.
+
+use std::path::{Path, PathBuf};
+
+use proptest::prelude::*;
+
+/// Cases per property: 4 properties × 500 cases = 2000 inputs per run.
+const CASES: u32 = 500;
+
+fn shared(name: &str) -> String {
+    std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/data").join(name)).unwrap()
+}
+
+fn scratch() -> PathBuf {
+    static N: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+    let n = N.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    let d = std::env::temp_dir().join(format!("rigtwin-fuzz-{}-{n}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+/// One mutation of a text.
+#[derive(Debug, Clone)]
+enum Mutation {
+    FlipByte(usize, u8),
+    DropLine(usize),
+    RepeatLine(usize),
+    Number(usize, &'static str),
+    Delimiter(&'static str),
+    Truncate(usize),
+}
+
+fn mutation() -> impl Strategy<Value = Mutation> {
+    prop_oneof![
+        (any::<usize>(), any::<u8>()).prop_map(|(i, b)| Mutation::FlipByte(i, b)),
+        any::<usize>().prop_map(Mutation::DropLine),
+        any::<usize>().prop_map(Mutation::RepeatLine),
+        (
+            any::<usize>(),
+            prop::sample::select(vec!["NaN", "inf", "-inf", "1e308", "-1", "0", "", "x", "1e-320", "2e200"])
+        )
+            .prop_map(|(i, v)| Mutation::Number(i, v)),
+        prop::sample::select(vec![";", "\t", " ", ",,"]).prop_map(Mutation::Delimiter),
+        any::<usize>().prop_map(Mutation::Truncate),
+    ]
+}
+
+fn apply(text: &str, m: &Mutation) -> Vec<u8> {
+    let lines: Vec<&str> = text.lines().collect();
+    let pick = |i: usize| i % lines.len().max(1);
+    match m {
+        Mutation::FlipByte(i, b) => {
+            let mut bytes = text.as_bytes().to_vec();
+            if !bytes.is_empty() {
+                let k = i % bytes.len();
+                bytes[k] = *b;
+            }
+            bytes
+        }
+        Mutation::DropLine(i) => {
+            let k = pick(*i);
+            lines
+                .iter()
+                .enumerate()
+                .filter(|(j, _)| *j != k)
+                .map(|(_, l)| format!("{l}\n"))
+                .collect::<String>()
+                .into_bytes()
+        }
+        Mutation::RepeatLine(i) => {
+            let k = pick(*i);
+            let mut v: Vec<&str> = lines.clone();
+            if !v.is_empty() {
+                v.insert(k, lines[k]);
+            }
+            (v.join("\n") + "\n").into_bytes()
+        }
+        Mutation::Number(i, value) => {
+            // the i-th number-looking token of the text
+            let tokens: Vec<(usize, usize)> = {
+                let b = text.as_bytes();
+                let mut out = Vec::new();
+                let mut k = 0;
+                while k < b.len() {
+                    if b[k].is_ascii_digit() {
+                        let s = k;
+                        while k < b.len() && (b[k].is_ascii_digit() || b".eE-+".contains(&b[k])) {
+                            k += 1;
+                        }
+                        out.push((s, k));
+                    } else {
+                        k += 1;
+                    }
+                }
+                out
+            };
+            if tokens.is_empty() {
+                return text.as_bytes().to_vec();
+            }
+            let (s, e) = tokens[i % tokens.len()];
+            format!("{}{value}{}", &text[..s], &text[e..]).into_bytes()
+        }
+        Mutation::Delimiter(d) => text.replace(',', d).into_bytes(),
+        Mutation::Truncate(i) => {
+            let bytes = text.as_bytes();
+            bytes[..i % (bytes.len() + 1)].to_vec()
+        }
+    }
+}
+
+/// The first `rows` data rows of a CSV (keeps a case fast; the readers still see a full header).
+fn head(csv: &str, rows: usize) -> String {
+    csv.lines().take(rows + 1).map(|l| format!("{l}\n")).collect()
+}
+
+fn finite(v: &[f64]) -> bool {
+    v.iter().all(|x| x.is_finite())
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: CASES, failure_persistence: None, ..ProptestConfig::default() })]
+
+    #[test]
+    fn rig_files_parse_or_are_refused(ms in prop::collection::vec(mutation(), 1..4)) {
+        let mut text = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("rigs/paper.toml")).unwrap();
+        for m in &ms {
+            text = String::from_utf8_lossy(&apply(&text, m)).into_owned();
+        }
+        if let Ok(rig) = rigtwin::rigfile::parse_rig(&text, Path::new("rig.toml")) {
+            prop_assert!(rig.model.validate("model").is_ok());
+        }
+    }
+
+    #[test]
+    fn torsional_bundles_load_or_are_refused(
+        toml_ms in prop::collection::vec(mutation(), 0..3),
+        csv_ms in prop::collection::vec(mutation(), 0..3),
+    ) {
+        let d = scratch();
+        let mut toml = shared("v1_sweep_b.toml");
+        for m in &toml_ms {
+            toml = String::from_utf8_lossy(&apply(&toml, m)).into_owned();
+        }
+        let mut csv = head(&shared("v1_sweep_b.csv"), 3000).into_bytes();
+        for m in &csv_ms {
+            csv = apply(&String::from_utf8_lossy(&csv), m);
+        }
+        std::fs::write(d.join("v1_sweep_b.toml"), toml).unwrap();
+        std::fs::write(d.join("v1_sweep_b.csv"), csv).unwrap();
+        if let Ok(b) = rigtwin::bundle::load_torsional(&d.join("v1_sweep_b.toml")) {
+            prop_assert!(b.model.validate("model").is_ok());
+            prop_assert!(b.sweep.dt_s > 0.0 && b.sweep.dt_s.is_finite());
+            prop_assert!(finite(&b.sweep.torque_nm) && finite(&b.sweep.speed_m2_radps) && finite(&b.sweep.speed_m3_radps));
+        }
+        let _ = std::fs::remove_dir_all(&d);
+    }
+
+    #[test]
+    fn bearing_bundles_load_or_are_refused(
+        toml_ms in prop::collection::vec(mutation(), 0..3),
+        csv_ms in prop::collection::vec(mutation(), 0..2),
+    ) {
+        let d = scratch();
+        let mut toml = shared("sfd_shake.toml");
+        for m in &toml_ms {
+            toml = String::from_utf8_lossy(&apply(&toml, m)).into_owned();
+        }
+        let mut x = shared("sfd_shake_x.csv").into_bytes();
+        for m in &csv_ms {
+            x = apply(&String::from_utf8_lossy(&x), m);
+        }
+        std::fs::write(d.join("sfd_shake.toml"), toml).unwrap();
+        std::fs::write(d.join("sfd_shake_x.csv"), x).unwrap();
+        std::fs::write(d.join("sfd_shake_y.csv"), shared("sfd_shake_y.csv")).unwrap();
+        if let Ok(b) = rigtwin::bundle::load_bearing(&d.join("sfd_shake.toml")) {
+            for t in &b.tests {
+                prop_assert!(finite(&t.force_x_n) && finite(&t.force_y_n) && finite(&t.disp_x_m) && finite(&t.disp_y_m));
+            }
+            prop_assert!(b.band_hz.1 > b.band_hz.0);
+        }
+        let _ = std::fs::remove_dir_all(&d);
+    }
+
+    #[test]
+    fn random_bytes_are_refused_cleanly(bytes in prop::collection::vec(any::<u8>(), 0..400)) {
+        let d = scratch();
+        std::fs::write(d.join("b.toml"), &bytes).unwrap();
+        prop_assert!(rigtwin::bundle::load_torsional(&d.join("b.toml")).is_err());
+        prop_assert!(rigtwin::bundle::load_bearing(&d.join("b.toml")).is_err());
+        let text = String::from_utf8_lossy(&bytes);
+        let _ = rigtwin::rigfile::parse_rig(&text, Path::new("b.toml"));
+        let _ = std::fs::remove_dir_all(&d);
+    }
+}
