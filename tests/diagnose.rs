@@ -578,3 +578,22 @@ fn fmu_carries_a_drive_compliance() {
         "drive_compliance",
     );
 }
+
+/// Side-shaft play about a 10 Nm set point (±8 Nm: the drive torque never crosses zero, the
+/// shaft torques at resonance nearly do): this sweep used to send a fit's matrices non-finite
+/// and the matrix exponential into an endless loop. The diagnosis must return, with finite
+/// numbers only.
+#[test]
+fn backlash_about_a_set_point_returns_with_finite_numbers() {
+    let s = sweep(&declared(), Truth { backlash_rad: 0.004, set_point_nm: 10.0, ..Default::default() }, 7);
+    let (tx, rx) = std::sync::mpsc::channel();
+    std::thread::spawn(move || {
+        let _ = tx.send(run(&s, &declared()));
+    });
+    let d = rx.recv_timeout(std::time::Duration::from_secs(300)).expect("the diagnosis returns within 300 s");
+    assert!(d.error_before.is_finite() && d.error_after.is_finite() && d.error_after <= d.error_before);
+    for c in &d.candidates {
+        assert!(c.error_after.is_finite(), "{}: {}", c.effect, c.error_after);
+        assert!(c.parameters.values().all(|v| v.is_finite()), "{}: {:?}", c.effect, c.parameters);
+    }
+}
