@@ -35,7 +35,7 @@ pub fn plant_of(params: &rigtwin_fmu::FmuParams) -> anyhow::Result<StateSpace> {
     let modes = params.powertrain.open_differential(params.variant)?.modes()?;
     let top = modes.frequencies_hz.iter().copied().fold(0.0, f64::max);
     let nyquist = 0.5 / mpc::MpcSettings::powertrain(1).dt_s;
-    if !(top < nyquist) {
+    if top.is_nan() || top >= nyquist {
         let p = &params.powertrain;
         anyhow::bail!(
             "the rig's fastest mode is at {top:.4e} Hz, beyond the {nyquist} Hz a controller sampling every \

@@ -140,7 +140,7 @@ fn bad_bundles_name_file_line_and_expectation() {
     let e = bad("model", &TOML.replace("j_drive = 0.5", "j_drive = -0.5"), &format!("{header}{good_rows}"));
     assert!(e.contains("b.toml") && e.contains("model.j_drive"), "{e}");
     let e = bad("short", TOML, &format!("{header}{good_rows}"));
-    assert!(e.contains("too short"), "{e}");
+    assert!(e.contains("lasts 0.009"), "{e}");
     let e = bad(
         "nodata",
         "kind = \"torsional_sweep\"\nvariant = \"V1\"\n[model]\nj_m2 = 1.0\nj_drive = 1.0\nj_m3 = 1.0\nc_short = 1.0\n",

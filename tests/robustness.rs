@@ -173,8 +173,8 @@ fn data_that_cannot_support_an_answer_is_refused() {
     let d = scratch("alike", &SHAKE);
     std::fs::copy(d.join("sfd_shake_x.csv"), d.join("sfd_shake_y.csv")).unwrap();
     map_rows(&d.join("sfd_shake_y.csv"), |_, c| {
-        for k in 1..5 {
-            c[k] = format!("{:e}", 2.0 * c[k].parse::<f64>().unwrap());
+        for cell in &mut c[1..5] {
+            *cell = format!("{:e}", 2.0 * cell.parse::<f64>().unwrap());
         }
     });
     refused(&d, &["bearing", "sfd_shake.toml"], &["not independent"]);

@@ -162,7 +162,7 @@ pub unsafe extern "C" fn fmi2SetupExperiment(
 ) -> fmi2Status {
     with(c, |comp| {
         comp.inner.expect("fmi2SetupExperiment", &[Mode::Instantiated])?;
-        if stop_time_defined != 0 && !(stop_time >= start_time) {
+        if stop_time_defined != 0 && (stop_time.is_nan() || stop_time < start_time) {
             return Err(Failure {
                 status: Status::Error,
                 message: format!(

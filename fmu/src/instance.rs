@@ -295,7 +295,7 @@ impl Instance {
             return error(format!("start time {start_time} is not finite"));
         }
         if let Some(stop) = stop_time {
-            if !(stop >= start_time) {
+            if stop.is_nan() || stop < start_time {
                 return error(format!("stop time {stop} s is before the start time {start_time} s"));
             }
         }

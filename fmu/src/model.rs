@@ -129,7 +129,7 @@ impl Model {
         let npt = map.len();
         let (a, b) = (similar(&a_x), &t * &b_x);
         let norm = a.column_iter().chain(b.column_iter()).map(|c| c.lp_norm(1)).fold(0.0, f64::max);
-        if !(norm * FASTEST_TIME_SCALE_S <= 1.0) {
+        if norm.is_nan() || norm * FASTEST_TIME_SCALE_S > 1.0 {
             return Err(format!(
                 "the parameters give time scales of {:.1e} s (an inertia, mass or stiffness far off)",
                 1.0 / norm
@@ -253,7 +253,7 @@ impl Model {
         delay: &DelayLine,
     ) -> Result<(), String> {
         let sub_steps = if self.backlash() { h / BACKLASH_STEP_S } else { h / self.max_piece_s };
-        if !(sub_steps <= MAX_PIECES as f64) {
+        if sub_steps.is_nan() || sub_steps > MAX_PIECES as f64 {
             let longest = MAX_PIECES as f64 * if self.backlash() { BACKLASH_STEP_S } else { self.max_piece_s };
             return Err(format!(
                 "a step of {h} s is longer than this model integrates exactly (at most {longest:.4e} s)"

@@ -266,7 +266,7 @@ impl Impedances {
                 // Σ Z Zᴴ is Hermitian: its condition is the squared one of the motions
                 None => cond2(&szz[l]).sqrt(),
             };
-            if !(condition <= CONDITION_UNUSABLE) {
+            if condition.is_nan() || condition > CONDITION_UNUSABLE {
                 continue;
             }
             let Some(sffi) = sff[l].try_inverse() else { continue };

@@ -59,7 +59,7 @@ pub const GLITCH_SPREADS: f64 = 1e6;
 /// The first sample of `x` that is no measurement: beyond [`MAX_PLAUSIBLE_MAGNITUDE`], or more
 /// than [`GLITCH_SPREADS`] spreads from the median. Returns its index and why.
 pub fn implausible_sample(x: &[f64]) -> Option<(usize, String)> {
-    if let Some(i) = x.iter().position(|v| !(v.abs() <= MAX_PLAUSIBLE_MAGNITUDE)) {
+    if let Some(i) = x.iter().position(|v| v.is_nan() || v.abs() > MAX_PLAUSIBLE_MAGNITUDE) {
         return Some((i, format!("{:e} is beyond any measured value (|x| > {MAX_PLAUSIBLE_MAGNITUDE:e})", x[i])));
     }
     let (median, spread) = median_and_spread(x)?;
@@ -104,7 +104,7 @@ impl SamplingNeeds {
     /// Why a record of `n` samples every `dt_s` cannot serve, if it cannot.
     pub fn problem(&self, dt_s: f64, n: usize) -> Option<String> {
         let have = 1.0 / (dt_s * self.max_frequency_hz);
-        if !(have >= self.samples_per_period) {
+        if have.is_nan() || have < self.samples_per_period {
             return Some(format!(
                 "a sample every {dt_s} s gives {have:.3} samples per period at {:.2} Hz; the analysis needs {} (a step of at most {:.3e} s)",
                 self.max_frequency_hz,
@@ -113,7 +113,7 @@ impl SamplingNeeds {
             ));
         }
         let duration = dt_s * n.saturating_sub(1) as f64;
-        if !(duration >= self.min_duration_s) {
+        if duration.is_nan() || duration < self.min_duration_s {
             return Some(format!(
                 "the record lasts {duration} s; the analysis needs at least {} s",
                 self.min_duration_s

@@ -44,7 +44,7 @@ pub fn zoh(a: &DMatrix<f64>, b: &DMatrix<f64>, dt_s: f64) -> Result<(DMatrix<f64
     aug.view_mut((0, 0), (n, n)).copy_from(&(a * dt_s));
     aug.view_mut((0, n), (n, m)).copy_from(&(b * dt_s));
     let norm = aug.column_iter().map(|c| c.lp_norm(1)).fold(0.0, f64::max);
-    if !(norm <= ZOH_MAX_NORM) {
+    if norm.is_nan() || norm > ZOH_MAX_NORM {
         return Err(PlantError::Numerical(format!(
             "a step of {dt_s} s is {norm:.3e} times the model's fastest time scale: too long to discretise \
              exactly (at most {ZOH_MAX_NORM:.3e})"

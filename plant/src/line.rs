@@ -1,0 +1,217 @@
+//! Bodies in a line, each coupled to the next by a spring-damper, optionally through a gear
+//! stage (`../shared/DATA.md`, `drive_test`): a motor driving a load through shafts and gears,
+//! a linear axis, a shaft line with disks. Rotational or translational; one [`MechanicalModel`].
+//!
+//! Coupling i joins body i and body i+1 with ratio r (speed of body i = r · speed of body i+1):
+//! its elongation (twist) is q_i / r − q_{i+1}, its force T = c·twist + d·d(twist)/dt drives
+//! body i+1 forward and loads body i with T / r. As a spring of [`MechanicalModel`] that is the
+//! elongation vector e with e_i = 1/r and e_{i+1} = −1 (potential ½ c (eᵀq)²), so a gear stage
+//! reflects the load side's stiffness to the motor side by 1/r², the textbook reduction.
+
+use nalgebra::{DMatrix, DVector};
+use serde::{Deserialize, Serialize};
+
+use crate::error::{non_negative, positive, PlantError, Result};
+use crate::mechanical::{MechanicalModel, Spring};
+
+/// Rotational (kg m², Nm/rad, rad) or translational (kg, N/m, m).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Domain {
+    /// Angles, torques, inertias.
+    Rotational,
+    /// Positions, forces, masses.
+    Translational,
+}
+
+impl Domain {
+    /// SI units: (inertia, stiffness, damping, force, coordinate, speed).
+    pub fn units(self) -> [&'static str; 6] {
+        match self {
+            Domain::Rotational => ["kg m^2", "Nm/rad", "Nm s/rad", "Nm", "rad", "rad/s"],
+            Domain::Translational => ["kg", "N/m", "N s/m", "N", "m", "m/s"],
+        }
+    }
+}
+
+/// One body of the line.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LineBody {
+    /// Name (unique in the line).
+    pub name: String,
+    /// Inertia (kg m²) or mass (kg).
+    pub inertia: f64,
+    /// Viscous friction to ground (Nm s/rad or N s/m).
+    #[serde(default)]
+    pub drag: f64,
+}
+
+/// The coupling of body i to body i+1.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Coupling {
+    /// Stiffness (Nm/rad or N/m).
+    pub stiffness: f64,
+    /// Damping (Nm s/rad or N s/m).
+    #[serde(default)]
+    pub damping: f64,
+    /// Gear ratio: speed of body i = ratio · speed of body i+1 (1: no gear stage).
+    #[serde(default = "one")]
+    pub ratio: f64,
+}
+
+fn one() -> f64 {
+    1.0
+}
+
+/// A line of bodies and the couplings between neighbours (`couplings.len() == bodies.len() − 1`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Line {
+    /// Rotational or translational.
+    pub domain: Domain,
+    /// The bodies in line order.
+    pub bodies: Vec<LineBody>,
+    /// Coupling i joins body i and i+1.
+    pub couplings: Vec<Coupling>,
+}
+
+impl Line {
+    /// Checks every value; errors name the key as a bundle spells it (`model.bodies[2].inertia`,
+    /// 1-based like the bundle's positions).
+    pub fn validate(&self) -> Result<()> {
+        let u = self.domain.units();
+        if self.bodies.is_empty() {
+            return Err(PlantError::Invalid("`model.bodies` is empty: a line needs at least one body".into()));
+        }
+        if self.couplings.len() + 1 != self.bodies.len() {
+            return Err(PlantError::Invalid(format!(
+                "`model.couplings` has {} entries for {} bodies: coupling i joins body i and i+1, so {} are expected",
+                self.couplings.len(),
+                self.bodies.len(),
+                self.bodies.len() - 1
+            )));
+        }
+        for (i, b) in self.bodies.iter().enumerate() {
+            if b.name.trim().is_empty() {
+                return Err(PlantError::Invalid(format!("`model.bodies[{}].name` is empty", i + 1)));
+            }
+            if self.bodies[..i].iter().any(|o| o.name == b.name) {
+                return Err(PlantError::Invalid(format!(
+                    "`model.bodies[{}].name` = \"{}\" is used twice: names must be unique",
+                    i + 1,
+                    b.name
+                )));
+            }
+            positive(|| format!("model.bodies[{}].inertia", i + 1), b.inertia, u[0])?;
+            non_negative(|| format!("model.bodies[{}].drag", i + 1), b.drag, u[2])?;
+        }
+        for (i, c) in self.couplings.iter().enumerate() {
+            positive(|| format!("model.couplings[{}].stiffness", i + 1), c.stiffness, u[1])?;
+            non_negative(|| format!("model.couplings[{}].damping", i + 1), c.damping, u[2])?;
+            positive(
+                || format!("model.couplings[{}].ratio", i + 1),
+                c.ratio,
+                "(speed of body i per speed of body i+1)",
+            )?;
+        }
+        Ok(())
+    }
+
+    /// 0-based position of the body named `name`.
+    pub fn body(&self, name: &str) -> Option<usize> {
+        self.bodies.iter().position(|b| b.name == name)
+    }
+
+    /// The line as a mechanical model: diagonal inertia, one spring per coupling with
+    /// elongation q_i / r − q_{i+1}, drag on each body.
+    pub fn model(&self) -> Result<MechanicalModel> {
+        self.validate()?;
+        let n = self.bodies.len();
+        let springs = self
+            .couplings
+            .iter()
+            .enumerate()
+            .map(|(i, c)| {
+                let mut e = DVector::zeros(n);
+                e[i] = 1.0 / c.ratio;
+                e[i + 1] = -1.0;
+                Spring {
+                    name: format!("coupling {}", i + 1),
+                    elongation: e,
+                    stiffness: c.stiffness,
+                    damping: c.damping,
+                }
+            })
+            .collect();
+        Ok(MechanicalModel {
+            dof_names: self.bodies.iter().map(|b| b.name.replace(' ', "_")).collect(),
+            inertia: DMatrix::from_diagonal(&DVector::from_iterator(n, self.bodies.iter().map(|b| b.inertia))),
+            springs,
+            drag: DVector::from_iterator(n, self.bodies.iter().map(|b| b.drag)),
+            layout: None,
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use approx::assert_relative_eq;
+
+    fn body(name: &str, inertia: f64) -> LineBody {
+        LineBody { name: name.into(), inertia, drag: 0.0 }
+    }
+
+    /// Motor – shaft – hub – 4:1 gear – load: the frequencies equal those of the same line with
+    /// the gear reduced by hand to the motor side (load inertia and stiffness over r²), written
+    /// as a plain spring chain: J q̈ + K q = 0 with K tridiagonal.
+    #[test]
+    fn a_gear_stage_reflects_by_the_square_of_its_ratio() {
+        let (jm, jh, jl, c1, c2, r) = (0.002, 0.0004, 0.05, 800.0, 20000.0, 4.0);
+        let line = Line {
+            domain: Domain::Rotational,
+            bodies: vec![body("motor", jm), body("hub", jh), body("load", jl)],
+            couplings: vec![
+                Coupling { stiffness: c1, damping: 0.0, ratio: 1.0 },
+                Coupling { stiffness: c2, damping: 0.0, ratio: r },
+            ],
+        };
+        let f = line.model().unwrap().modes().unwrap().frequencies_hz;
+        // by hand: the load seen from the hub side in hub radians q_l' = r q_l: kinetic energy
+        // ½ jl (q̇_l'/r)² gives J' = jl / r², potential ½ c2 ((q_h − q_l')/r)² gives c' = c2 / r²
+        let (jl2, c22) = (jl / (r * r), c2 / (r * r));
+        let j = DMatrix::from_diagonal(&DVector::from_vec(vec![jm, jh, jl2]));
+        let k = DMatrix::from_row_slice(3, 3, &[c1, -c1, 0.0, -c1, c1 + c22, -c22, 0.0, -c22, c22]);
+        let jinv_sqrt = j.map(|v| if v > 0.0 { 1.0 / v.sqrt() } else { 0.0 });
+        let mut w2: Vec<f64> = (&jinv_sqrt * k * &jinv_sqrt).symmetric_eigenvalues().iter().copied().collect();
+        w2.sort_by(|a, b| a.total_cmp(b));
+        let by_hand: Vec<f64> = w2.iter().map(|v| v.max(0.0).sqrt() / (2.0 * std::f64::consts::PI)).collect();
+        assert_eq!(f.len(), 3);
+        assert!(f[0].abs() < 1e-6, "rigid body: {f:?}");
+        for (a, b) in f.iter().zip(&by_hand).skip(1) {
+            assert_relative_eq!(*a, *b, max_relative = 1e-9);
+        }
+        // a single mass on its own: no coupling, one rigid-body mode
+        let one = Line { domain: Domain::Translational, bodies: vec![body("carriage", 20.0)], couplings: vec![] };
+        assert_eq!(one.model().unwrap().dofs(), 1);
+    }
+
+    #[test]
+    fn bad_lines_name_the_key() {
+        let mut line = Line {
+            domain: Domain::Rotational,
+            bodies: vec![body("a", 1.0), body("b", 1.0)],
+            couplings: vec![Coupling { stiffness: 1.0, damping: 0.0, ratio: 1.0 }],
+        };
+        line.couplings[0].ratio = 0.0;
+        assert!(line.validate().unwrap_err().to_string().contains("model.couplings[1].ratio"));
+        line.couplings[0].ratio = 1.0;
+        line.bodies[1].inertia = -1.0;
+        assert!(line.validate().unwrap_err().to_string().contains("model.bodies[2].inertia"));
+        line.bodies[1] = body("a", 1.0);
+        assert!(line.validate().unwrap_err().to_string().contains("used twice"));
+        line.couplings.clear();
+        assert!(line.validate().unwrap_err().to_string().contains("1 are expected"));
+    }
+}
