@@ -356,3 +356,199 @@ pub fn load_bearing(file: &Path) -> Result<BearingBundle, BundleError> {
         coupling: raw.model.coupling,
     })
 }
+
+/// A measured signal of a `drive_test` bundle: its CSV column, where it acts or is measured
+/// (0-based body, or coupling for coupling forces) and, for outputs, what it is.
+#[derive(Debug, Clone, PartialEq)]
+pub struct DriveSignal {
+    /// CSV column.
+    pub column: String,
+    /// 0-based body (inputs, positions, speeds) or coupling (coupling forces).
+    pub at: usize,
+    /// What an output measures (None for inputs).
+    pub quantity: Option<plant::Quantity>,
+}
+
+/// A `drive_test` bundle (`../shared/DATA.md`), loaded: any line of bodies, its measured inputs
+/// and outputs.
+#[derive(Debug, Clone)]
+pub struct DriveTestBundle {
+    /// The TOML file.
+    pub file: PathBuf,
+    /// The declared model.
+    pub line: plant::Line,
+    /// Free text of the bundle.
+    pub description: Option<String>,
+    /// Forces (torques) on bodies.
+    pub inputs: Vec<DriveSignal>,
+    /// Measured outputs.
+    pub outputs: Vec<DriveSignal>,
+    /// Sample time, s.
+    pub dt_s: f64,
+    /// The inputs' samples, one vector per input.
+    pub input_data: Vec<Vec<f64>>,
+    /// The outputs' samples, one vector per output.
+    pub output_data: Vec<Vec<f64>>,
+}
+
+/// A body given by name or by 1-based position.
+#[derive(Deserialize)]
+#[serde(untagged)]
+enum BodyRef {
+    Name(String),
+    Position(i64),
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct DriveFile {
+    // read through `Header`; listed so that deny_unknown_fields accepts it
+    #[serde(rename = "kind")]
+    _kind: String,
+    data: String,
+    domain: plant::Domain,
+    description: Option<String>,
+    model: DriveModelFile,
+    #[serde(default)]
+    inputs: Vec<DriveInputFile>,
+    #[serde(default)]
+    outputs: Vec<DriveOutputFile>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct DriveModelFile {
+    bodies: Vec<plant::LineBody>,
+    #[serde(default)]
+    couplings: Vec<plant::Coupling>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct DriveInputFile {
+    column: String,
+    body: BodyRef,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct DriveOutputFile {
+    column: String,
+    body: Option<BodyRef>,
+    coupling: Option<i64>,
+    quantity: String,
+}
+
+/// Reads a `drive_test` bundle and its CSV: the line validated with named keys, every input and
+/// output resolved to its body or coupling, the columns read and checked as for the other kinds.
+pub fn load_drive_test(file: &Path) -> Result<DriveTestBundle, BundleError> {
+    let text = read_toml(file)?;
+    let header: Header = toml::from_str(&text).map_err(|e| error(file, None, e.to_string().trim_end().to_string()))?;
+    if header.kind != "drive_test" {
+        return Err(error(file, None, format!("`kind` = \"{}\": expected \"drive_test\"", header.kind)));
+    }
+    let raw: DriveFile = toml::from_str(&text).map_err(|e| error(file, None, e.to_string().trim_end().to_string()))?;
+    let line = plant::Line { domain: raw.domain, bodies: raw.model.bodies, couplings: raw.model.couplings };
+    line.validate().map_err(|e| error(file, None, e.to_string()))?;
+    let n = line.bodies.len();
+    let body = |r: &BodyRef, key: &str| -> Result<usize, BundleError> {
+        match r {
+            BodyRef::Name(name) => line.body(name).ok_or_else(|| {
+                let names: Vec<&str> = line.bodies.iter().map(|b| b.name.as_str()).collect();
+                error(file, None, format!("`{key}` = \"{name}\": no such body (the bodies are {})", names.join(", ")))
+            }),
+            BodyRef::Position(p) if (1..=n as i64).contains(p) => Ok(*p as usize - 1),
+            BodyRef::Position(p) => {
+                Err(error(file, None, format!("`{key}` = {p}: expected a body's name or a position from 1 to {n}")))
+            }
+        }
+    };
+    if raw.inputs.is_empty() || raw.outputs.is_empty() {
+        return Err(error(file, None, "expected at least one [[inputs]] and one [[outputs]] entry"));
+    }
+    let mut inputs = Vec::new();
+    for (k, i) in raw.inputs.iter().enumerate() {
+        inputs.push(DriveSignal {
+            column: i.column.clone(),
+            at: body(&i.body, &format!("inputs[{}].body", k + 1))?,
+            quantity: None,
+        });
+    }
+    let mut outputs = Vec::new();
+    for (k, o) in raw.outputs.iter().enumerate() {
+        let key = |f: &str| format!("outputs[{}].{f}", k + 1);
+        let quantity = match o.quantity.as_str() {
+            "angle" | "position" => plant::Quantity::Position,
+            "speed" => plant::Quantity::Speed,
+            "coupling_torque" | "coupling_force" => plant::Quantity::CouplingForce,
+            other => {
+                return Err(error(
+                    file,
+                    None,
+                    format!("`{}` = \"{other}\": expected \"angle\" (\"position\"), \"speed\" or \"coupling_torque\" (\"coupling_force\")", key("quantity")),
+                ))
+            }
+        };
+        let at = match (quantity, &o.body, o.coupling) {
+            (plant::Quantity::CouplingForce, None, Some(c)) if (1..n as i64).contains(&c) => c as usize - 1,
+            (plant::Quantity::CouplingForce, None, Some(c)) => {
+                return Err(error(
+                    file,
+                    None,
+                    format!("`{}` = {c}: expected a coupling from 1 to {}", key("coupling"), n - 1),
+                ))
+            }
+            (plant::Quantity::CouplingForce, _, _) => {
+                return Err(error(
+                    file,
+                    None,
+                    format!("`{}`: a coupling force names `coupling = k` (1-based), not `body`", key("quantity")),
+                ))
+            }
+            (_, Some(b), None) => body(b, &key("body"))?,
+            _ => {
+                return Err(error(
+                    file,
+                    None,
+                    format!("`{}`: an angle, position or speed names `body`, not `coupling`", key("quantity")),
+                ))
+            }
+        };
+        outputs.push(DriveSignal { column: o.column.clone(), at, quantity: Some(quantity) });
+    }
+    let columns: Vec<&str> = inputs.iter().chain(&outputs).map(|s| s.column.as_str()).collect();
+    if let Some((_, c)) = columns.iter().enumerate().find(|(k, c)| columns[..*k].contains(c) || **c == "time_s") {
+        return Err(error(
+            file,
+            None,
+            format!("column `{c}` is named twice (or is the time): each signal needs its own column"),
+        ));
+    }
+    let csv_path = data_path(file, "data", &raw.data)?;
+    let names: Vec<&str> = std::iter::once("time_s").chain(columns.iter().copied()).collect();
+    let mut cols = read_columns(&csv_path, &names)?;
+    let dt_s = uniform_sample_time(&csv_path, &cols[0])?;
+    check_glitches(&csv_path, &names, &cols)?;
+    // the line's slowest flexible mode must be resolved and seen for ten periods
+    let modes = line.model().and_then(|m| m.modes()).map_err(|e| error(file, None, e.to_string()))?;
+    if let Some(lo) = modes.frequencies_hz.iter().copied().filter(|f| *f > 0.01).reduce(f64::min) {
+        let needs =
+            ident::signal::SamplingNeeds { max_frequency_hz: lo, samples_per_period: 4.0, min_duration_s: 10.0 / lo };
+        check_sampling(&csv_path, &cols[0], dt_s, &needs)?;
+    }
+    let output_data = cols.split_off(1 + inputs.len());
+    let input_data = cols.split_off(1);
+    for (s, data) in inputs.iter().zip(&input_data) {
+        check_varies(&csv_path, &s.column, data, "nothing excites the drive, so nothing can be identified")?;
+    }
+    Ok(DriveTestBundle {
+        file: file.to_path_buf(),
+        line,
+        description: raw.description,
+        inputs,
+        outputs,
+        dt_s,
+        input_data,
+        output_data,
+    })
+}

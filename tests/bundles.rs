@@ -148,3 +148,63 @@ fn bad_bundles_name_file_line_and_expectation() {
     );
     assert!(e.contains("`data`"), "{e}");
 }
+
+/// The `drive_test` examples load with their bodies, couplings, inputs and outputs resolved;
+/// the declared line's state space reproduces the gear stage's static ratio (a constant torque
+/// on the motor of bench_gear turns into `ratio` times the torque at the gear's output once the
+/// transients have decayed, minus what the drags take).
+#[test]
+fn drive_test_bundles_load_with_their_signals_resolved() {
+    let g = rigtwin::bundle::load_drive_test(Path::new(&data("bench_gear.toml"))).unwrap();
+    assert_eq!(g.line.bodies.len(), 3);
+    assert_eq!(g.line.couplings[1].ratio, 4.0);
+    assert_eq!((g.inputs.len(), g.outputs.len()), (1, 3));
+    assert_eq!(g.outputs[2].quantity, Some(plant::Quantity::CouplingForce));
+    assert_eq!(g.outputs[2].at, 1);
+    assert!((g.dt_s - 1e-3).abs() < 1e-12);
+    assert_eq!(g.input_data[0].len(), g.output_data[2].len());
+    // static check of the model: no drag, a constant 1 Nm on the motor accelerates the line as
+    // one body; the gear output's torque is then the load's share, ratio · J_load/(J_total,motor side)
+    let mut line = g.line.clone();
+    for b in &mut line.bodies {
+        b.drag = 0.0;
+    }
+    for c in &mut line.couplings {
+        c.damping = 5.0 * c.damping.max(0.1);
+    }
+    let ss = line.state_space(&[0], &[(plant::Quantity::CouplingForce, 1)]).unwrap();
+    let y = ss.lsim(&nalgebra::DMatrix::from_element(20001, 1, 1.0), 1e-3, &nalgebra::DVector::zeros(6)).unwrap();
+    let (jm, jh, jl, r) = (0.002, 0.0004, 0.05, 4.0);
+    let j_motor_side = jm + jh + jl / (r * r);
+    let want = r * (jl / (r * r)) / j_motor_side;
+    assert!((y[(20000, 0)] - want).abs() < 1e-3 * want, "{} vs {want}", y[(20000, 0)]);
+    let a = rigtwin::bundle::load_drive_test(Path::new(&data("axis_linear.toml"))).unwrap();
+    assert_eq!(a.line.domain, plant::Domain::Translational);
+    assert_eq!(a.outputs[0].quantity, Some(plant::Quantity::Position));
+}
+
+#[test]
+fn bad_drive_test_bundles_name_the_key() {
+    let d = std::env::temp_dir().join(format!("rigtwin-drive-{}", std::process::id()));
+    std::fs::create_dir_all(&d).unwrap();
+    std::fs::copy(data("bench_gear.csv"), d.join("bench_gear.csv")).unwrap();
+    let toml = std::fs::read_to_string(data("bench_gear.toml")).unwrap();
+    let refused = |text: String| {
+        std::fs::write(d.join("b.toml"), text).unwrap();
+        rigtwin::bundle::load_drive_test(&d.join("b.toml")).unwrap_err().to_string()
+    };
+    let e = refused(toml.replace("body = \"motor\"\nquantity", "body = \"rotor\"\nquantity"));
+    assert!(e.contains("outputs[1].body") && e.contains("rotor") && e.contains("motor, hub, load"), "{e}");
+    let e = refused(toml.replace("coupling = 2", "coupling = 3"));
+    assert!(e.contains("outputs[3].coupling") && e.contains("from 1 to 2"), "{e}");
+    let e = refused(toml.replace("ratio = 4.0", "ratio = -4.0"));
+    assert!(e.contains("model.couplings[2].ratio"), "{e}");
+    let e = refused(toml.replace("quantity = \"speed\"", "quantity = \"velocity\""));
+    assert!(e.contains("outputs[1].quantity") && e.contains("velocity"), "{e}");
+    let e = refused(toml.replace("column = \"speed_load_radps\"", "column = \"speed_motor_radps\""));
+    assert!(e.contains("named twice"), "{e}");
+    let e = refused(toml.replace("column = \"torque_motor_Nm\"", "column = \"torque_Nm\""));
+    assert!(e.contains("bench_gear.csv:1") && e.contains("torque_Nm"), "{e}");
+    let e = refused(toml.replace("{ stiffness = 800.0, damping = 0.02 },\n", ""));
+    assert!(e.contains("model.couplings") && e.contains("2 are expected"), "{e}");
+}

@@ -42,7 +42,7 @@ pub use bearing::{BearingModel, CoefficientTable, Coefficients, Support};
 pub use bending::{Beam, BeamSegment, Deflection};
 pub use chain::{Body, Chain};
 pub use error::{PlantError, Result};
-pub use line::{Coupling, Domain, Line, LineBody};
+pub use line::{Coupling, Domain, Line, LineBody, Quantity};
 pub use mechanical::{Layout, MechanicalModel, Output, Spring};
 pub use modal::{damp, modes, Modes, Pole};
 pub use reduce::{reduce, Reduction, ReductionStep};

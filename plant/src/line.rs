@@ -12,7 +12,20 @@ use nalgebra::{DMatrix, DVector};
 use serde::{Deserialize, Serialize};
 
 use crate::error::{non_negative, positive, PlantError, Result};
-use crate::mechanical::{MechanicalModel, Spring};
+use crate::mechanical::{MechanicalModel, Output, Spring};
+use crate::statespace::StateSpace;
+
+/// What a measured output of a line is.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Quantity {
+    /// Angle (rad) or position (m) of a body.
+    Position,
+    /// Speed of a body (rad/s or m/s).
+    Speed,
+    /// Force (Nm or N) a coupling transmits, T = c·twist + d·d(twist)/dt.
+    CouplingForce,
+}
 
 /// Rotational (kg m², Nm/rad, rad) or translational (kg, N/m, m).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -154,6 +167,39 @@ impl Line {
     }
 }
 
+impl Line {
+    /// The state space x = [q; q̇] with the forces on the bodies `inputs` (0-based) as inputs and
+    /// the `outputs` (quantity, 0-based body or coupling) as outputs.
+    pub fn state_space(&self, inputs: &[usize], outputs: &[(Quantity, usize)]) -> Result<StateSpace> {
+        let n = self.bodies.len();
+        let full = self.model()?.state_space(&[Output::Angles, Output::Speeds, Output::SpringTorques])?;
+        let row = |&(q, i): &(Quantity, usize)| -> Result<usize> {
+            let (offset, count) = match q {
+                Quantity::Position => (0, n),
+                Quantity::Speed => (n, n),
+                Quantity::CouplingForce => (2 * n, n - 1),
+            };
+            if i >= count {
+                return Err(PlantError::Invalid(format!("output {q:?} of position {} is outside the line", i + 1)));
+            }
+            Ok(offset + i)
+        };
+        let rows = outputs.iter().map(row).collect::<Result<Vec<usize>>>()?;
+        if let Some(&i) = inputs.iter().find(|&&i| i >= n) {
+            return Err(PlantError::Invalid(format!("input on body {} is outside the line", i + 1)));
+        }
+        Ok(StateSpace {
+            b: full.b.select_columns(inputs),
+            c: full.c.select_rows(&rows),
+            d: DMatrix::zeros(rows.len(), inputs.len()),
+            input_names: inputs.iter().map(|&i| full.input_names[i].clone()).collect(),
+            output_names: rows.iter().map(|&r| full.output_names[r].clone()).collect(),
+            a: full.a,
+            state_names: full.state_names,
+        })
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -195,6 +241,23 @@ mod tests {
         // a single mass on its own: no coupling, one rigid-body mode
         let one = Line { domain: Domain::Translational, bodies: vec![body("carriage", 20.0)], couplings: vec![] };
         assert_eq!(one.model().unwrap().dofs(), 1);
+    }
+
+    /// A single mass m with drag d under a force: the speed's transfer function 1/(m s + d),
+    /// so after a unit force step the speed is (1 − e^(−d t/m))/d.
+    #[test]
+    fn a_single_mass_state_space_is_the_first_order_law() {
+        let line = Line {
+            domain: Domain::Translational,
+            bodies: vec![LineBody { name: "carriage".into(), inertia: 20.0, drag: 60.0 }],
+            couplings: vec![],
+        };
+        let ss = line.state_space(&[0], &[(Quantity::Speed, 0), (Quantity::Position, 0)]).unwrap();
+        let u = DMatrix::from_element(1001, 1, 1.0);
+        let y = ss.lsim(&u, 1e-3, &DVector::zeros(2)).unwrap();
+        let t = 1.0;
+        assert_relative_eq!(y[(1000, 0)], (1.0 - (-60.0 * t / 20.0f64).exp()) / 60.0, max_relative = 1e-9);
+        assert!(line.state_space(&[0], &[(Quantity::CouplingForce, 0)]).is_err(), "no coupling to measure");
     }
 
     #[test]
