@@ -24,6 +24,7 @@ fn in_child(name: &str, case: impl FnOnce()) {
     let mut child = Command::new(std::env::current_exe().unwrap())
         .args([name, "--exact", "--test-threads=1", "--nocapture"])
         .env(CHILD, "1")
+        .stdout(std::process::Stdio::null())
         .spawn()
         .unwrap();
     let start = Instant::now();
