@@ -268,6 +268,30 @@ fn sfd_bundle_gives_a_squeeze_film_damper_of_the_slides_size() {
     assert!(kc["K_N_per_m"][0][0].as_f64().unwrap() < 0.0, "KC mimics the inertia with a negative stiffness");
     let warnings = kc["warnings"].to_string();
     assert!(warnings.contains("KCM") && warnings.contains("inertia"), "{warnings}");
+    // the FMU's default bearing is this identification (KCM, full coupling, IVFM) of sfd_shake,
+    // with the bundle's support: the numbers in fmu/src/params.rs are not typed in by hand
+    let default = rigtwin_fmu::FmuParams::default().bearing;
+    for (key, table) in [
+        ("K_N_per_m", default.element.k_n_per_m),
+        ("C_Ns_per_m", default.element.c_ns_per_m),
+        ("M_kg", default.element.m_kg),
+    ] {
+        for i in 0..2 {
+            for j in 0..2 {
+                // the JSON carries the identification to float_roundtrip precision; 1e-9 of the
+                // direct term leaves room for the last bits of a different summation order
+                let scale = table[i][i].abs();
+                assert!(
+                    (c(key, i, j) - table[i][j]).abs() <= 1e-9 * scale,
+                    "{key}[{i}][{j}]: {} vs default {}",
+                    c(key, i, j),
+                    table[i][j]
+                );
+            }
+        }
+    }
+    let b = rigtwin::bundle::load_bearing(&bundle).unwrap();
+    assert_eq!(b.support, default.support);
 }
 
 #[test]

@@ -80,3 +80,21 @@ fn a_binary_copied_alone_writes_both_fmus() {
         assert!(p["powertrain"]["d_short"].as_f64().unwrap() > 0.0, "the default is the damped rig: {p}");
     }
 }
+
+/// What `cargo build --release --workspace` compiles needs no bindgen, so no libclang: the FMI
+/// headers' bindings are checked in (only the tests' fmi-sys generates them).
+#[test]
+fn the_products_build_needs_no_bindgen() {
+    let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
+    let out = Command::new(cargo)
+        .args(["tree", "-e", "normal,build", "--workspace", "--prefix", "none", "--offline"])
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let tree = String::from_utf8_lossy(&out.stdout);
+    assert!(tree.contains("nalgebra") && tree.contains("clarabel"), "the tree lists the dependencies:\n{tree}");
+    for banned in ["bindgen", "clang-sys", "fmi-sys"] {
+        assert!(!tree.contains(banned), "{banned} is built by the product:\n{tree}");
+    }
+}
