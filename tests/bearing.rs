@@ -276,16 +276,15 @@ fn sfd_bundle_gives_a_squeeze_film_damper_of_the_slides_size() {
         ("C_Ns_per_m", default.element.c_ns_per_m),
         ("M_kg", default.element.m_kg),
     ] {
-        for i in 0..2 {
-            for j in 0..2 {
+        for (i, row) in table.iter().enumerate() {
+            for (j, &want) in row.iter().enumerate() {
                 // the JSON carries the identification to float_roundtrip precision; 1e-9 of the
                 // direct term leaves room for the last bits of a different summation order
                 let scale = table[i][i].abs();
                 assert!(
-                    (c(key, i, j) - table[i][j]).abs() <= 1e-9 * scale,
-                    "{key}[{i}][{j}]: {} vs default {}",
-                    c(key, i, j),
-                    table[i][j]
+                    (c(key, i, j) - want).abs() <= 1e-9 * scale,
+                    "{key}[{i}][{j}]: {} vs default {want}",
+                    c(key, i, j)
                 );
             }
         }
