@@ -71,6 +71,8 @@ pub struct BearingReport {
     pub alternatives: Vec<Alternative>,
     /// Things the engineer should know.
     pub warnings: Vec<String>,
+    /// Unit conversions and sensor calibrations applied to the tests' channels.
+    pub conversions: Vec<String>,
 }
 
 /// Identifies the element of a bundle; `structure`/`coupling` override the declared ones.
@@ -151,6 +153,7 @@ pub fn identify(
         support: b.support,
         alternatives,
         warnings,
+        conversions: b.conversions.clone(),
     };
     Ok((report, imp))
 }
@@ -174,6 +177,9 @@ impl BearingReport {
             "  {} lines in {}–{} Hz, {avg}; condition number of [Z1 Z2] ≤ {:.2}",
             self.lines, self.band_hz.0, self.band_hz.1, self.condition_number_max
         );
+        for c in &self.conversions {
+            let _ = writeln!(s, "  converted: {c}");
+        }
         if self.method == Method::Ivfm {
             let _ = writeln!(
                 s,

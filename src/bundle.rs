@@ -8,6 +8,7 @@ use ident::Sweep;
 use plant::{RigParams, Variant};
 
 use crate::rigfile::parse_rig;
+use crate::units::{Calibration, Dimension};
 
 /// A bundle that cannot be used: which file, which line if known, and what is wrong.
 #[derive(Debug, thiserror::Error)]
@@ -52,6 +53,8 @@ pub struct TorsionalBundle {
     pub model: RigParams,
     /// The recorded sweep.
     pub sweep: Sweep,
+    /// Unit conversions and calibrations applied to the recorded channels.
+    pub conversions: Vec<String>,
 }
 
 #[derive(Deserialize)]
@@ -59,6 +62,91 @@ struct Header {
     kind: String,
     data: Option<String>,
     variant: Option<toml::Value>,
+    columns: Option<std::collections::BTreeMap<String, ColumnFile>>,
+}
+
+/// Where a signal of a kind with fixed column names is in the file, and how its values become SI
+/// (`[columns]`, `../shared/DATA.md`).
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ColumnFile {
+    channel: Option<String>,
+    unit: Option<String>,
+    #[serde(default = "unit_gain")]
+    gain: f64,
+    #[serde(default)]
+    offset: f64,
+}
+
+fn unit_gain() -> f64 {
+    1.0
+}
+
+/// One signal a reader needs: its name in the format, where it is in the file, what it measures
+/// and how its recorded values become SI; `key` names its calibration in the bundle.
+struct SignalSpec {
+    name: String,
+    channel: String,
+    dimension: Dimension,
+    calibration: Calibration,
+    key: String,
+}
+
+/// The specs of the fixed columns `expected` (name, dimension), remapped by `[columns]`.
+fn fixed_columns(
+    file: &Path,
+    columns: Option<&std::collections::BTreeMap<String, ColumnFile>>,
+    expected: &[(&str, Dimension)],
+) -> Result<Vec<SignalSpec>, BundleError> {
+    if let Some(map) = columns {
+        if let Some(k) = map.keys().find(|k| !expected.iter().any(|(n, _)| n == k)) {
+            let names: Vec<&str> = expected.iter().map(|(n, _)| *n).collect();
+            return Err(error(
+                file,
+                None,
+                format!("`columns.{k}` is not a signal of this kind: expected {}", names.join(", ")),
+            ));
+        }
+    }
+    Ok(expected
+        .iter()
+        .map(|&(name, dimension)| {
+            let c = columns.and_then(|m| m.get(name));
+            SignalSpec {
+                name: name.into(),
+                channel: c.and_then(|c| c.channel.clone()).unwrap_or_else(|| name.into()),
+                dimension,
+                calibration: c
+                    .map(|c| Calibration { unit: c.unit.clone(), gain: c.gain, offset: c.offset })
+                    .unwrap_or_default(),
+                key: format!("columns.{name}"),
+            }
+        })
+        .collect())
+}
+
+/// What the calibrations of `specs` do to the recorded values, one line each (none for SI columns
+/// read as they are).
+fn conversions_of(specs: &[SignalSpec]) -> Vec<String> {
+    specs.iter().filter_map(|s| s.calibration.describe(&s.name, &s.channel, s.dimension)).collect()
+}
+
+/// Reads the signals `specs` from the CSV `path` (named in the bundle `file`) and converts them to SI.
+fn read_signals(file: &Path, path: &Path, specs: &[SignalSpec]) -> Result<Vec<Vec<f64>>, BundleError> {
+    let mut scales = Vec::with_capacity(specs.len());
+    for s in specs {
+        scales.push(s.calibration.resolve(s.dimension).map_err(|e| error(file, None, format!("`{}`: {e}", s.key)))?);
+    }
+    let channels: Vec<&str> = specs.iter().map(|s| s.channel.as_str()).collect();
+    let mut cols = read_columns(path, &channels)?;
+    for (col, &(scale, offset)) in cols.iter_mut().zip(&scales) {
+        if (scale, offset) != (1.0, 0.0) {
+            for v in col.iter_mut() {
+                *v = scale * *v + offset;
+            }
+        }
+    }
+    Ok(cols)
 }
 
 /// Reads a bundle's TOML (a regular file of sane size).
@@ -144,18 +232,27 @@ pub fn load_torsional(file: &Path) -> Result<TorsionalBundle, BundleError> {
         samples_per_period: 8.0,
         min_duration_s: 10.0 / lo,
     });
-    let sweep = read_sweep_csv(&csv_path, needs.as_ref())?;
+    let specs = fixed_columns(file, header.columns.as_ref(), &SWEEP_SIGNALS)?;
+    let conversions = conversions_of(&specs);
+    let sweep = read_sweep_csv(file, &csv_path, &specs, needs.as_ref())?;
     check_varies(
         &csv_path,
         "torque_drive_Nm",
         &sweep.torque_nm,
         "nothing excites the rig, so nothing can be identified",
     )?;
-    Ok(TorsionalBundle { file: file.to_path_buf(), variant: rig.variant, model: rig.model, sweep })
+    Ok(TorsionalBundle { file: file.to_path_buf(), variant: rig.variant, model: rig.model, sweep, conversions })
 }
 
 /// The columns of a sweep CSV.
 pub const SWEEP_COLUMNS: [&str; 4] = ["time_s", "torque_drive_Nm", "speed_m2_radps", "speed_m3_radps"];
+
+const SWEEP_SIGNALS: [(&str, Dimension); 4] = [
+    ("time_s", Dimension::Time),
+    ("torque_drive_Nm", Dimension::Torque),
+    ("speed_m2_radps", Dimension::AngularSpeed),
+    ("speed_m3_radps", Dimension::AngularSpeed),
+];
 
 /// Reads named columns of a numeric CSV with a header line; returns them in the order asked.
 pub fn read_columns(path: &Path, names: &[&str]) -> Result<Vec<Vec<f64>>, BundleError> {
@@ -233,13 +330,19 @@ pub fn uniform_sample_time(path: &Path, t: &[f64]) -> Result<f64, BundleError> {
     Ok((t[t.len() - 1] - t[0]) / (t.len() - 1) as f64)
 }
 
-fn read_sweep_csv(path: &Path, needs: Option<&ident::signal::SamplingNeeds>) -> Result<Sweep, BundleError> {
-    let mut cols = read_columns(path, &SWEEP_COLUMNS)?;
+fn read_sweep_csv(
+    file: &Path,
+    path: &Path,
+    specs: &[SignalSpec],
+    needs: Option<&ident::signal::SamplingNeeds>,
+) -> Result<Sweep, BundleError> {
+    let mut cols = read_signals(file, path, specs)?;
     let dt_s = uniform_sample_time(path, &cols[0])?;
     if let Some(needs) = needs {
         check_sampling(path, &cols[0], dt_s, needs)?;
     }
-    check_glitches(path, &SWEEP_COLUMNS, &cols)?;
+    let channels: Vec<&str> = specs.iter().map(|s| s.channel.as_str()).collect();
+    check_glitches(path, &channels, &cols)?;
     let speed_m3_radps = cols.pop().expect("4 columns");
     let speed_m2_radps = cols.pop().expect("4 columns");
     let torque_nm = cols.pop().expect("4 columns");
@@ -261,6 +364,8 @@ pub struct BearingBundle {
     pub structure: ident::Structure,
     /// Declared coupling.
     pub coupling: ident::Coupling,
+    /// Unit conversions and calibrations applied to the recorded channels.
+    pub conversions: Vec<String>,
 }
 
 #[derive(Deserialize)]
@@ -272,6 +377,7 @@ struct BearingFile {
     f_max_hz: f64,
     support: plant::Support,
     model: BearingModelFile,
+    columns: Option<std::collections::BTreeMap<String, ColumnFile>>,
 }
 
 #[derive(Deserialize)]
@@ -283,6 +389,14 @@ struct BearingModelFile {
 
 /// The columns of a shake-test CSV.
 pub const SHAKE_COLUMNS: [&str; 5] = ["time_s", "force_x_N", "force_y_N", "disp_x_m", "disp_y_m"];
+
+const SHAKE_SIGNALS: [(&str, Dimension); 5] = [
+    ("time_s", Dimension::Time),
+    ("force_x_N", Dimension::Force),
+    ("force_y_N", Dimension::Force),
+    ("disp_x_m", Dimension::Length),
+    ("disp_y_m", Dimension::Length),
+];
 
 /// Reads a `bearing_shake` bundle and its two CSVs.
 pub fn load_bearing(file: &Path) -> Result<BearingBundle, BundleError> {
@@ -329,16 +443,18 @@ pub fn load_bearing(file: &Path) -> Result<BearingBundle, BundleError> {
         samples_per_period: 2.5,
         min_duration_s: 5.0 / raw.f_min_hz.max(0.1 * raw.f_max_hz),
     };
+    let specs = fixed_columns(file, raw.columns.as_ref(), &SHAKE_SIGNALS)?;
+    let channels: Vec<&str> = specs.iter().map(|s| s.channel.as_str()).collect();
     let read = |path: &Path| -> Result<ident::ShakeTest, BundleError> {
         let path = path.to_path_buf();
-        let mut cols = read_columns(&path, &SHAKE_COLUMNS)?;
+        let mut cols = read_signals(file, &path, &specs)?;
         let dt_s = uniform_sample_time(&path, &cols[0])?;
-        check_glitches(&path, &SHAKE_COLUMNS, &cols)?;
+        check_glitches(&path, &channels, &cols)?;
         check_sampling(&path, &cols[0], dt_s, &needs).map_err(|mut e| {
             e.message = format!("{} (f_min_hz = {}, f_max_hz = {})", e.message, raw.f_min_hz, raw.f_max_hz);
             e
         })?;
-        for (name, col) in SHAKE_COLUMNS.iter().zip(&cols).skip(1) {
+        for (name, col) in channels.iter().zip(&cols).skip(1) {
             check_varies(&path, name, col, "each test must excite and move the element")?;
         }
         let disp_y_m = cols.pop().expect("5 columns");
@@ -350,6 +466,7 @@ pub fn load_bearing(file: &Path) -> Result<BearingBundle, BundleError> {
     Ok(BearingBundle {
         file: file.to_path_buf(),
         tests: [read(&paths[0])?, read(&paths[1])?],
+        conversions: conversions_of(&specs),
         band_hz: (raw.f_min_hz, raw.f_max_hz),
         support: raw.support,
         structure: raw.model.structure,
@@ -389,6 +506,8 @@ pub struct DriveTestBundle {
     pub input_data: Vec<Vec<f64>>,
     /// The outputs' samples, one vector per output.
     pub output_data: Vec<Vec<f64>>,
+    /// Unit conversions and calibrations applied to the recorded channels.
+    pub conversions: Vec<String>,
 }
 
 /// A body given by name or by 1-based position.
@@ -428,6 +547,11 @@ struct DriveModelFile {
 struct DriveInputFile {
     column: String,
     body: BodyRef,
+    unit: Option<String>,
+    #[serde(default = "unit_gain")]
+    gain: f64,
+    #[serde(default)]
+    offset: f64,
 }
 
 #[derive(Deserialize)]
@@ -437,6 +561,11 @@ struct DriveOutputFile {
     body: Option<BodyRef>,
     coupling: Option<i64>,
     quantity: String,
+    unit: Option<String>,
+    #[serde(default = "unit_gain")]
+    gain: f64,
+    #[serde(default)]
+    offset: f64,
 }
 
 /// Reads a `drive_test` bundle and its CSV: the line validated with named keys, every input and
@@ -525,8 +654,41 @@ pub fn load_drive_test(file: &Path) -> Result<DriveTestBundle, BundleError> {
         ));
     }
     let csv_path = data_path(file, "data", &raw.data)?;
-    let names: Vec<&str> = std::iter::once("time_s").chain(columns.iter().copied()).collect();
-    let mut cols = read_columns(&csv_path, &names)?;
+    let rotational = raw.domain == plant::Domain::Rotational;
+    let dimension_of = |q: Option<plant::Quantity>| match (q, rotational) {
+        (None | Some(plant::Quantity::CouplingForce), true) => Dimension::Torque,
+        (None | Some(plant::Quantity::CouplingForce), false) => Dimension::Force,
+        (Some(plant::Quantity::Position), true) => Dimension::Angle,
+        (Some(plant::Quantity::Position), false) => Dimension::Length,
+        (Some(plant::Quantity::Speed), true) => Dimension::AngularSpeed,
+        (Some(plant::Quantity::Speed), false) => Dimension::Speed,
+    };
+    let calibrations = raw
+        .inputs
+        .iter()
+        .map(|i| (&i.unit, i.gain, i.offset))
+        .chain(raw.outputs.iter().map(|o| (&o.unit, o.gain, o.offset)));
+    let keys = (1..=raw.inputs.len())
+        .map(|k| format!("inputs[{k}]"))
+        .chain((1..=raw.outputs.len()).map(|k| format!("outputs[{k}]")));
+    let mut specs = vec![SignalSpec {
+        name: "time_s".into(),
+        channel: "time_s".into(),
+        dimension: Dimension::Time,
+        calibration: Calibration::default(),
+        key: "time_s".into(),
+    }];
+    for ((s, (unit, gain, offset)), key) in inputs.iter().chain(&outputs).zip(calibrations).zip(keys) {
+        specs.push(SignalSpec {
+            name: s.column.clone(),
+            channel: s.column.clone(),
+            dimension: dimension_of(s.quantity),
+            calibration: Calibration { unit: unit.clone(), gain, offset },
+            key,
+        });
+    }
+    let names: Vec<&str> = specs.iter().map(|s| s.channel.as_str()).collect();
+    let mut cols = read_signals(file, &csv_path, &specs)?;
     let dt_s = uniform_sample_time(&csv_path, &cols[0])?;
     check_glitches(&csv_path, &names, &cols)?;
     // the line's slowest flexible mode must be resolved and seen for ten periods
@@ -550,5 +712,6 @@ pub fn load_drive_test(file: &Path) -> Result<DriveTestBundle, BundleError> {
         dt_s,
         input_data,
         output_data,
+        conversions: conversions_of(&specs),
     })
 }

@@ -32,6 +32,8 @@ pub struct DiagnosisReport {
     pub evidence: serde_json::Value,
     /// Remarks.
     pub notes: Vec<String>,
+    /// Unit conversions and sensor calibrations applied to the recorded channels.
+    pub conversions: Vec<String>,
 }
 
 /// The diagnosis with what is needed to plot it and write the model.
@@ -143,6 +145,7 @@ fn torsional(file: &Path, progress: &(dyn Fn(&str) + Sync)) -> anyhow::Result<Di
             structured_residual: d.structured_residual,
             evidence: serde_json::to_value(&d.evidence)?,
             notes,
+            conversions: b.conversions.clone(),
         },
         model_toml,
         panels,
@@ -236,6 +239,7 @@ fn bearing(file: &Path, _progress: &(dyn Fn(&str) + Sync)) -> anyhow::Result<Dia
             structured_residual: d.structured_residual,
             evidence,
             notes,
+            conversions: b.conversions.clone(),
         },
         model_toml,
         panels,
@@ -282,6 +286,9 @@ pub fn human(r: &DiagnosisReport) -> String {
     }
     for n in &r.notes {
         s += &format!("  note: {n}\n");
+    }
+    for c in &r.conversions {
+        s += &format!("  converted: {c}\n");
     }
     s
 }

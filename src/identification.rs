@@ -57,6 +57,8 @@ pub struct MeasurementReport {
     pub mode_seen: Option<SeenMode>,
     /// Phase of M2 against M3 at the resonance, degrees (bundles only).
     pub phase_m2_m3_deg: Option<f64>,
+    /// Unit conversions and sensor calibrations applied to the bundle's channels.
+    pub conversions: Vec<String>,
 }
 
 /// All solutions of one variant pair.
@@ -163,6 +165,7 @@ pub fn parametrise(
                     modal_fit: None,
                     mode_seen: None,
                     phase_m2_m3_deg: None,
+                    conversions: Vec::new(),
                 })
                 .collect();
             (rig.model, m)
@@ -212,6 +215,7 @@ pub fn parametrise(
                     modal_fit: Some(a.modal_fit.clone()),
                     mode_seen: Some(a.mode),
                     phase_m2_m3_deg: Some(a.phase_m2_m3_deg),
+                    conversions: b.conversions.clone(),
                 });
             }
             let (_, t) = template.ok_or_else(|| anyhow::anyhow!("no bundle given"))?;
@@ -346,6 +350,9 @@ impl ParametriseReport {
                 mode,
                 m.file.as_deref().unwrap_or("typed in")
             );
+            for c in &m.conversions {
+                let _ = writeln!(s, "           converted: {c}");
+            }
         }
         let _ = writeln!(s, "\n  pair    j_drive [kg m^2]  c_short [Nm/rad]  measured on the shuffle mode");
         for p in &self.pairs {

@@ -10,3 +10,4 @@ pub mod identification;
 pub mod plot;
 pub mod report;
 pub mod rigfile;
+pub mod units;

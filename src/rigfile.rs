@@ -82,6 +82,9 @@ struct RigFile {
     /// A bundle's data file; not read here.
     #[allow(dead_code)]
     data: Option<String>,
+    /// A bundle's map of its columns to the recorded channels; not read here.
+    #[allow(dead_code)]
+    columns: Option<toml::Value>,
     #[serde(default)]
     variant: Variant,
     model: RigParams,
