@@ -63,6 +63,39 @@ struct Header {
     data: Option<String>,
     variant: Option<toml::Value>,
     columns: Option<std::collections::BTreeMap<String, ColumnFile>>,
+    time: Option<String>,
+    sample_rate_hz: Option<f64>,
+}
+
+/// Where the samples' times come from: a column (variable, channel), or a sample rate.
+#[derive(Debug, Clone, PartialEq)]
+enum TimeBase {
+    /// The time signal (the first spec) is read like the others.
+    Column,
+    /// Uniform samples at this rate, starting at 0 s.
+    Rate(f64),
+}
+
+/// The time base of a bundle from its `time` and `sample_rate_hz` keys; `time` renames the
+/// time signal (the first of `specs`).
+fn time_base(
+    file: &Path,
+    time: Option<&str>,
+    rate: Option<f64>,
+    specs: &mut [SignalSpec],
+) -> Result<TimeBase, BundleError> {
+    match (time, rate) {
+        (Some(_), Some(_)) => {
+            Err(error(file, None, "give either `time` (the time signal) or `sample_rate_hz`, not both"))
+        }
+        (Some(t), None) => {
+            specs[0].channel = t.to_string();
+            Ok(TimeBase::Column)
+        }
+        (None, Some(r)) if r.is_finite() && r > 0.0 => Ok(TimeBase::Rate(r)),
+        (None, Some(r)) => Err(error(file, None, format!("`sample_rate_hz` = {r}: expected a positive, finite rate"))),
+        (None, None) => Ok(TimeBase::Column),
+    }
 }
 
 /// Where a signal of a kind with fixed column names is in the file, and how its values become SI
@@ -131,14 +164,24 @@ fn conversions_of(specs: &[SignalSpec]) -> Vec<String> {
     specs.iter().filter_map(|s| s.calibration.describe(&s.name, &s.channel, s.dimension)).collect()
 }
 
-/// Reads the signals `specs` from the CSV `path` (named in the bundle `file`) and converts them to SI.
-fn read_signals(file: &Path, path: &Path, specs: &[SignalSpec]) -> Result<Vec<Vec<f64>>, BundleError> {
+/// Reads the signals `specs` (the time first) from the record `path` (a CSV, or a `.mat` file;
+/// named in the bundle `file`) and converts them to SI.
+fn read_signals(file: &Path, path: &Path, specs: &[SignalSpec], time: &TimeBase) -> Result<Vec<Vec<f64>>, BundleError> {
+    let specs_read = match time {
+        TimeBase::Column => specs,
+        TimeBase::Rate(_) => &specs[1..],
+    };
     let mut scales = Vec::with_capacity(specs.len());
     for s in specs {
         scales.push(s.calibration.resolve(s.dimension).map_err(|e| error(file, None, format!("`{}`: {e}", s.key)))?);
     }
-    let channels: Vec<&str> = specs.iter().map(|s| s.channel.as_str()).collect();
-    let mut cols = read_columns(path, &channels)?;
+    let channels: Vec<&str> = specs_read.iter().map(|s| s.channel.as_str()).collect();
+    let is_mat = path.extension().and_then(|e| e.to_str()).is_some_and(|e| e.eq_ignore_ascii_case("mat"));
+    let mut cols = if is_mat { read_mat(path, &channels)? } else { read_columns(path, &channels)? };
+    if let TimeBase::Rate(r) = time {
+        let n = cols[0].len();
+        cols.insert(0, (0..n).map(|k| k as f64 / r).collect());
+    }
     for (col, &(scale, offset)) in cols.iter_mut().zip(&scales) {
         if (scale, offset) != (1.0, 0.0) {
             for v in col.iter_mut() {
@@ -232,9 +275,10 @@ pub fn load_torsional(file: &Path) -> Result<TorsionalBundle, BundleError> {
         samples_per_period: 8.0,
         min_duration_s: 10.0 / lo,
     });
-    let specs = fixed_columns(file, header.columns.as_ref(), &SWEEP_SIGNALS)?;
+    let mut specs = fixed_columns(file, header.columns.as_ref(), &SWEEP_SIGNALS)?;
+    let time = time_base(file, header.time.as_deref(), header.sample_rate_hz, &mut specs)?;
     let conversions = conversions_of(&specs);
-    let sweep = read_sweep_csv(file, &csv_path, &specs, needs.as_ref())?;
+    let sweep = read_sweep_csv(file, &csv_path, &specs, &time, needs.as_ref())?;
     check_varies(
         &csv_path,
         "torque_drive_Nm",
@@ -334,9 +378,10 @@ fn read_sweep_csv(
     file: &Path,
     path: &Path,
     specs: &[SignalSpec],
+    time: &TimeBase,
     needs: Option<&ident::signal::SamplingNeeds>,
 ) -> Result<Sweep, BundleError> {
-    let mut cols = read_signals(file, path, specs)?;
+    let mut cols = read_signals(file, path, specs, time)?;
     let dt_s = uniform_sample_time(path, &cols[0])?;
     if let Some(needs) = needs {
         check_sampling(path, &cols[0], dt_s, needs)?;
@@ -378,6 +423,8 @@ struct BearingFile {
     support: plant::Support,
     model: BearingModelFile,
     columns: Option<std::collections::BTreeMap<String, ColumnFile>>,
+    time: Option<String>,
+    sample_rate_hz: Option<f64>,
 }
 
 #[derive(Deserialize)]
@@ -443,11 +490,12 @@ pub fn load_bearing(file: &Path) -> Result<BearingBundle, BundleError> {
         samples_per_period: 2.5,
         min_duration_s: 5.0 / raw.f_min_hz.max(0.1 * raw.f_max_hz),
     };
-    let specs = fixed_columns(file, raw.columns.as_ref(), &SHAKE_SIGNALS)?;
+    let mut specs = fixed_columns(file, raw.columns.as_ref(), &SHAKE_SIGNALS)?;
+    let time = time_base(file, raw.time.as_deref(), raw.sample_rate_hz, &mut specs)?;
     let channels: Vec<&str> = specs.iter().map(|s| s.channel.as_str()).collect();
     let read = |path: &Path| -> Result<ident::ShakeTest, BundleError> {
         let path = path.to_path_buf();
-        let mut cols = read_signals(file, &path, &specs)?;
+        let mut cols = read_signals(file, &path, &specs, &time)?;
         let dt_s = uniform_sample_time(&path, &cols[0])?;
         check_glitches(&path, &channels, &cols)?;
         check_sampling(&path, &cols[0], dt_s, &needs).map_err(|mut e| {
@@ -528,6 +576,8 @@ struct DriveFile {
     domain: plant::Domain,
     description: Option<String>,
     model: DriveModelFile,
+    time: Option<String>,
+    sample_rate_hz: Option<f64>,
     #[serde(default)]
     inputs: Vec<DriveInputFile>,
     #[serde(default)]
@@ -687,8 +737,9 @@ pub fn load_drive_test(file: &Path) -> Result<DriveTestBundle, BundleError> {
             key,
         });
     }
+    let time = time_base(file, raw.time.as_deref(), raw.sample_rate_hz, &mut specs)?;
     let names: Vec<&str> = specs.iter().map(|s| s.channel.as_str()).collect();
-    let mut cols = read_signals(file, &csv_path, &specs)?;
+    let mut cols = read_signals(file, &csv_path, &specs, &time)?;
     let dt_s = uniform_sample_time(&csv_path, &cols[0])?;
     check_glitches(&csv_path, &names, &cols)?;
     // the line's slowest flexible mode must be resolved and seen for ten periods
@@ -714,4 +765,99 @@ pub fn load_drive_test(file: &Path) -> Result<DriveTestBundle, BundleError> {
         output_data,
         conversions: conversions_of(&specs),
     })
+}
+
+/// Reads the variables `names` of a MATLAB `.mat` file (v5 or v7, compressed or not) as
+/// vectors, converted to f64 from any real numeric class. v7.3 files (HDF5) are refused with
+/// the fix; a file the reader cannot parse — or on which it panics — is an error naming it.
+pub fn read_mat(path: &Path, names: &[&str]) -> Result<Vec<Vec<f64>>, BundleError> {
+    crate::files::check_input(path, crate::files::MAX_DATA_BYTES)
+        .map_err(|e| error(path, None, format!("{e:#}").replace(&format!("{}: ", path.display()), "")))?;
+    let bytes = std::fs::read(path).map_err(|e| error(path, None, format!("cannot read: {e}")))?;
+    if bytes.starts_with(b"MATLAB 7.3 MAT-file") || bytes.get(512..520) == Some(b"\x89HDF\r\n\x1a\n") {
+        return Err(error(
+            path,
+            None,
+            "a MATLAB v7.3 (HDF5) file: rigtwin reads v5 and v7 .mat files; save it with save(file, '-v7')",
+        ));
+    }
+    if !bytes.starts_with(b"MATLAB 5.0 MAT-file") || bytes.len() < 128 {
+        return Err(error(
+            path,
+            None,
+            "not a MATLAB v5/v7 .mat file (its header does not say \"MATLAB 5.0 MAT-file\")",
+        ));
+    }
+    // The first 116 bytes are descriptive text; matrw wants MATLAB's own wording
+    // ("MATLAB 5.0 MAT-file, Platform: …") where scipy writes "MATLAB 5.0 MAT-file Platform: …".
+    let mut bytes = bytes;
+    let text = b"MATLAB 5.0 MAT-file, written by another tool";
+    bytes[..text.len()].copy_from_slice(text);
+    bytes[text.len()..116].fill(b' ');
+    // the parser unwraps in places (a corrupt zlib stream): a panic on a hostile file is
+    // contained and reported as the file's error, and the default hook's message kept quiet
+    let hook = std::panic::take_hook();
+    std::panic::set_hook(Box::new(|_| {}));
+    let parsed = std::panic::catch_unwind(|| matrw::load_matfile_from_u8(&bytes));
+    std::panic::set_hook(hook);
+    let mat = match parsed {
+        Ok(Ok(m)) => m,
+        Ok(Err(e)) => return Err(error(path, None, format!("cannot parse the .mat file: {e}"))),
+        Err(_) => return Err(error(path, None, "cannot parse the .mat file (the reader failed on its contents)")),
+    };
+    let available: Vec<String> = mat.iter().map(|(k, _)| k.clone()).collect();
+    let mut out: Vec<Vec<f64>> = Vec::with_capacity(names.len());
+    for name in names {
+        let Some((_, var)) = mat.iter().find(|(k, _)| k.as_str() == *name) else {
+            return Err(error(path, None, format!("no variable `{name}` (the file has {})", available.join(", "))));
+        };
+        let dims = var.dim();
+        if dims.iter().filter(|&&d| d > 1).count() > 1 {
+            return Err(error(
+                path,
+                None,
+                format!("variable `{name}` is a {dims:?} array: expected a row or column vector"),
+            ));
+        }
+        let values: Option<Vec<f64>> = var
+            .to_vec::<f64>()
+            .or_else(|| var.to_vec::<f32>().map(|v| v.into_iter().map(f64::from).collect()))
+            .or_else(|| var.to_vec::<i32>().map(|v| v.into_iter().map(f64::from).collect()))
+            .or_else(|| var.to_vec::<i16>().map(|v| v.into_iter().map(f64::from).collect()))
+            .or_else(|| var.to_vec::<u16>().map(|v| v.into_iter().map(f64::from).collect()))
+            .or_else(|| var.to_vec::<i8>().map(|v| v.into_iter().map(f64::from).collect()))
+            .or_else(|| var.to_vec::<u8>().map(|v| v.into_iter().map(f64::from).collect()))
+            .or_else(|| var.to_vec::<u32>().map(|v| v.into_iter().map(f64::from).collect()))
+            .or_else(|| var.to_vec::<i64>().map(|v| v.into_iter().map(|x| x as f64).collect()))
+            .or_else(|| var.to_vec::<u64>().map(|v| v.into_iter().map(|x| x as f64).collect()));
+        let Some(values) = values else {
+            return Err(error(path, None, format!("variable `{name}` is not a real numeric array")));
+        };
+        if let Some(k) = values.iter().position(|v| !v.is_finite()) {
+            return Err(error(
+                path,
+                None,
+                format!("variable `{name}`, sample {}: {} is not a finite number", k + 1, values[k]),
+            ));
+        }
+        if let Some(first) = out.first() {
+            if first.len() != values.len() {
+                return Err(error(
+                    path,
+                    None,
+                    format!(
+                        "variable `{name}` has {} samples, `{}` has {}: the signals must have one length",
+                        values.len(),
+                        names[0],
+                        first.len()
+                    ),
+                ));
+            }
+        }
+        out.push(values);
+    }
+    if out.first().map_or(0, |c| c.len()) < 2 {
+        return Err(error(path, None, "fewer than two samples: a recording needs at least two"));
+    }
+    Ok(out)
 }

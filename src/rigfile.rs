@@ -82,9 +82,13 @@ struct RigFile {
     /// A bundle's data file; not read here.
     #[allow(dead_code)]
     data: Option<String>,
-    /// A bundle's map of its columns to the recorded channels; not read here.
+    /// A bundle's map of its columns to the recorded channels and its time base; not read here.
     #[allow(dead_code)]
     columns: Option<toml::Value>,
+    #[allow(dead_code)]
+    time: Option<String>,
+    #[allow(dead_code)]
+    sample_rate_hz: Option<f64>,
     #[serde(default)]
     variant: Variant,
     model: RigParams,

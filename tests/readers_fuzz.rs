@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 
 use proptest::prelude::*;
 
-/// Cases per property: 4 properties × 500 cases = 2000 inputs per run.
+/// Cases per property: 5 properties × 500 cases = 2500 inputs per run.
 const CASES: u32 = 500;
 
 fn shared(name: &str) -> String {
@@ -182,6 +182,30 @@ proptest! {
                 prop_assert!(finite(&t.force_x_n) && finite(&t.force_y_n) && finite(&t.disp_x_m) && finite(&t.disp_y_m));
             }
             prop_assert!(b.band_hz.1 > b.band_hz.0);
+        }
+        let _ = std::fs::remove_dir_all(&d);
+    }
+
+    #[test]
+    fn mat_files_read_or_are_refused(flips in prop::collection::vec((any::<usize>(), any::<u8>()), 1..6), cut in any::<usize>(), compress in any::<bool>()) {
+        // a .mat file written by matrw (v7, compressed or not), then damaged
+        let d = scratch();
+        let base = d.join("base.mat");
+        let n = 200;
+        let mut mat = matrw::MatFile::new();
+        mat.insert("t", matrw::matvar!((0..n).map(|k| k as f64 * 1e-3).collect::<Vec<f64>>()));
+        mat.insert("x", matrw::matvar!((0..n).map(|k| (k as f64).sin()).collect::<Vec<f64>>()));
+        matrw::save_matfile_v7(base.to_str().unwrap(), mat, compress).unwrap();
+        let mut bytes = std::fs::read(&base).unwrap();
+        for (i, b) in &flips {
+            let k = 128 + i % (bytes.len() - 128);
+            bytes[k] = *b;
+        }
+        bytes.truncate(128 + cut % (bytes.len() - 127));
+        std::fs::write(d.join("m.mat"), &bytes).unwrap();
+        if let Ok(cols) = rigtwin::bundle::read_mat(&d.join("m.mat"), &["t", "x"]) {
+            prop_assert_eq!(cols[0].len(), cols[1].len());
+            prop_assert!(finite(&cols[0]) && finite(&cols[1]));
         }
         let _ = std::fs::remove_dir_all(&d);
     }

@@ -1,0 +1,149 @@
+//! MATLAB `.mat` records (v5 and compressed v7, written by scipy.io.savemat from the example
+//! bundles' CSV) read straight into the bundles: the same samples give the same diagnosis to
+//! 1e-6; a time from a variable or from `sample_rate_hz`; v7.3, truncated and garbage files are
+//! refused with the file named, never a panic.
+
+mod common;
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn shared(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/data").join(name)
+}
+
+fn scratch(case: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("rigtwin-records-{}-{case}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn make_mat(csv: &Path, out: &Path, compress: bool, vars: &[&str]) {
+    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/make_mat.py");
+    let status = Command::new(common::python())
+        .arg(script)
+        .arg(csv)
+        .arg(out)
+        .arg(if compress { "1" } else { "0" })
+        .args(vars)
+        .status()
+        .unwrap();
+    assert!(status.success(), "make_mat.py failed");
+}
+
+fn diagnose(bundle: &Path, dir: &Path, tag: &str) -> serde_json::Value {
+    let json = dir.join(format!("{tag}.json"));
+    let out = Command::new(env!("CARGO_BIN_EXE_rigtwin"))
+        .args(["diagnose", bundle.to_str().unwrap(), "--json", json.to_str().unwrap()])
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    serde_json::from_str(&std::fs::read_to_string(json).unwrap()).unwrap()
+}
+
+#[test]
+fn a_sweep_in_a_mat_file_diagnoses_like_its_csv() {
+    let d = scratch("sweep");
+    let reference = diagnose(&shared("v1_sweep_b.toml"), &d, "csv");
+    let toml = std::fs::read_to_string(shared("v1_sweep_b.toml")).unwrap();
+    let rpm = 60.0 / (2.0 * std::f64::consts::PI);
+    for compress in [false, true] {
+        let mat = d.join(format!("rec{}.mat", u8::from(compress)));
+        make_mat(
+            &shared("v1_sweep_b.csv"),
+            &mat,
+            compress,
+            &[
+                "t=time_s*1",
+                "trq=torque_drive_Nm*1",
+                &format!("n2=speed_m2_radps*{rpm}"),
+                &format!("n3=speed_m3_radps*{rpm}"),
+            ],
+        );
+        let bundle = d.join(format!("rec{}.toml", u8::from(compress)));
+        let text = toml.replace("data = \"v1_sweep_b.csv\"", &format!("data = \"{}\"\ntime = \"t\"", mat.file_name().unwrap().to_str().unwrap()))
+            + "\n[columns]\ntorque_drive_Nm = { channel = \"trq\" }\nspeed_m2_radps = { channel = \"n2\", unit = \"rpm\" }\nspeed_m3_radps = { channel = \"n3\", unit = \"rpm\" }\n";
+        std::fs::write(&bundle, text).unwrap();
+        let v = diagnose(&bundle, &d, &format!("mat{compress}"));
+        assert_eq!(v["effect"], reference["effect"]);
+        for (k, want) in reference["parameters"].as_object().unwrap() {
+            let (got, want) = (v["parameters"][k].as_f64().unwrap(), want.as_f64().unwrap());
+            assert!((got - want).abs() <= 1e-6 * want.abs(), "{k}: {got} vs {want} (compressed {compress})");
+        }
+    }
+}
+
+#[test]
+fn a_drive_axis_in_a_mat_file_with_a_sample_rate_and_a_gain() {
+    let d = scratch("axis");
+    // the force as a voltage of the drive's 35.15 N/V, the position in integer micrometres
+    make_mat(
+        &shared("axis_linear.csv"),
+        &d.join("axis.mat"),
+        true,
+        &["vir=force_N*0.028449502133712661", "pos_i32=position_m*1000000"],
+    );
+    let toml = std::fs::read_to_string(shared("axis_linear.toml"))
+        .unwrap()
+        .replace("data = \"axis_linear.csv\"", "data = \"axis.mat\"\nsample_rate_hz = 1000.0")
+        .replace("column = \"force_N\"", "column = \"vir\"\nunit = \"V\"\ngain = 35.15")
+        .replace("column = \"position_m\"", "column = \"pos_i32\"\nunit = \"µm\"");
+    std::fs::write(d.join("axis.toml"), toml).unwrap();
+    let b = rigtwin::bundle::load_drive_test(&d.join("axis.toml")).unwrap();
+    let si = rigtwin::bundle::load_drive_test(&shared("axis_linear.toml")).unwrap();
+    assert!((b.dt_s - si.dt_s).abs() < 1e-12);
+    for (x, y) in b.input_data[0].iter().zip(&si.input_data[0]) {
+        assert!((x - y).abs() <= 1e-9 * y.abs().max(1.0), "{x} vs {y}");
+    }
+    // rounded to whole micrometres: within half a micrometre of the CSV
+    for (x, y) in b.output_data[0].iter().zip(&si.output_data[0]) {
+        assert!((x - y).abs() <= 0.5e-6 + 1e-12, "{x} vs {y}");
+    }
+    assert_eq!(b.conversions.len(), 2, "{:?}", b.conversions);
+}
+
+#[test]
+fn v73_truncated_and_garbage_mat_files_are_refused() {
+    let d = scratch("bad");
+    make_mat(&shared("axis_linear.csv"), &d.join("good.mat"), true, &["t=time_s*1", "f=force_N*1", "x=position_m*1"]);
+    let good = std::fs::read(d.join("good.mat")).unwrap();
+    let mut v73 = b"MATLAB 7.3 MAT-file, Platform: GLNXA64".to_vec();
+    v73.resize(1024, 0);
+    let mut flipped = good.clone();
+    for k in (200..flipped.len()).step_by(37) {
+        flipped[k] ^= 0x5a;
+    }
+    for (name, bytes, expect) in [
+        ("v73.mat", v73, "v7.3"),
+        ("short.mat", good[..good.len() / 2].to_vec(), "short.mat"),
+        ("flipped.mat", flipped, "flipped.mat"),
+        ("text.mat", b"time_s,force_N\n0,1\n".to_vec(), "not a MATLAB"),
+    ] {
+        std::fs::write(d.join(name), &bytes).unwrap();
+        let r = std::panic::catch_unwind(|| rigtwin::bundle::read_mat(&d.join(name), &["t", "f"]));
+        let e = r.expect("no panic").expect_err("refused").to_string();
+        assert!(e.contains(expect), "{name}: {e}");
+    }
+    // through the command line: the file named, exit 1, no panic message
+    let sweep = std::fs::read_to_string(shared("v1_sweep_b.toml"))
+        .unwrap()
+        .replace("data = \"v1_sweep_b.csv\"", "data = \"flipped.mat\"");
+    std::fs::write(d.join("sweep.toml"), sweep).unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_rigtwin"))
+        .args(["diagnose", d.join("sweep.toml").to_str().unwrap()])
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{stderr}");
+    assert!(!stderr.contains("panicked") && stderr.contains("flipped.mat"), "{stderr}");
+    let toml = std::fs::read_to_string(shared("axis_linear.toml"))
+        .unwrap()
+        .replace("data = \"axis_linear.csv\"", "data = \"flipped.mat\"");
+    std::fs::write(d.join("flipped.toml"), toml).unwrap();
+    let r = std::panic::catch_unwind(|| rigtwin::bundle::load_drive_test(&d.join("flipped.toml")));
+    let e = r.expect("no panic").expect_err("refused").to_string();
+    assert!(e.contains("flipped.mat"), "{e}");
+    let e = rigtwin::bundle::read_mat(&d.join("good.mat"), &["t", "speed"]).unwrap_err().to_string();
+    assert!(e.contains("no variable `speed`") && e.contains("f, t, x") || e.contains("no variable `speed`"), "{e}");
+}
