@@ -164,32 +164,60 @@ fn conversions_of(specs: &[SignalSpec]) -> Vec<String> {
     specs.iter().filter_map(|s| s.calibration.describe(&s.name, &s.channel, s.dimension)).collect()
 }
 
-/// Reads the signals `specs` (the time first) from the record `path` (a CSV, or a `.mat` file;
-/// named in the bundle `file`) and converts them to SI.
-fn read_signals(file: &Path, path: &Path, specs: &[SignalSpec], time: &TimeBase) -> Result<Vec<Vec<f64>>, BundleError> {
-    let specs_read = match time {
-        TimeBase::Column => specs,
-        TimeBase::Rate(_) => &specs[1..],
+/// Reads the signals `specs` (the time first) from the record `path` (a CSV, a `.mat` file or
+/// an MDF 4 file; named in the bundle `file`) and converts them to SI. An MDF channel without a
+/// `unit` in the bundle gets its own unit (written into `specs`); without a `time` key its
+/// group's master channel gives the time, and channels of different groups are resampled onto
+/// one time base (said in the returned note).
+fn read_signals(
+    file: &Path,
+    path: &Path,
+    specs: &mut [SignalSpec],
+    time: &TimeBase,
+) -> Result<(Vec<Vec<f64>>, Option<String>), BundleError> {
+    let extension = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
+    let mdf = matches!(extension.as_deref(), Some("mf4" | "mdf"));
+    let master = mdf && *time == TimeBase::Column && specs[0].channel == "time_s";
+    let first = if *time == TimeBase::Column && !master { 0 } else { 1 };
+    let channels: Vec<String> = specs[first..].iter().map(|s| s.channel.clone()).collect();
+    let channels: Vec<&str> = channels.iter().map(String::as_str).collect();
+    let mut note = None;
+    let mut cols = match extension.as_deref() {
+        Some("mat") => read_mat(path, &channels)?,
+        Some("mf4" | "mdf") => {
+            let mut m = read_mdf_channels(path, &channels)?;
+            for (s, unit) in specs[first..].iter_mut().zip(&m.units) {
+                if s.calibration.unit.is_none() && !unit.trim().is_empty() {
+                    s.calibration.unit = Some(unit.trim().to_string());
+                }
+            }
+            if master {
+                let (t, n) = common_time_base(path, &channels, &m.times, &mut m.values)?;
+                note = n;
+                m.values.insert(0, t);
+            } else if m.values.iter().any(|v| v.len() != m.values[0].len()) {
+                return Err(error(path, None, "the channels have different lengths: leave out `time`/`sample_rate_hz` to resample them on their master times"));
+            }
+            m.values
+        }
+        _ => read_columns(path, &channels)?,
     };
-    let mut scales = Vec::with_capacity(specs.len());
-    for s in specs {
-        scales.push(s.calibration.resolve(s.dimension).map_err(|e| error(file, None, format!("`{}`: {e}", s.key)))?);
-    }
-    let channels: Vec<&str> = specs_read.iter().map(|s| s.channel.as_str()).collect();
-    let is_mat = path.extension().and_then(|e| e.to_str()).is_some_and(|e| e.eq_ignore_ascii_case("mat"));
-    let mut cols = if is_mat { read_mat(path, &channels)? } else { read_columns(path, &channels)? };
     if let TimeBase::Rate(r) = time {
         let n = cols[0].len();
         cols.insert(0, (0..n).map(|k| k as f64 / r).collect());
     }
-    for (col, &(scale, offset)) in cols.iter_mut().zip(&scales) {
+    for (s, col) in specs.iter().zip(cols.iter_mut()) {
+        let (scale, offset) = s.calibration.resolve(s.dimension).map_err(|e| {
+            let channel = if mdf { format!(" (channel `{}`)", s.channel) } else { String::new() };
+            error(file, None, format!("`{}`{channel}: {e}", s.key))
+        })?;
         if (scale, offset) != (1.0, 0.0) {
             for v in col.iter_mut() {
                 *v = scale * *v + offset;
             }
         }
     }
-    Ok(cols)
+    Ok((cols, note))
 }
 
 /// Reads a bundle's TOML (a regular file of sane size).
@@ -277,8 +305,8 @@ pub fn load_torsional(file: &Path) -> Result<TorsionalBundle, BundleError> {
     });
     let mut specs = fixed_columns(file, header.columns.as_ref(), &SWEEP_SIGNALS)?;
     let time = time_base(file, header.time.as_deref(), header.sample_rate_hz, &mut specs)?;
-    let conversions = conversions_of(&specs);
-    let sweep = read_sweep_csv(file, &csv_path, &specs, &time, needs.as_ref())?;
+    let (sweep, note) = read_sweep_csv(file, &csv_path, &mut specs, &time, needs.as_ref())?;
+    let conversions: Vec<String> = conversions_of(&specs).into_iter().chain(note).collect();
     check_varies(
         &csv_path,
         "torque_drive_Nm",
@@ -377,11 +405,11 @@ pub fn uniform_sample_time(path: &Path, t: &[f64]) -> Result<f64, BundleError> {
 fn read_sweep_csv(
     file: &Path,
     path: &Path,
-    specs: &[SignalSpec],
+    specs: &mut [SignalSpec],
     time: &TimeBase,
     needs: Option<&ident::signal::SamplingNeeds>,
-) -> Result<Sweep, BundleError> {
-    let mut cols = read_signals(file, path, specs, time)?;
+) -> Result<(Sweep, Option<String>), BundleError> {
+    let (mut cols, note) = read_signals(file, path, specs, time)?;
     let dt_s = uniform_sample_time(path, &cols[0])?;
     if let Some(needs) = needs {
         check_sampling(path, &cols[0], dt_s, needs)?;
@@ -391,7 +419,7 @@ fn read_sweep_csv(
     let speed_m3_radps = cols.pop().expect("4 columns");
     let speed_m2_radps = cols.pop().expect("4 columns");
     let torque_nm = cols.pop().expect("4 columns");
-    Ok(Sweep { dt_s, torque_nm, speed_m2_radps, speed_m3_radps })
+    Ok((Sweep { dt_s, torque_nm, speed_m2_radps, speed_m3_radps }, note))
 }
 
 /// A `bearing_shake` bundle, loaded.
@@ -492,10 +520,12 @@ pub fn load_bearing(file: &Path) -> Result<BearingBundle, BundleError> {
     };
     let mut specs = fixed_columns(file, raw.columns.as_ref(), &SHAKE_SIGNALS)?;
     let time = time_base(file, raw.time.as_deref(), raw.sample_rate_hz, &mut specs)?;
-    let channels: Vec<&str> = specs.iter().map(|s| s.channel.as_str()).collect();
-    let read = |path: &Path| -> Result<ident::ShakeTest, BundleError> {
+    let mut notes = Vec::new();
+    let mut read = |path: &Path| -> Result<ident::ShakeTest, BundleError> {
         let path = path.to_path_buf();
-        let mut cols = read_signals(file, &path, &specs, &time)?;
+        let (mut cols, note) = read_signals(file, &path, &mut specs, &time)?;
+        notes.extend(note);
+        let channels: Vec<&str> = specs.iter().map(|s| s.channel.as_str()).collect();
         let dt_s = uniform_sample_time(&path, &cols[0])?;
         check_glitches(&path, &channels, &cols)?;
         check_sampling(&path, &cols[0], dt_s, &needs).map_err(|mut e| {
@@ -511,10 +541,11 @@ pub fn load_bearing(file: &Path) -> Result<BearingBundle, BundleError> {
         let force_x_n = cols.pop().expect("5 columns");
         Ok(ident::ShakeTest { dt_s, force_x_n, force_y_n, disp_x_m, disp_y_m })
     };
+    let tests = [read(&paths[0])?, read(&paths[1])?];
     Ok(BearingBundle {
         file: file.to_path_buf(),
-        tests: [read(&paths[0])?, read(&paths[1])?],
-        conversions: conversions_of(&specs),
+        tests,
+        conversions: conversions_of(&specs).into_iter().chain(notes).collect(),
         band_hz: (raw.f_min_hz, raw.f_max_hz),
         support: raw.support,
         structure: raw.model.structure,
@@ -738,8 +769,8 @@ pub fn load_drive_test(file: &Path) -> Result<DriveTestBundle, BundleError> {
         });
     }
     let time = time_base(file, raw.time.as_deref(), raw.sample_rate_hz, &mut specs)?;
+    let (mut cols, note) = read_signals(file, &csv_path, &mut specs, &time)?;
     let names: Vec<&str> = specs.iter().map(|s| s.channel.as_str()).collect();
-    let mut cols = read_signals(file, &csv_path, &specs, &time)?;
     let dt_s = uniform_sample_time(&csv_path, &cols[0])?;
     check_glitches(&csv_path, &names, &cols)?;
     // the line's slowest flexible mode must be resolved and seen for ten periods
@@ -763,7 +794,7 @@ pub fn load_drive_test(file: &Path) -> Result<DriveTestBundle, BundleError> {
         dt_s,
         input_data,
         output_data,
-        conversions: conversions_of(&specs),
+        conversions: conversions_of(&specs).into_iter().chain(note).collect(),
     })
 }
 
@@ -860,4 +891,107 @@ pub fn read_mat(path: &Path, names: &[&str]) -> Result<Vec<Vec<f64>>, BundleErro
         return Err(error(path, None, "fewer than two samples: a recording needs at least two"));
     }
     Ok(out)
+}
+
+/// Channels of an MDF 4 file (`.mf4`, `.mdf`), read with falcon_mdf: each channel's values
+/// (converted by the file's own conversion rules), its unit, and its group's master time.
+struct MdfChannels {
+    values: Vec<Vec<f64>>,
+    units: Vec<String>,
+    times: Vec<Vec<f64>>,
+}
+
+fn read_mdf_channels(path: &Path, names: &[&str]) -> Result<MdfChannels, BundleError> {
+    crate::files::check_input(path, crate::files::MAX_DATA_BYTES)
+        .map_err(|e| error(path, None, format!("{e:#}").replace(&format!("{}: ", path.display()), "")))?;
+    let hook = std::panic::take_hook();
+    std::panic::set_hook(Box::new(|_| {}));
+    let result = std::panic::catch_unwind(|| -> Result<MdfChannels, BundleError> {
+        let f = falcon_mdf::Mf4File::open_buffered(path)
+            .map_err(|e| error(path, None, format!("not a readable MDF 4 file: {e}")))?;
+        let mut out = MdfChannels { values: Vec::new(), units: Vec::new(), times: Vec::new() };
+        for name in names {
+            let ch =
+                f.find_channel(name).ok_or_else(|| error(path, None, format!("no channel `{name}` in the file")))?;
+            let s = f.time_series(ch).map_err(|e| error(path, None, format!("channel `{name}`: {e}")))?;
+            let values = s.values_f64();
+            if values.len() != s.timestamps().len() {
+                return Err(error(
+                    path,
+                    None,
+                    format!("channel `{name}`: {} values for {} time stamps", values.len(), s.timestamps().len()),
+                ));
+            }
+            out.units.push(s.unit().to_string());
+            out.times.push(s.timestamps().to_vec());
+            out.values.push(values);
+        }
+        Ok(out)
+    });
+    std::panic::set_hook(hook);
+    match result {
+        Ok(r) => r,
+        Err(_) => Err(error(path, None, "cannot read the MDF file (the reader failed on its contents)")),
+    }
+}
+
+/// Signals of different channel groups on one uniform time base: the finest group's step over
+/// the interval all groups cover, each signal linearly interpolated. Returns the time base and
+/// the note for the report.
+fn common_time_base(
+    path: &Path,
+    names: &[&str],
+    times: &[Vec<f64>],
+    values: &mut [Vec<f64>],
+) -> Result<(Vec<f64>, Option<String>), BundleError> {
+    if times.iter().all(|t| t == &times[0]) {
+        return Ok((times[0].clone(), None));
+    }
+    let mut dt = f64::INFINITY;
+    let (mut start, mut end) = (f64::NEG_INFINITY, f64::INFINITY);
+    for (t, name) in times.iter().zip(names) {
+        let not_increasing = |w: &[f64]| w[1].partial_cmp(&w[0]) != Some(std::cmp::Ordering::Greater);
+        if t.len() < 2 || t.windows(2).any(not_increasing) {
+            let k = t.windows(2).position(not_increasing).map_or(0, |k| k + 1);
+            return Err(error(
+                path,
+                None,
+                format!("channel `{name}`: its time stamps do not increase (sample {})", k + 1),
+            ));
+        }
+        let mut steps: Vec<f64> = t.windows(2).map(|w| w[1] - w[0]).collect();
+        steps.sort_by(|a, b| a.total_cmp(b));
+        dt = dt.min(steps[steps.len() / 2]);
+        start = start.max(t[0]);
+        end = end.min(t[t.len() - 1]);
+    }
+    let n = ((end - start) / dt + 1e-9).floor() + 1.0;
+    if !(2.0..=1e9).contains(&n) {
+        return Err(error(
+            path,
+            None,
+            format!("the channels share no common interval long enough to resample ({start} s to {end} s)"),
+        ));
+    }
+    let grid: Vec<f64> = (0..n as usize).map(|k| start + k as f64 * dt).collect();
+    for (v, t) in values.iter_mut().zip(times) {
+        let mut j = 0;
+        let resampled: Vec<f64> = grid
+            .iter()
+            .map(|&g| {
+                while j + 2 < t.len() && t[j + 1] < g {
+                    j += 1;
+                }
+                let w = ((g - t[j]) / (t[j + 1] - t[j])).clamp(0.0, 1.0);
+                v[j] + w * (v[j + 1] - v[j])
+            })
+            .collect();
+        *v = resampled;
+    }
+    let note = format!(
+        "channels of different groups resampled by linear interpolation onto {:.6} Hz over {start} s to {} s",
+        1.0 / dt,
+        grid[grid.len() - 1]
+    );
+    Ok((grid, Some(note)))
 }

@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 
 use proptest::prelude::*;
 
-/// Cases per property: 5 properties × 500 cases = 2500 inputs per run.
+/// Cases per property: 6 properties × 500 cases = 3000 inputs per run.
 const CASES: u32 = 500;
 
 fn shared(name: &str) -> String {
@@ -211,6 +211,32 @@ proptest! {
     }
 
     #[test]
+    fn mdf_files_read_or_are_refused(flips in prop::collection::vec((any::<usize>(), any::<u8>()), 1..6), cut in any::<usize>()) {
+        // an MDF 4 file of two channel groups at different rates (falcon_mdf's writer), damaged
+        let d = scratch();
+        let t1: Vec<f64> = (0..300).map(|k| k as f64 * 1e-3).collect();
+        let t2: Vec<f64> = (0..150).map(|k| k as f64 * 2e-3).collect();
+        let mut w = falcon_mdf::Mf4Writer::new();
+        w.add_group(&t1).unwrap().add_channel("n", "rpm", &t1.iter().map(|t| (t * 50.0).sin()).collect::<Vec<f64>>()).unwrap();
+        w.add_group(&t2).unwrap().add_channel("m", "Nm", &t2.iter().map(|t| (t * 20.0).cos()).collect::<Vec<f64>>()).unwrap();
+        w.write_to_file(d.join("base.mf4")).unwrap();
+        let mut bytes = std::fs::read(d.join("base.mf4")).unwrap();
+        for (i, b) in &flips {
+            let k = 64 + i % (bytes.len() - 64);
+            bytes[k] = *b;
+        }
+        bytes.truncate(64 + cut % (bytes.len() - 63));
+        std::fs::write(d.join("m.mf4"), &bytes).unwrap();
+        let bundle = "kind = \"drive_test\"\ndata = \"m.mf4\"\ndomain = \"rotational\"\n[model]\nbodies = [{ name = \"a\", inertia = 1.0 }]\n[[inputs]]\ncolumn = \"m\"\nbody = 1\n[[outputs]]\ncolumn = \"n\"\nbody = 1\nquantity = \"speed\"\n";
+        std::fs::write(d.join("b.toml"), bundle).unwrap();
+        if let Ok(b) = rigtwin::bundle::load_drive_test(&d.join("b.toml")) {
+            prop_assert!(finite(&b.input_data[0]) && finite(&b.output_data[0]));
+            prop_assert!(b.dt_s > 0.0);
+        }
+        let _ = std::fs::remove_dir_all(&d);
+    }
+
+    #[test]
     fn random_bytes_are_refused_cleanly(bytes in prop::collection::vec(any::<u8>(), 0..400)) {
         let d = scratch();
         std::fs::write(d.join("b.toml"), &bytes).unwrap();
@@ -220,4 +246,33 @@ proptest! {
         let _ = rigtwin::rigfile::parse_rig(&text, Path::new("b.toml"));
         let _ = std::fs::remove_dir_all(&d);
     }
+}
+
+/// The undamaged base file of `mdf_files_read_or_are_refused` loads, resampled onto 1 kHz: the
+/// property's cases start from a file the reader accepts.
+#[test]
+fn the_fuzzed_mdf_base_file_loads() {
+    let d = scratch();
+    let t1: Vec<f64> = (0..300).map(|k| k as f64 * 1e-3).collect();
+    let t2: Vec<f64> = (0..150).map(|k| k as f64 * 2e-3).collect();
+    let mut w = falcon_mdf::Mf4Writer::new();
+    w.add_group(&t1)
+        .unwrap()
+        .add_channel("n", "rpm", &t1.iter().map(|t| (t * 50.0).sin()).collect::<Vec<f64>>())
+        .unwrap();
+    w.add_group(&t2)
+        .unwrap()
+        .add_channel("m", "Nm", &t2.iter().map(|t| (t * 20.0).cos()).collect::<Vec<f64>>())
+        .unwrap();
+    w.write_to_file(d.join("m.mf4")).unwrap();
+    let bundle = "kind = \"drive_test\"\ndata = \"m.mf4\"\ndomain = \"rotational\"\n[model]\nbodies = [{ name = \"a\", inertia = 1.0 }]\n[[inputs]]\ncolumn = \"m\"\nbody = 1\n[[outputs]]\ncolumn = \"n\"\nbody = 1\nquantity = \"speed\"\n";
+    std::fs::write(d.join("b.toml"), bundle).unwrap();
+    let b = rigtwin::bundle::load_drive_test(&d.join("b.toml")).unwrap();
+    assert!((b.dt_s - 1e-3).abs() < 1e-12);
+    // the common interval 0 … 0.298 s at 1 kHz
+    assert_eq!(b.output_data[0].len(), 299);
+    // rpm → rad/s, and the torque interpolated between its 2 ms samples
+    assert!((b.output_data[0][100] - (0.1f64 * 50.0).sin() * 2.0 * std::f64::consts::PI / 60.0).abs() < 1e-12);
+    let mid = 0.5 * ((0.100f64 * 20.0).cos() + (0.102f64 * 20.0).cos());
+    assert!((b.input_data[0][101] - mid).abs() < 1e-12, "{} vs {mid}", b.input_data[0][101]);
 }

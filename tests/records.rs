@@ -147,3 +147,55 @@ fn v73_truncated_and_garbage_mat_files_are_refused() {
     let e = rigtwin::bundle::read_mat(&d.join("good.mat"), &["t", "speed"]).unwrap_err().to_string();
     assert!(e.contains("no variable `speed`") && e.contains("f, t, x") || e.contains("no variable `speed`"), "{e}");
 }
+
+fn make_mf4(out: &Path, mode: &str) {
+    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/make_mf4.py");
+    let status =
+        Command::new(common::python()).arg(script).arg(shared("v1_sweep_b.csv")).arg(out).arg(mode).status().unwrap();
+    assert!(status.success(), "make_mf4.py failed");
+}
+
+/// An MDF 4 file written by asammdf: with every channel in one compressed group the diagnosis
+/// equals the CSV's (the channels' own units, rpm, are applied); with the torque in a second
+/// group at half the rate (in kNm) the channels are resampled onto the speeds' 1 kHz by linear
+/// interpolation, and the diagnosis finds the same effect with its parameter within 5 % (the
+/// interpolation error of a 30 Hz sine sampled at 500 Hz is about 0.2 % of its amplitude).
+#[test]
+fn a_sweep_in_an_mdf4_file_diagnoses_like_its_csv() {
+    let d = scratch("mf4");
+    let reference = diagnose(&shared("v1_sweep_b.toml"), &d, "csv");
+    let toml = std::fs::read_to_string(shared("v1_sweep_b.toml")).unwrap();
+    for mode in ["one", "two"] {
+        let mf4 = d.join(format!("{mode}.mf4"));
+        make_mf4(&mf4, mode);
+        let bundle = d.join(format!("{mode}.toml"));
+        let text = toml.replace("data = \"v1_sweep_b.csv\"", &format!("data = \"{mode}.mf4\""))
+            + "\n[columns]\ntorque_drive_Nm = { channel = \"Trq_Drv\" }\nspeed_m2_radps = { channel = \"n_M2\" }\nspeed_m3_radps = { channel = \"n_M3\" }\n";
+        std::fs::write(&bundle, text).unwrap();
+        let v = diagnose(&bundle, &d, mode);
+        assert_eq!(v["effect"], reference["effect"], "{mode}");
+        let tol = if mode == "one" { 1e-6 } else { 0.05 };
+        for (k, want) in reference["parameters"].as_object().unwrap() {
+            let (got, want) = (v["parameters"][k].as_f64().unwrap(), want.as_f64().unwrap());
+            assert!((got - want).abs() <= tol * want.abs(), "{mode} {k}: {got} vs {want}");
+        }
+        let conversions = v["conversions"].to_string();
+        assert!(conversions.contains("n_M2 [rpm]"), "{conversions}");
+        if mode == "two" {
+            assert!(
+                conversions.contains("Trq_Drv [kNm]") && conversions.contains("linear interpolation"),
+                "{conversions}"
+            );
+        }
+    }
+    // a channel the file does not have, and a file that is not MDF
+    let bad = toml.replace("data = \"v1_sweep_b.csv\"", "data = \"one.mf4\"");
+    std::fs::write(d.join("bad.toml"), bad).unwrap();
+    let e = rigtwin::bundle::load_torsional(&d.join("bad.toml")).unwrap_err().to_string();
+    assert!(e.contains("one.mf4") && e.contains("no channel `torque_drive_Nm`"), "{e}");
+    std::fs::write(d.join("not.mf4"), b"MDF     4.10    garbage").unwrap();
+    let text = toml.replace("data = \"v1_sweep_b.csv\"", "data = \"not.mf4\"");
+    std::fs::write(d.join("not.toml"), text).unwrap();
+    let e = rigtwin::bundle::load_torsional(&d.join("not.toml")).unwrap_err().to_string();
+    assert!(e.contains("not.mf4"), "{e}");
+}
