@@ -118,6 +118,27 @@ fn head(csv: &str, rows: usize) -> String {
     csv.lines().take(rows + 1).map(|l| format!("{l}\n")).collect()
 }
 
+/// The bytes of an MDF 4 file of two channel groups at different rates (falcon_mdf's writer):
+/// `n` (rpm) at 1 kHz for 0.3 s, `m` (N·m) at 500 Hz.
+fn mdf_base(dir: &Path) -> Vec<u8> {
+    let t1: Vec<f64> = (0..300).map(|k| k as f64 * 1e-3).collect();
+    let t2: Vec<f64> = (0..150).map(|k| k as f64 * 2e-3).collect();
+    let mut w = falcon_mdf::Mf4Writer::new();
+    w.add_group(&t1)
+        .unwrap()
+        .add_channel("n", "rpm", &t1.iter().map(|t| (t * 50.0).sin()).collect::<Vec<f64>>())
+        .unwrap();
+    w.add_group(&t2)
+        .unwrap()
+        .add_channel("m", "Nm", &t2.iter().map(|t| (t * 20.0).cos()).collect::<Vec<f64>>())
+        .unwrap();
+    w.write_to_file(dir.join("base.mf4")).unwrap();
+    std::fs::read(dir.join("base.mf4")).unwrap()
+}
+
+/// A single-body drive_test reading `m.mf4`: input `m`, output `n` as a speed.
+const MDF_BUNDLE: &str = "kind = \"drive_test\"\ndata = \"m.mf4\"\ndomain = \"rotational\"\n[model]\nbodies = [{ name = \"a\", inertia = 1.0 }]\n[[inputs]]\ncolumn = \"m\"\nbody = 1\n[[outputs]]\ncolumn = \"n\"\nbody = 1\nquantity = \"speed\"\n";
+
 fn finite(v: &[f64]) -> bool {
     v.iter().all(|x| x.is_finite())
 }
@@ -214,20 +235,14 @@ proptest! {
     fn mdf_files_read_or_are_refused(flips in prop::collection::vec((any::<usize>(), any::<u8>()), 1..6), cut in any::<usize>()) {
         // an MDF 4 file of two channel groups at different rates (falcon_mdf's writer), damaged
         let d = scratch();
-        let t1: Vec<f64> = (0..300).map(|k| k as f64 * 1e-3).collect();
-        let t2: Vec<f64> = (0..150).map(|k| k as f64 * 2e-3).collect();
-        let mut w = falcon_mdf::Mf4Writer::new();
-        w.add_group(&t1).unwrap().add_channel("n", "rpm", &t1.iter().map(|t| (t * 50.0).sin()).collect::<Vec<f64>>()).unwrap();
-        w.add_group(&t2).unwrap().add_channel("m", "Nm", &t2.iter().map(|t| (t * 20.0).cos()).collect::<Vec<f64>>()).unwrap();
-        w.write_to_file(d.join("base.mf4")).unwrap();
-        let mut bytes = std::fs::read(d.join("base.mf4")).unwrap();
+        let mut bytes = mdf_base(&d);
         for (i, b) in &flips {
             let k = 64 + i % (bytes.len() - 64);
             bytes[k] = *b;
         }
         bytes.truncate(64 + cut % (bytes.len() - 63));
         std::fs::write(d.join("m.mf4"), &bytes).unwrap();
-        let bundle = "kind = \"drive_test\"\ndata = \"m.mf4\"\ndomain = \"rotational\"\n[model]\nbodies = [{ name = \"a\", inertia = 1.0 }]\n[[inputs]]\ncolumn = \"m\"\nbody = 1\n[[outputs]]\ncolumn = \"n\"\nbody = 1\nquantity = \"speed\"\n";
+        let bundle = MDF_BUNDLE;
         std::fs::write(d.join("b.toml"), bundle).unwrap();
         if let Ok(b) = rigtwin::bundle::load_drive_test(&d.join("b.toml")) {
             prop_assert!(finite(&b.input_data[0]) && finite(&b.output_data[0]));
@@ -253,19 +268,8 @@ proptest! {
 #[test]
 fn the_fuzzed_mdf_base_file_loads() {
     let d = scratch();
-    let t1: Vec<f64> = (0..300).map(|k| k as f64 * 1e-3).collect();
-    let t2: Vec<f64> = (0..150).map(|k| k as f64 * 2e-3).collect();
-    let mut w = falcon_mdf::Mf4Writer::new();
-    w.add_group(&t1)
-        .unwrap()
-        .add_channel("n", "rpm", &t1.iter().map(|t| (t * 50.0).sin()).collect::<Vec<f64>>())
-        .unwrap();
-    w.add_group(&t2)
-        .unwrap()
-        .add_channel("m", "Nm", &t2.iter().map(|t| (t * 20.0).cos()).collect::<Vec<f64>>())
-        .unwrap();
-    w.write_to_file(d.join("m.mf4")).unwrap();
-    let bundle = "kind = \"drive_test\"\ndata = \"m.mf4\"\ndomain = \"rotational\"\n[model]\nbodies = [{ name = \"a\", inertia = 1.0 }]\n[[inputs]]\ncolumn = \"m\"\nbody = 1\n[[outputs]]\ncolumn = \"n\"\nbody = 1\nquantity = \"speed\"\n";
+    std::fs::write(d.join("m.mf4"), mdf_base(&d)).unwrap();
+    let bundle = MDF_BUNDLE;
     std::fs::write(d.join("b.toml"), bundle).unwrap();
     let b = rigtwin::bundle::load_drive_test(&d.join("b.toml")).unwrap();
     assert!((b.dt_s - 1e-3).abs() < 1e-12);

@@ -5,19 +5,10 @@
 
 mod common;
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
+
+use common::shared;
 use std::process::Command;
-
-fn shared(name: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/data").join(name)
-}
-
-fn scratch(case: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("rigtwin-records-{}-{case}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
 
 fn make_mat(csv: &Path, out: &Path, compress: bool, vars: &[&str]) {
     let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/make_mat.py");
@@ -44,7 +35,7 @@ fn diagnose(bundle: &Path, dir: &Path, tag: &str) -> serde_json::Value {
 
 #[test]
 fn a_sweep_in_a_mat_file_diagnoses_like_its_csv() {
-    let d = scratch("sweep");
+    let d = common::scratch("records", "sweep");
     let reference = diagnose(&shared("v1_sweep_b.toml"), &d, "csv");
     let toml = std::fs::read_to_string(shared("v1_sweep_b.toml")).unwrap();
     let rpm = 60.0 / (2.0 * std::f64::consts::PI);
@@ -76,7 +67,7 @@ fn a_sweep_in_a_mat_file_diagnoses_like_its_csv() {
 
 #[test]
 fn a_drive_axis_in_a_mat_file_with_a_sample_rate_and_a_gain() {
-    let d = scratch("axis");
+    let d = common::scratch("records", "axis");
     // the force as a voltage of the drive's 35.15 N/V, the position in integer micrometres
     make_mat(
         &shared("axis_linear.csv"),
@@ -105,7 +96,7 @@ fn a_drive_axis_in_a_mat_file_with_a_sample_rate_and_a_gain() {
 
 #[test]
 fn v73_truncated_and_garbage_mat_files_are_refused() {
-    let d = scratch("bad");
+    let d = common::scratch("records", "bad");
     make_mat(&shared("axis_linear.csv"), &d.join("good.mat"), true, &["t=time_s*1", "f=force_N*1", "x=position_m*1"]);
     let good = std::fs::read(d.join("good.mat")).unwrap();
     let mut v73 = b"MATLAB 7.3 MAT-file, Platform: GLNXA64".to_vec();
@@ -162,7 +153,7 @@ fn make_mf4(out: &Path, mode: &str) {
 /// interpolation error of a 30 Hz sine sampled at 500 Hz is about 0.2 % of its amplitude).
 #[test]
 fn a_sweep_in_an_mdf4_file_diagnoses_like_its_csv() {
-    let d = scratch("mf4");
+    let d = common::scratch("records", "mf4");
     let reference = diagnose(&shared("v1_sweep_b.toml"), &d, "csv");
     let toml = std::fs::read_to_string(shared("v1_sweep_b.toml")).unwrap();
     for mode in ["one", "two"] {

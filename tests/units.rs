@@ -4,21 +4,14 @@
 //! converted files are written here from the example bundles with 17 significant digits, so
 //! the samples agree to round-off and the results to 1e-6 relative.
 
-use std::path::{Path, PathBuf};
+mod common;
+
+use std::path::Path;
+
+use common::shared;
 use std::process::Command;
 
 use serde_json::Value;
-
-fn shared(name: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/data").join(name)
-}
-
-fn scratch(case: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("rigtwin-units-{}-{case}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
 
 fn json(args: &[&str]) -> Value {
     let out = Command::new(env!("CARGO_BIN_EXE_rigtwin")).args(args).output().unwrap();
@@ -50,7 +43,7 @@ fn close(a: f64, b: f64, rel: f64) -> bool {
 
 #[test]
 fn a_sweep_in_rpm_ms_and_volts_diagnoses_like_the_si_original() {
-    let d = scratch("sweep");
+    let d = common::scratch("units", "sweep");
     let to_rpm = |w: f64| w * 60.0 / (2.0 * std::f64::consts::PI);
     convert_csv(
         &shared("v1_sweep_b.csv"),
@@ -89,7 +82,7 @@ fn a_sweep_in_rpm_ms_and_volts_diagnoses_like_the_si_original() {
 
 #[test]
 fn a_shake_test_in_micrometres_and_pound_force_identifies_like_the_si_original() {
-    let d = scratch("shake");
+    let d = common::scratch("units", "shake");
     let lbf = 4.4482216152605;
     for name in ["sfd_shake_x.csv", "sfd_shake_y.csv"] {
         convert_csv(
@@ -115,7 +108,7 @@ fn a_shake_test_in_micrometres_and_pound_force_identifies_like_the_si_original()
 
 #[test]
 fn a_unit_of_the_wrong_dimension_is_refused_with_the_key() {
-    let d = scratch("wrong");
+    let d = common::scratch("units", "wrong");
     std::fs::copy(shared("v1_sweep_b.csv"), d.join("v1_sweep_b.csv")).unwrap();
     let base = std::fs::read_to_string(shared("v1_sweep_b.toml")).unwrap();
     for (columns, words) in [

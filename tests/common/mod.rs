@@ -43,3 +43,16 @@ pub fn vr(name: &str) -> u32 {
         .unwrap_or_else(|| panic!("no variable {name}"))
         .vr
 }
+
+/// An example bundle's file in `../shared/data`.
+pub fn shared(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/data").join(name)
+}
+
+/// A fresh scratch folder for test `case` of test file `file`.
+pub fn scratch(file: &str, case: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("rigtwin-{file}-{}-{case}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
