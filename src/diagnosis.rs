@@ -44,6 +44,57 @@ pub struct Diagnosis {
     pub model_toml: String,
     /// Plot panels.
     pub panels: Vec<crate::plot::Panel>,
+    /// The measured and simulated signals, for `--save-signals`.
+    pub signals: Signals,
+}
+
+/// What `--save-signals` writes: the measured outputs, the declared and the extended model's
+/// outputs and the residual on one base (time for a sweep, frequency lines for a shake test).
+pub enum Signals {
+    /// A sweep: the load machines' speeds, high-passed as the error is.
+    Time(ident::diagnose::torsional::Traces),
+    /// A shake test: one row per excited line, the header naming the columns.
+    Lines {
+        /// Column names with units.
+        header: Vec<String>,
+        /// One row per line.
+        rows: Vec<Vec<f64>>,
+    },
+}
+
+impl Diagnosis {
+    /// The signals as CSV (header line, then one row per sample or line).
+    pub fn signals_csv(&self) -> String {
+        use std::fmt::Write as _;
+        let mut s = String::new();
+        match &self.signals {
+            Signals::Time(t) => {
+                let mut header = vec!["time_s".to_string()];
+                for m in ["m2", "m3"] {
+                    for what in ["measured", "declared", "extended", "residual_declared", "residual_extended"] {
+                        header.push(format!("speed_{m}_{what}_radps"));
+                    }
+                }
+                let _ = writeln!(s, "{}", header.join(","));
+                for k in 0..t.time_s.len() {
+                    let _ = write!(s, "{:.9e}", t.time_s[k]);
+                    for c in 0..2 {
+                        let (m, b, a) = (t.measured[c][k], t.before[c][k], t.after[c][k]);
+                        let _ = write!(s, ",{m:.9e},{b:.9e},{a:.9e},{:.9e},{:.9e}", m - b, m - a);
+                    }
+                    s.push('\n');
+                }
+            }
+            Signals::Lines { header, rows } => {
+                let _ = writeln!(s, "{}", header.join(","));
+                for r in rows {
+                    let cells: Vec<String> = r.iter().map(|v| format!("{v:.9e}")).collect();
+                    let _ = writeln!(s, "{}", cells.join(","));
+                }
+            }
+        }
+        s
+    }
 }
 
 fn kind_of(file: &Path) -> anyhow::Result<String> {
@@ -104,8 +155,8 @@ fn torsional(file: &Path, progress: &(dyn Fn(&str) + Sync)) -> anyhow::Result<Di
     let model_toml = rig_toml(&d.model.rig, d.model.variant, &d.model.effects, None)?;
     let dt = b.sweep.dt_s;
     let t = &d.traces;
-    let res_before: Vec<f64> = t.measured.iter().zip(&t.before).map(|(a, b)| a - b).collect();
-    let res_after: Vec<f64> = t.measured.iter().zip(&t.after).map(|(a, b)| a - b).collect();
+    let res_before: Vec<f64> = t.measured[0].iter().zip(&t.before[0]).map(|(a, b)| a - b).collect();
+    let res_after: Vec<f64> = t.measured[0].iter().zip(&t.after[0]).map(|(a, b)| a - b).collect();
     // an SVG line of more points than a screen has pixels only costs memory: every k-th sample
     let stride = t.time_s.len().div_ceil(PLOT_POINTS).max(1);
     let pts = |y: &[f64]| t.time_s.iter().zip(y).step_by(stride).map(|(&a, &b)| (a, b)).collect::<Vec<_>>();
@@ -116,9 +167,9 @@ fn torsional(file: &Path, progress: &(dyn Fn(&str) + Sync)) -> anyhow::Result<Di
             y_desc: "speed_m2 [rad/s]".into(),
             log_y: false,
             series: vec![
-                ("measured".into(), pts(&t.measured)),
-                ("declared model".into(), pts(&t.before)),
-                (format!("with {}", d.effect), pts(&t.after)),
+                ("measured".into(), pts(&t.measured[0])),
+                ("declared model".into(), pts(&t.before[0])),
+                (format!("with {}", d.effect), pts(&t.after[0])),
             ],
         },
         crate::plot::Panel {
@@ -129,7 +180,7 @@ fn torsional(file: &Path, progress: &(dyn Fn(&str) + Sync)) -> anyhow::Result<Di
             series: vec![
                 ("declared model".into(), spectrum(&res_before, dt, 60.0)),
                 (format!("with {}", d.effect), spectrum(&res_after, dt, 60.0)),
-                ("measured speed".into(), spectrum(&t.measured, dt, 60.0)),
+                ("measured speed".into(), spectrum(&t.measured[0], dt, 60.0)),
             ],
         },
     ];
@@ -149,6 +200,7 @@ fn torsional(file: &Path, progress: &(dyn Fn(&str) + Sync)) -> anyhow::Result<Di
         },
         model_toml,
         panels,
+        signals: Signals::Time(d.traces),
     })
 }
 
@@ -185,6 +237,32 @@ fn bearing(file: &Path, _progress: &(dyn Fn(&str) + Sync)) -> anyhow::Result<Dia
     let fmu = rigtwin_fmu::FmuParams::default();
     let model_toml = rig_toml(&fmu.powertrain, fmu.variant, &Default::default(), Some(&bearing_model))?;
     let none = d.declared_fit.clone();
+    let signals = {
+        let mut header = vec!["frequency_hz".to_string()];
+        for term in ["xx", "xy", "yx", "yy"] {
+            for what in ["measured", "declared", "extended"] {
+                header.push(format!("H{term}_{what}_re_N_per_m"));
+                header.push(format!("H{term}_{what}_im_N_per_m"));
+            }
+        }
+        let w = |hz: f64| 2.0 * std::f64::consts::PI * hz;
+        let rows = f
+            .iter()
+            .zip(&imp.h)
+            .map(|(&hz, h)| {
+                let (decl, ext) =
+                    (none.measured_impedance(&b.support, w(hz)), d.model.measured_impedance(&b.support, w(hz)));
+                let mut r = vec![hz];
+                for (i, j) in [(0, 0), (0, 1), (1, 0), (1, 1)] {
+                    for z in [h[(i, j)], decl[(i, j)], ext[(i, j)]] {
+                        r.extend([z.re, z.im]);
+                    }
+                }
+                r
+            })
+            .collect();
+        Signals::Lines { header, rows }
+    };
     let w = |hz: f64| 2.0 * std::f64::consts::PI * hz;
     let mut panels = Vec::new();
     for (i, name) in [(0usize, "H_xx"), (1, "H_yy")] {
@@ -243,6 +321,7 @@ fn bearing(file: &Path, _progress: &(dyn Fn(&str) + Sync)) -> anyhow::Result<Dia
         },
         model_toml,
         panels,
+        signals,
     })
 }
 

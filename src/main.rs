@@ -193,6 +193,11 @@ enum Command {
         /// Write the extended model as a rig file (`rigtwin fmu --params` takes it).
         #[arg(long, value_name = "FILE.toml")]
         write_model: Option<PathBuf>,
+        /// Write the measured outputs, the declared and the extended model's outputs and the
+        /// residuals on one base as CSV (a sweep: time and both speeds, high-passed as the error
+        /// is; a shake test: the four impedances per excited line).
+        #[arg(long, value_name = "FILE.csv")]
+        save_signals: Option<PathBuf>,
     },
     /// Which additional spring and variants make j_drive and c_short identifiable.
     DesignSpring {
@@ -417,13 +422,15 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                 out!("{}", rep.human());
             }
         }
-        Command::Diagnose { bundle, json, plot, write_model } => {
+        Command::Diagnose { bundle, json, plot, write_model, save_signals } => {
             // every output is checked before the diagnosis starts, none may be an input
             let inputs = rigtwin::bundle::input_files(&bundle);
             let inputs: Vec<&std::path::Path> = inputs.iter().map(|p| p.as_path()).collect();
             let json = json.map(|f| rigtwin::files::output(&f, "--json", &inputs)).transpose()?;
             let write_model = write_model.map(|f| rigtwin::files::output(&f, "--write-model", &inputs)).transpose()?;
             let plot = plot.map(|f| rigtwin::plot::svg_target(&f, "--plot", &inputs)).transpose()?;
+            let save_signals =
+                save_signals.map(|f| rigtwin::files::output(&f, "--save-signals", &inputs)).transpose()?;
             let start = std::time::Instant::now();
             let show = std::io::IsTerminal::is_terminal(&std::io::stderr());
             let progress = |name: &str| {
@@ -438,6 +445,9 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             }
             if let Some(f) = &write_model {
                 rigtwin::files::write(f, d.model_toml.as_bytes())?;
+            }
+            if let Some(f) = &save_signals {
+                rigtwin::files::write(f, d.signals_csv().as_bytes())?;
             }
             if let Some(f) = &plot {
                 rigtwin::plot::lines(f, &format!("rigtwin diagnose {}", bundle.display()), &d.panels)?;

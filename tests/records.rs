@@ -190,3 +190,53 @@ fn a_sweep_in_an_mdf4_file_diagnoses_like_its_csv() {
     let e = rigtwin::bundle::load_torsional(&d.join("not.toml")).unwrap_err().to_string();
     assert!(e.contains("not.mf4"), "{e}");
 }
+
+/// `--save-signals`: the saved measured and simulated speeds give back the report's errors
+/// (‖y − ŷ‖/‖y‖ over both speeds, recomputed here from the CSV's columns), one row per sample.
+#[test]
+fn saved_signals_reproduce_the_reported_errors() {
+    let d = common::scratch("records", "save");
+    let (json, csv) = (d.join("d.json"), d.join("signals.csv"));
+    let out = Command::new(env!("CARGO_BIN_EXE_rigtwin"))
+        .args(["diagnose", shared("v1_sweep_b.toml").to_str().unwrap()])
+        .args(["--json", json.to_str().unwrap(), "--save-signals", csv.to_str().unwrap()])
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    let text = std::fs::read_to_string(&csv).unwrap();
+    let mut lines = text.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let col = |name: &str| header.iter().position(|h| *h == name).unwrap_or_else(|| panic!("no column {name}"));
+    let rows: Vec<Vec<f64>> = lines.map(|l| l.split(',').map(|c| c.parse().unwrap()).collect()).collect();
+    assert_eq!(rows.len(), 60_000);
+    let (mut meas, mut before, mut after) = (0.0, 0.0, 0.0);
+    for r in &rows {
+        for m in ["m2", "m3"] {
+            let y = r[col(&format!("speed_{m}_measured_radps"))];
+            meas += y * y;
+            before += (y - r[col(&format!("speed_{m}_declared_radps"))]).powi(2);
+            after += (y - r[col(&format!("speed_{m}_extended_radps"))]).powi(2);
+            assert!(
+                (r[col(&format!("speed_{m}_residual_extended_radps"))]
+                    - (y - r[col(&format!("speed_{m}_extended_radps"))]))
+                .abs()
+                    < 1e-8
+            );
+        }
+    }
+    let (eb, ea) = ((before / meas).sqrt(), (after / meas).sqrt());
+    // 10 printed digits per value: the recomputed errors agree to far better than 1e-6
+    assert!((eb - v["error_before"].as_f64().unwrap()).abs() < 1e-6 * eb, "{eb} vs {}", v["error_before"]);
+    assert!((ea - v["error_after"].as_f64().unwrap()).abs() < 1e-6 * ea, "{ea} vs {}", v["error_after"]);
+    // a shake test: one row per excited line, the four impedances measured, declared, extended
+    let out = Command::new(env!("CARGO_BIN_EXE_rigtwin"))
+        .args(["diagnose", shared("sfd_shake.toml").to_str().unwrap(), "--save-signals", csv.to_str().unwrap()])
+        .output()
+        .unwrap();
+    assert!(out.status.success());
+    let text = std::fs::read_to_string(&csv).unwrap();
+    assert!(text.starts_with("frequency_hz,Hxx_measured_re_N_per_m"));
+    assert_eq!(text.lines().next().unwrap().split(',').count(), 25);
+    assert!(text.lines().count() > 20);
+}

@@ -75,12 +75,12 @@ pub struct TorsionalDiagnosis {
 pub struct Traces {
     /// Time, s.
     pub time_s: Vec<f64>,
-    /// Measured M2 speed (high-passed), rad/s.
-    pub measured: Vec<f64>,
-    /// Declared model's M2 speed.
-    pub before: Vec<f64>,
-    /// Extended model's M2 speed.
-    pub after: Vec<f64>,
+    /// Measured speeds [M2, M3] (high-passed as the error is), rad/s.
+    pub measured: [Vec<f64>; 2],
+    /// Declared model's speeds, rad/s.
+    pub before: [Vec<f64>; 2],
+    /// Extended model's speeds, rad/s.
+    pub after: [Vec<f64>; 2],
 }
 
 struct Problem<'a> {
@@ -375,11 +375,9 @@ pub fn diagnose(
         }
         let c = &cands[i];
         let m = (c.build)(&problem, &x);
-        // One simulation per fitted candidate: its residual's whiteness and, for the best,
-        // the plotted trace.
-        let sim = problem.simulate(&m);
-        let rho = sim.as_ref().map_or(0.0, |s| lag1_autocorrelation(&problem.residual_of(s)));
-        let trace = sim.map(|[w2, _]| w2).unwrap_or_default();
+        // One simulation per fitted candidate: its residual's whiteness (the best one's
+        // traces are simulated once more below, so no candidate keeps a record-long trace).
+        let rho = problem.simulate(&m).map_or(0.0, |s| lag1_autocorrelation(&problem.residual_of(&s)));
         scored.push(CandidateScore {
             effect: c.name.to_string(),
             parameters: (c.report)(&m),
@@ -387,11 +385,11 @@ pub fn diagnose(
             score: 0.0,
             fitted_parameters: x.len(),
         });
-        models.push((m, rho, trace, cost));
+        models.push((m, rho, cost));
     }
     // One effective count for all (the declared model's residual), so the scores compare.
     let n_eff = effective_count(nres, evidence.residual_lag1.max(lag1_autocorrelation(&r0)));
-    for (s, (_, _, _, cost)) in scored.iter_mut().zip(&models) {
+    for (s, (_, _, cost)) in scored.iter_mut().zip(&models) {
         s.score = bic(*cost * problem.norm * problem.norm, nres, n_eff, s.fitted_parameters);
     }
     let none = scored
@@ -406,12 +404,13 @@ pub fn diagnose(
             best = i;
         }
     }
-    let (model, rho, after, _) = models.swap_remove(best);
+    let (model, rho, _) = models.swap_remove(best);
     let structured_residual = rho.abs() > 0.5 && scored[best].error_after > 0.02;
+    let after = problem.simulate(&model).unwrap_or_else(|| [vec![0.0; n], vec![0.0; n]]);
     let traces = Traces {
         time_s: (0..n).map(|k| k as f64 * dt).collect(),
-        measured: problem.measured[0].clone(),
-        before: sim0[0].clone(),
+        measured: problem.measured.clone(),
+        before: sim0,
         after,
     };
     let mut candidates = scored.clone();
