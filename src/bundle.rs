@@ -220,10 +220,14 @@ fn read_signals(
     Ok((cols, note))
 }
 
+/// A record must be a regular file of sane size.
+fn check_data_file(path: &Path) -> Result<(), BundleError> {
+    crate::files::check_input(path, crate::files::MAX_DATA_BYTES).map_err(|e| error(path, None, e.message))
+}
+
 /// Reads a bundle's TOML (a regular file of sane size).
 fn read_toml(file: &Path) -> Result<String, BundleError> {
-    crate::files::read_text(file)
-        .map_err(|e| error(file, None, format!("{e:#}").replace(&format!("{}: ", file.display()), "")))
+    crate::files::read_text(file).map_err(|e| error(file, None, e.message))
 }
 
 /// The data file a bundle names in `key`, relative to the bundle.
@@ -316,10 +320,8 @@ pub fn load_torsional(file: &Path) -> Result<TorsionalBundle, BundleError> {
     Ok(TorsionalBundle { file: file.to_path_buf(), variant: rig.variant, model: rig.model, sweep, conversions })
 }
 
-/// The columns of a sweep CSV.
-pub const SWEEP_COLUMNS: [&str; 4] = ["time_s", "torque_drive_Nm", "speed_m2_radps", "speed_m3_radps"];
-
-const SWEEP_SIGNALS: [(&str, Dimension); 4] = [
+/// The signals of a sweep (their CSV columns unless `[columns]` maps them) and what they measure.
+pub const SWEEP_SIGNALS: [(&str, Dimension); 4] = [
     ("time_s", Dimension::Time),
     ("torque_drive_Nm", Dimension::Torque),
     ("speed_m2_radps", Dimension::AngularSpeed),
@@ -328,8 +330,7 @@ const SWEEP_SIGNALS: [(&str, Dimension); 4] = [
 
 /// Reads named columns of a numeric CSV with a header line; returns them in the order asked.
 pub fn read_columns(path: &Path, names: &[&str]) -> Result<Vec<Vec<f64>>, BundleError> {
-    crate::files::check_input(path, crate::files::MAX_DATA_BYTES)
-        .map_err(|e| error(path, None, format!("{e:#}").replace(&format!("{}: ", path.display()), "")))?;
+    check_data_file(path)?;
     let mut rdr = csv::ReaderBuilder::new()
         .trim(csv::Trim::All)
         .from_path(path)
@@ -462,10 +463,9 @@ struct BearingModelFile {
     coupling: ident::Coupling,
 }
 
-/// The columns of a shake-test CSV.
-pub const SHAKE_COLUMNS: [&str; 5] = ["time_s", "force_x_N", "force_y_N", "disp_x_m", "disp_y_m"];
-
-const SHAKE_SIGNALS: [(&str, Dimension); 5] = [
+/// The signals of a shake test (their CSV columns unless `[columns]` maps them) and what they
+/// measure.
+pub const SHAKE_SIGNALS: [(&str, Dimension); 5] = [
     ("time_s", Dimension::Time),
     ("force_x_N", Dimension::Force),
     ("force_y_N", Dimension::Force),
@@ -802,8 +802,7 @@ pub fn load_drive_test(file: &Path) -> Result<DriveTestBundle, BundleError> {
 /// vectors, converted to f64 from any real numeric class. v7.3 files (HDF5) are refused with
 /// the fix; a file the reader cannot parse — or on which it panics — is an error naming it.
 pub fn read_mat(path: &Path, names: &[&str]) -> Result<Vec<Vec<f64>>, BundleError> {
-    crate::files::check_input(path, crate::files::MAX_DATA_BYTES)
-        .map_err(|e| error(path, None, format!("{e:#}").replace(&format!("{}: ", path.display()), "")))?;
+    check_data_file(path)?;
     let bytes = std::fs::read(path).map_err(|e| error(path, None, format!("cannot read: {e}")))?;
     if bytes.starts_with(b"MATLAB 7.3 MAT-file") || bytes.get(512..520) == Some(b"\x89HDF\r\n\x1a\n") {
         return Err(error(
@@ -902,8 +901,7 @@ struct MdfChannels {
 }
 
 fn read_mdf_channels(path: &Path, names: &[&str]) -> Result<MdfChannels, BundleError> {
-    crate::files::check_input(path, crate::files::MAX_DATA_BYTES)
-        .map_err(|e| error(path, None, format!("{e:#}").replace(&format!("{}: ", path.display()), "")))?;
+    check_data_file(path)?;
     let hook = std::panic::take_hook();
     std::panic::set_hook(Box::new(|_| {}));
     let result = std::panic::catch_unwind(|| -> Result<MdfChannels, BundleError> {

@@ -14,30 +14,38 @@ pub const MAX_TEXT_BYTES: u64 = 16 << 20;
 /// record in CSV (≈ 0.3 GB).
 pub const MAX_DATA_BYTES: u64 = 4 << 30;
 
-/// Checks that `path` is a regular file of at most `max_bytes`; the error names the file.
-pub fn check_input(path: &Path, max_bytes: u64) -> anyhow::Result<()> {
+/// An input that cannot be read: the file and what is wrong with it (shown as "FILE: message";
+/// a caller that names the file itself takes `message`).
+#[derive(Debug, thiserror::Error)]
+#[error("{}: {message}", path.display())]
+pub struct InputError {
+    /// The file.
+    pub path: PathBuf,
+    /// What is wrong, without the file's name.
+    pub message: String,
+}
+
+/// Checks that `path` is a regular file of at most `max_bytes`.
+pub fn check_input(path: &Path, max_bytes: u64) -> Result<(), InputError> {
+    let fail = |message: String| InputError { path: path.to_path_buf(), message };
     if path.as_os_str().is_empty() {
-        anyhow::bail!("an empty file name was given");
+        return Err(fail("an empty file name was given".into()));
     }
-    let meta = std::fs::metadata(path).map_err(|e| anyhow::anyhow!("{}: cannot read: {e}", path.display()))?;
+    let meta = std::fs::metadata(path).map_err(|e| fail(format!("cannot read: {e}")))?;
     if !meta.is_file() {
-        anyhow::bail!("{}: not a regular file ({}): expected a file to read", path.display(), kind(&meta));
+        return Err(fail(format!("not a regular file ({}): expected a file to read", kind(&meta))));
     }
     if meta.len() > max_bytes {
-        anyhow::bail!(
-            "{}: {} bytes is more than the {} bytes such a file may have",
-            path.display(),
-            meta.len(),
-            max_bytes
-        );
+        return Err(fail(format!("{} bytes is more than the {max_bytes} bytes such a file may have", meta.len())));
     }
     Ok(())
 }
 
 /// Reads a text input (TOML), checked first.
-pub fn read_text(path: &Path) -> anyhow::Result<String> {
+pub fn read_text(path: &Path) -> Result<String, InputError> {
     check_input(path, MAX_TEXT_BYTES)?;
-    std::fs::read_to_string(path).map_err(|e| anyhow::anyhow!("{}: cannot read: {e}", path.display()))
+    std::fs::read_to_string(path)
+        .map_err(|e| InputError { path: path.to_path_buf(), message: format!("cannot read: {e}") })
 }
 
 #[cfg(unix)]
@@ -90,7 +98,7 @@ pub enum Target {
 
 /// Checks an output path before the computation starts: its folder exists and is writable, it
 /// is a regular file, a new name or a character device, and it is none of `inputs`.
-pub fn output(path: &Path, option: &str, inputs: &[&Path]) -> anyhow::Result<Target> {
+pub fn output(path: &Path, option: &str, inputs: &[PathBuf]) -> anyhow::Result<Target> {
     let named = || format!("{option} {}", path.display());
     if path.as_os_str().is_empty() {
         anyhow::bail!("{option}: an empty file name was given");
@@ -221,7 +229,7 @@ mod tests {
         let d = scratch("refuse");
         let input = d.join("bundle.toml");
         std::fs::write(&input, "x").unwrap();
-        let e = output(&input, "--write-model", &[&input]).unwrap_err().to_string();
+        let e = output(&input, "--write-model", std::slice::from_ref(&input)).unwrap_err().to_string();
         assert!(e.contains("input"), "{e}");
         let e = output(&d, "--json", &[]).unwrap_err().to_string();
         assert!(e.contains("directory"), "{e}");

@@ -343,7 +343,6 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         }
         Command::Bearing { bundle, structure, coupling, method, plot, json } => {
             let inputs = rigtwin::bundle::input_files(&bundle);
-            let inputs: Vec<&std::path::Path> = inputs.iter().map(|p| p.as_path()).collect();
             let plot = plot.map(|p| rigtwin::plot::svg_target(&p, "--plot", &inputs)).transpose()?;
             let b = rigtwin::bundle::load_bearing(&bundle)?;
             let structure = structure.map(|s| match s {
@@ -425,7 +424,6 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Diagnose { bundle, json, plot, write_model, save_signals } => {
             // every output is checked before the diagnosis starts, none may be an input
             let inputs = rigtwin::bundle::input_files(&bundle);
-            let inputs: Vec<&std::path::Path> = inputs.iter().map(|p| p.as_path()).collect();
             let json = json.map(|f| rigtwin::files::output(&f, "--json", &inputs)).transpose()?;
             let write_model = write_model.map(|f| rigtwin::files::output(&f, "--write-model", &inputs)).transpose()?;
             let plot = plot.map(|f| rigtwin::plot::svg_target(&f, "--plot", &inputs)).transpose()?;

@@ -24,7 +24,7 @@ pub(crate) fn err<E: std::fmt::Display>(e: E) -> anyhow::Error {
 }
 
 /// Checks a `--plot` path before the computation: an SVG file name, writable, not an input.
-pub fn svg_target(path: &Path, option: &str, inputs: &[&Path]) -> anyhow::Result<Target> {
+pub fn svg_target(path: &Path, option: &str, inputs: &[std::path::PathBuf]) -> anyhow::Result<Target> {
     if path.extension().and_then(|e| e.to_str()).map(|e| e.eq_ignore_ascii_case("svg")) != Some(true)
         && !path.starts_with("/dev")
     {

@@ -286,10 +286,8 @@ pub fn parse_rig(text: &str, file: &Path) -> Result<Rig, RigFileError> {
 
 /// Reads and parses a rig file.
 pub fn load_rig(file: &Path) -> Result<Rig, RigFileError> {
-    let text = crate::files::read_text(file).map_err(|e| RigFileError {
-        file: file.to_path_buf(),
-        message: format!("{e:#}").replace(&format!("{}: ", file.display()), ""),
-    })?;
+    let text =
+        crate::files::read_text(file).map_err(|e| RigFileError { file: file.to_path_buf(), message: e.message })?;
     parse_rig(&text, file)
 }
 

@@ -195,10 +195,7 @@ impl Model {
             out.copy_from_slice((&self.t * dx).as_slice());
             self.xs = xs;
         } else {
-            for (i, o) in out.iter_mut().enumerate() {
-                *o = self.a.row(i).iter().zip(z).map(|(a, b)| a * b).sum::<f64>()
-                    + self.b.row(i).iter().zip(&u_eff).map(|(b, v)| b * v).sum::<f64>();
-            }
+            affine(&self.a, &self.b, z, &u_eff, out);
         }
     }
 
@@ -215,15 +212,21 @@ impl Model {
     /// The absolute angles that are not states, [φ_drive, φ_motor] (φ_motor is φ_drive without
     /// a compliance), in state `z`.
     pub fn angles(&self, z: &[f64]) -> [f64; 2] {
-        let x = &self.t_inv * DVector::from_column_slice(z);
-        let drive = x[self.map[1]];
-        [drive, self.motor.map_or(drive, |m| x[m])]
+        [0, 1].map(|i| self.t_inv.row(self.angle_row(i)).iter().zip(z).map(|(a, b)| a * b).sum())
     }
 
     /// ∂[φ_drive, φ_motor][i]/∂z_j: an entry of T⁻¹.
     pub fn angle_gradient(&self, i: usize, j: usize) -> f64 {
-        let row = if i == 0 { self.map[1] } else { self.motor.unwrap_or(self.map[1]) };
-        self.t_inv[(row, j)]
+        self.t_inv[(self.angle_row(i), j)]
+    }
+
+    /// The row of x (and of T⁻¹) of angle `i` of [`Model::angles`].
+    fn angle_row(&self, i: usize) -> usize {
+        if i == 0 {
+            self.map[1]
+        } else {
+            self.motor.unwrap_or(self.map[1])
+        }
     }
 
     /// The Jacobians (∂ż/∂z, ∂ż/∂u, ∂T/∂z) at state `z`: the linear model, or with backlash the
@@ -353,13 +356,18 @@ impl Model {
     }
 }
 
+/// out = A x + B u (no allocation).
+fn affine(a: &DMatrix<f64>, b: &DMatrix<f64>, x: &[f64], u: &[f64], out: &mut [f64]) {
+    for (i, o) in out.iter_mut().enumerate() {
+        *o = a.row(i).iter().zip(x).map(|(a, v)| a * v).sum::<f64>()
+            + b.row(i).iter().zip(u).map(|(b, v)| b * v).sum::<f64>();
+    }
+}
+
 /// ẋ = A x + B u in absolute angles, the powertrain's rows from its own (nonlinear) derivative
 /// with backlash.
 fn rhs(m: &mut Model, x: &[f64], u: &[f64; NU], out: &mut [f64]) {
-    for (i, o) in out.iter_mut().enumerate().take(m.nx()) {
-        *o = m.a_x.row(i).iter().zip(x).map(|(a, b)| a * b).sum::<f64>()
-            + m.b_x.row(i).iter().zip(u).map(|(b, v)| b * v).sum::<f64>();
-    }
+    affine(&m.a_x, &m.b_x, x, u, out);
     if m.backlash() {
         for (k, &i) in m.map.iter().enumerate() {
             m.pt_x[k] = x[i];
