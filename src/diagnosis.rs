@@ -14,6 +14,9 @@ use crate::bundle::{load_bearing, load_torsional};
 pub struct DiagnosisReport {
     /// The chosen effect.
     pub effect: String,
+    /// Where it acts (`drive_test`: "body load", "coupling 2", "input 1").
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub at: Option<String>,
     /// Its fitted parameters (SI; the declared ones re-fitted beside them).
     pub parameters: BTreeMap<String, f64>,
     /// Error of the declared model.
@@ -22,7 +25,7 @@ pub struct DiagnosisReport {
     pub error_after: f64,
     /// Every candidate, best score first.
     pub candidates: Vec<CandidateScore>,
-    /// `torsional_sweep` or `bearing_shake`.
+    /// `torsional_sweep`, `bearing_shake` or `drive_test`.
     pub kind: String,
     /// How the error is defined.
     pub error_definition: String,
@@ -53,6 +56,13 @@ pub struct Diagnosis {
 pub enum Signals {
     /// A sweep: the load machines' speeds, high-passed as the error is.
     Time(ident::diagnose::torsional::Traces),
+    /// A drive test: every measured output (its CSV name), high-passed as the error is.
+    Outputs {
+        /// The outputs' column names.
+        names: Vec<String>,
+        /// The signals.
+        traces: ident::diagnose::drive::DriveTraces,
+    },
     /// A shake test: one row per excited line, the header naming the columns.
     Lines {
         /// Column names with units.
@@ -85,6 +95,23 @@ impl Diagnosis {
                     s.push('\n');
                 }
             }
+            Signals::Outputs { names, traces: t } => {
+                let mut header = vec!["time_s".to_string()];
+                for name in names {
+                    for what in ["measured", "declared", "extended", "residual_declared", "residual_extended"] {
+                        header.push(format!("{name}__{what}"));
+                    }
+                }
+                let _ = writeln!(s, "{}", header.join(","));
+                for k in 0..t.time_s.len() {
+                    let _ = write!(s, "{:.9e}", t.time_s[k]);
+                    for c in 0..t.measured.len() {
+                        let (m, b, a) = (t.measured[c][k], t.before[c][k], t.after[c][k]);
+                        let _ = write!(s, ",{m:.9e},{b:.9e},{a:.9e},{:.9e},{:.9e}", m - b, m - a);
+                    }
+                    s.push('\n');
+                }
+            }
             Signals::Lines { header, rows } => {
                 let _ = writeln!(s, "{}", header.join(","));
                 for r in rows {
@@ -105,7 +132,9 @@ fn kind_of(file: &Path) -> anyhow::Result<String> {
     let text = crate::files::read_text(file)?;
     let k: K =
         toml::from_str(&text).map_err(|e| anyhow::anyhow!("{}: {}", file.display(), e.to_string().trim_end()))?;
-    k.kind.ok_or_else(|| anyhow::anyhow!("{}: missing key `kind` (torsional_sweep or bearing_shake)", file.display()))
+    k.kind.ok_or_else(|| {
+        anyhow::anyhow!("{}: missing key `kind` (torsional_sweep, bearing_shake or drive_test)", file.display())
+    })
 }
 
 /// Diagnoses the bundle `file`; `progress` is told each candidate as it is fitted.
@@ -113,7 +142,11 @@ pub fn diagnose(file: &Path, progress: &(dyn Fn(&str) + Sync)) -> anyhow::Result
     match kind_of(file)?.as_str() {
         "torsional_sweep" => torsional(file, progress),
         "bearing_shake" => bearing(file, progress),
-        other => anyhow::bail!("{}: `kind` = \"{other}\": expected torsional_sweep or bearing_shake", file.display()),
+        "drive_test" => drive(file, progress),
+        other => anyhow::bail!(
+            "{}: `kind` = \"{other}\": expected torsional_sweep, bearing_shake or drive_test",
+            file.display()
+        ),
     }
 }
 
@@ -187,6 +220,7 @@ fn torsional(file: &Path, progress: &(dyn Fn(&str) + Sync)) -> anyhow::Result<Di
     Ok(Diagnosis {
         report: DiagnosisReport {
             effect: d.effect,
+            at: None,
             parameters: d.parameters,
             error_before: d.error_before,
             error_after: d.error_after,
@@ -308,6 +342,7 @@ fn bearing(file: &Path, _progress: &(dyn Fn(&str) + Sync)) -> anyhow::Result<Dia
     Ok(Diagnosis {
         report: DiagnosisReport {
             effect: d.effect,
+            at: None,
             parameters: d.parameters,
             error_before: d.error_before,
             error_after: d.error_after,
@@ -354,14 +389,19 @@ pub fn rig_toml(
 
 /// Text for the terminal.
 pub fn human(r: &DiagnosisReport) -> String {
-    let mut s = format!("diagnosis ({}): {}\n", r.kind, r.effect);
+    let at = r.at.as_ref().map(|a| format!(" at {a}")).unwrap_or_default();
+    let mut s = format!("diagnosis ({}): {}{at}\n", r.kind, r.effect);
     for (k, v) in &r.parameters {
         s += &format!("  {k} = {v:.6e}\n");
     }
     s += &format!("  error before {:.4}, after {:.4} ({})\n", r.error_before, r.error_after, r.error_definition);
     s += "  candidates (best score first):\n";
     for c in &r.candidates {
-        s += &format!("    {:<26} error {:.4}  score {:>12.1}\n", c.effect, c.error_after, c.score);
+        let name = match &c.at {
+            Some(a) => format!("{} at {a}", c.effect),
+            None => c.effect.clone(),
+        };
+        s += &format!("    {name:<34} error {:.4}  score {:>12.1}\n", c.error_after, c.score);
     }
     for n in &r.notes {
         s += &format!("  note: {n}\n");
@@ -370,4 +410,154 @@ pub fn human(r: &DiagnosisReport) -> String {
         s += &format!("  converted: {c}\n");
     }
     s
+}
+
+fn drive(file: &Path, progress: &(dyn Fn(&str) + Sync)) -> anyhow::Result<Diagnosis> {
+    let b = crate::bundle::load_drive_test(file)?;
+    let model =
+        plant::DriveModel { line: b.line.clone(), inputs: b.inputs.iter().map(|s| s.at).collect(), effects: vec![] };
+    let outputs: Vec<(plant::Quantity, usize)> =
+        b.outputs.iter().map(|s| (s.quantity.unwrap_or(plant::Quantity::Speed), s.at)).collect();
+    let rec = ident::diagnose::drive::DriveRecord {
+        model: &model,
+        inputs: &b.input_data,
+        outputs: &outputs,
+        measured: &b.output_data,
+        dt_s: b.dt_s,
+    };
+    let d = ident::diagnose::drive::diagnose(rec, progress).map_err(|e| anyhow::anyhow!("{}: {e}", file.display()))?;
+    let mut notes = Vec::new();
+    if d.effect == "none" {
+        notes.push("no candidate beats re-fitting the declared inertias and stiffnesses".into());
+    }
+    if d.structured_residual {
+        notes.push(format!(
+            "the best model still leaves a structured residual (lag-1 autocorrelation above 0.5, error {:.3})",
+            d.error_after
+        ));
+    }
+    for e in &d.model.effects {
+        if let plant::Effect::CoulombFriction { smoothing_speed, .. } = e {
+            notes.push(format!(
+                "Coulomb friction is smoothed as F_c·v/√(v² + v_s²) with v_s = {smoothing_speed:.3e} (1 % of the body's RMS speed in the declared model, or wider where the friction would be faster than the mechanics)"
+            ));
+        }
+    }
+    let model_toml = drive_model_toml(&d.model, &b)?;
+    let names: Vec<String> = b.outputs.iter().map(|s| s.column.clone()).collect();
+    let t = &d.traces;
+    let stride = t.time_s.len().div_ceil(PLOT_POINTS).max(1);
+    let pts = |y: &[f64]| t.time_s.iter().zip(y).step_by(stride).map(|(&a, &b)| (a, b)).collect::<Vec<_>>();
+    let label = match &d.at {
+        Some(a) => format!("with {} at {a}", d.effect),
+        None => format!("with {}", d.effect),
+    };
+    let mut panels: Vec<crate::plot::Panel> = names
+        .iter()
+        .enumerate()
+        .map(|(c, name)| crate::plot::Panel {
+            title: format!("{name} (offsets and drift below {:.3} Hz removed)", d.high_pass_hz),
+            x_desc: "time [s]".into(),
+            y_desc: name.clone(),
+            log_y: false,
+            series: vec![
+                ("measured".into(), pts(&t.measured[c])),
+                ("declared model".into(), pts(&t.before[c])),
+                (label.clone(), pts(&t.after[c])),
+            ],
+        })
+        .collect();
+    let res = |y: &[f64]| t.measured[0].iter().zip(y).map(|(a, b)| a - b).collect::<Vec<f64>>();
+    let f_max = 0.5 / b.dt_s;
+    panels.push(crate::plot::Panel {
+        title: format!("residual spectrum ({})", names[0]),
+        x_desc: "frequency [Hz]".into(),
+        y_desc: "amplitude".into(),
+        log_y: true,
+        series: vec![
+            ("declared model".into(), spectrum(&res(&t.before[0]), b.dt_s, f_max)),
+            (label, spectrum(&res(&t.after[0]), b.dt_s, f_max)),
+            ("measured".into(), spectrum(&t.measured[0], b.dt_s, f_max)),
+        ],
+    });
+    Ok(Diagnosis {
+        report: DiagnosisReport {
+            effect: d.effect.clone(),
+            at: d.at.clone(),
+            parameters: d.parameters.clone(),
+            error_before: d.error_before,
+            error_after: d.error_after,
+            candidates: d.candidates.clone(),
+            kind: "drive_test".into(),
+            error_definition: format!(
+                "RMS over the outputs of ‖y_meas − y_model‖/‖y_meas‖, each output below {:.3} Hz removed",
+                d.high_pass_hz
+            ),
+            structured_residual: d.structured_residual,
+            evidence: serde_json::json!({ "high_pass_hz": d.high_pass_hz }),
+            notes,
+            conversions: b.conversions.clone(),
+        },
+        model_toml,
+        panels,
+        signals: Signals::Outputs { names, traces: d.traces },
+    })
+}
+
+/// The extended model of a drive test as TOML: the bundle's model section with the re-fitted
+/// values, its inputs and the effects (positions 1-based, as in the bundle).
+pub fn drive_model_toml(m: &plant::DriveModel, b: &crate::bundle::DriveTestBundle) -> anyhow::Result<String> {
+    #[derive(Serialize)]
+    struct Model<'a> {
+        bodies: &'a [plant::LineBody],
+        couplings: &'a [plant::Coupling],
+    }
+    #[derive(Serialize)]
+    struct Input<'a> {
+        column: &'a str,
+        body: &'a str,
+    }
+    #[derive(Serialize)]
+    struct Out<'a> {
+        kind: &'a str,
+        name: &'a str,
+        domain: plant::Domain,
+        model: Model<'a>,
+        inputs: Vec<Input<'a>>,
+        effects: Vec<plant::Effect>,
+    }
+    let effects = m
+        .effects
+        .iter()
+        .map(|e| match *e {
+            plant::Effect::CoulombFriction { body, friction, smoothing_speed } => {
+                plant::Effect::CoulombFriction { body: body + 1, friction, smoothing_speed }
+            }
+            plant::Effect::Backlash { coupling, backlash } => {
+                plant::Effect::Backlash { coupling: coupling + 1, backlash }
+            }
+            plant::Effect::TimeDelay { input, delay_s } => plant::Effect::TimeDelay { input: input + 1, delay_s },
+            plant::Effect::ActuatorLag { input, time_constant_s } => {
+                plant::Effect::ActuatorLag { input: input + 1, time_constant_s }
+            }
+        })
+        .collect();
+    let out = Out {
+        kind: "drive_model",
+        name: "extended model written by rigtwin diagnose",
+        domain: m.line.domain,
+        model: Model { bodies: &m.line.bodies, couplings: &m.line.couplings },
+        inputs: b
+            .inputs
+            .iter()
+            .zip(&m.inputs)
+            .map(|(s, &body)| Input { column: &s.column, body: &m.line.bodies[body].name })
+            .collect(),
+        effects,
+    };
+    Ok(format!(
+        "# the extended model of {}; positions (body, coupling, input) are 1-based as in the bundle\n{}",
+        b.file.display(),
+        toml::to_string(&out)?
+    ))
 }

@@ -26,6 +26,7 @@
 pub mod bearing;
 pub mod bending;
 pub mod chain;
+pub mod drive;
 pub mod effects;
 pub mod error;
 pub mod line;
@@ -41,6 +42,7 @@ pub mod statespace;
 pub use bearing::{BearingModel, CoefficientTable, Coefficients, Support};
 pub use bending::{Beam, BeamSegment, Deflection};
 pub use chain::{Body, Chain};
+pub use drive::{DriveModel, Effect};
 pub use error::{PlantError, Result};
 pub use line::{Coupling, Domain, Line, LineBody, Quantity};
 pub use mechanical::{Layout, MechanicalModel, Output, Spring};

@@ -273,6 +273,7 @@ pub fn diagnose(
         .map(|(name, fit, _, k, p)| {
             let e = error(imp, support, fit);
             CandidateScore {
+                at: None,
                 effect: name.clone(),
                 parameters: p.clone(),
                 error_after: e,

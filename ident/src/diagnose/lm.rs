@@ -4,8 +4,18 @@
 use nalgebra::{DMatrix, DVector};
 
 /// Minimises ‖f(x)‖² from `x0`; `f` returns `None` where the model cannot be evaluated.
-/// Returns the best x and its sum of squares.
+/// Returns the best x and its sum of squares. Stops when a step gains less than 1e-7 of the cost.
 pub fn minimise(f: &dyn Fn(&[f64]) -> Option<Vec<f64>>, x0: &[f64], max_iter: usize) -> (Vec<f64>, f64) {
+    minimise_to(f, x0, max_iter, 1e-7)
+}
+
+/// [`minimise`] stopping when a step gains less than `rel_tol` of the cost.
+pub fn minimise_to(
+    f: &dyn Fn(&[f64]) -> Option<Vec<f64>>,
+    x0: &[f64],
+    max_iter: usize,
+    rel_tol: f64,
+) -> (Vec<f64>, f64) {
     let p = x0.len();
     let mut x = x0.to_vec();
     let Some(mut r) = f(&x) else { return (x, f64::INFINITY) };
@@ -68,7 +78,7 @@ pub fn minimise(f: &dyn Fn(&[f64]) -> Option<Vec<f64>>, x0: &[f64], max_iter: us
                     cost = cn;
                     lambda = (lambda / 5.0).max(1e-9);
                     improved = true;
-                    if rel < 1e-7 {
+                    if rel < rel_tol {
                         return (x, cost);
                     }
                     break;

@@ -4,6 +4,7 @@
 //! count).
 
 pub mod bearing;
+pub mod drive;
 mod lm;
 pub mod torsional;
 
@@ -16,6 +17,9 @@ use serde::Serialize;
 pub struct CandidateScore {
     /// Effect name (the report's vocabulary).
     pub effect: String,
+    /// Where it acts ("body load", "coupling 2", "input 1"), for effects at an element.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub at: Option<String>,
     /// Fitted parameters (effect and re-fitted declared ones), SI, keys with units.
     pub parameters: BTreeMap<String, f64>,
     /// Normalised error after fitting.

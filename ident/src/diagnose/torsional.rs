@@ -379,6 +379,7 @@ pub fn diagnose(
         // traces are simulated once more below, so no candidate keeps a record-long trace).
         let rho = problem.simulate(&m).map_or(0.0, |s| lag1_autocorrelation(&problem.residual_of(&s)));
         scored.push(CandidateScore {
+            at: None,
             effect: c.name.to_string(),
             parameters: (c.report)(&m),
             error_after: cost.sqrt(),
@@ -421,6 +422,7 @@ pub fn diagnose(
         let mut parameters = none.parameters.clone();
         parameters.insert("backlash_rad".into(), 0.0);
         candidates.push(CandidateScore {
+            at: None,
             effect: name,
             parameters,
             error_after: none.error_after,

@@ -1,0 +1,511 @@
+//! Diagnosis of any drivetrain (`drive_test`): the declared [`DriveModel`] simulated with the
+//! recorded inputs, its residual over every measured output, and the vocabulary applied at
+//! every element where it can act — Coulomb friction at each body, backlash in each coupling, a
+//! dead time and an actuator lag at each input, the damping re-fitted, or nothing (`none`: the
+//! inertias and stiffnesses re-fitted). Each candidate re-fits the declared inertias and
+//! stiffnesses beside its own parameters; the choice is by the information criterion, as for
+//! the torsional sweep.
+//!
+//! Outputs are compared as measured (positions as positions), each normalised by its own
+//! spread, offsets and slow drift removed by the same zero-phase high-pass on measurement and
+//! model: nothing assumes a sweep.
+
+use std::collections::BTreeMap;
+
+use plant::drive::{DriveModel, Effect};
+use plant::{Domain, Quantity};
+use serde::Serialize;
+
+use super::{bic, effective_count, lag1_autocorrelation, lm, CandidateScore};
+use crate::error::{IdentError, Result};
+use crate::signal::filtfilt_high_pass_in_place;
+
+/// Offsets and drift are removed below max(`HIGH_PASS_PERIODS` / record length,
+/// `HIGH_PASS_MIN_HZ`): a few periods of the record's length, whatever the excitation.
+pub const HIGH_PASS_PERIODS: f64 = 3.0;
+/// Lowest high-pass corner, Hz.
+pub const HIGH_PASS_MIN_HZ: f64 = 0.02;
+/// The fits stop when a step gains less than this fraction of the cost (a 1e-5 change of the
+/// squared error is far below what the information criterion can tell apart).
+pub const LM_REL_TOL: f64 = 1e-5;
+/// A declared inertia or stiffness may be re-fitted within this factor of its declared value.
+pub const MAX_REFIT_FACTOR: f64 = 100.0;
+/// Smoothing speed of a fitted Coulomb friction, as a fraction of the body's RMS speed in the
+/// declared model's simulation — or wider, where the friction's slope F_c/(v_s J) would
+/// otherwise be faster than the declared mechanics' fastest rate (and than 1/dt).
+pub const FRICTION_SMOOTHING_FRACTION: f64 = 0.01;
+
+/// What a candidate adds to the declared model.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Candidate {
+    /// Nothing: the inertias and stiffnesses re-fitted.
+    None,
+    /// The couplings' damping and the bodies' drags re-fitted.
+    Damping,
+    /// Coulomb friction at a body.
+    CoulombFriction(usize),
+    /// Backlash in a coupling.
+    Backlash(usize),
+    /// A dead time of an input.
+    TimeDelay(usize),
+    /// A first-order lag of an input.
+    ActuatorLag(usize),
+}
+
+impl Candidate {
+    /// The vocabulary name.
+    pub fn name(self) -> &'static str {
+        match self {
+            Candidate::None => "none",
+            Candidate::Damping => "damping",
+            Candidate::CoulombFriction(_) => "coulomb_friction",
+            Candidate::Backlash(_) => "backlash",
+            Candidate::TimeDelay(_) => "time_delay",
+            Candidate::ActuatorLag(_) => "actuator_lag",
+        }
+    }
+}
+
+/// A record of a drivetrain: the declared model, the measured inputs and outputs.
+#[derive(Debug, Clone, Copy)]
+pub struct DriveRecord<'a> {
+    /// The declared model (its effects, if any, are kept in every candidate).
+    pub model: &'a DriveModel,
+    /// One sampled signal per model input, N or Nm.
+    pub inputs: &'a [Vec<f64>],
+    /// What each measured output is.
+    pub outputs: &'a [(Quantity, usize)],
+    /// One sampled signal per output, SI.
+    pub measured: &'a [Vec<f64>],
+    /// Sample time, s.
+    pub dt_s: f64,
+}
+
+/// Signals for plots and `--save-signals`: every output, high-passed as the error is.
+#[derive(Debug, Clone, Default)]
+pub struct DriveTraces {
+    /// Time, s.
+    pub time_s: Vec<f64>,
+    /// Measured outputs.
+    pub measured: Vec<Vec<f64>>,
+    /// The declared model's outputs.
+    pub before: Vec<Vec<f64>>,
+    /// The extended model's outputs.
+    pub after: Vec<Vec<f64>>,
+}
+
+/// The diagnosis of a drive record.
+#[derive(Debug, Clone, Serialize)]
+pub struct DriveDiagnosis {
+    /// The chosen effect (vocabulary name).
+    pub effect: String,
+    /// Where it acts ("body load", "coupling 2", "input 1"), if at an element.
+    pub at: Option<String>,
+    /// Its parameters and the re-fitted declared ones, SI, keys with units.
+    pub parameters: BTreeMap<String, f64>,
+    /// Normalised error of the declared model (1 = no better than predicting nothing).
+    pub error_before: f64,
+    /// Normalised error of the extended model.
+    pub error_after: f64,
+    /// Every candidate, best score first.
+    pub candidates: Vec<CandidateScore>,
+    /// The best model still leaves a structured (non-white) residual.
+    pub structured_residual: bool,
+    /// Corner of the high-pass that removes offsets and drift, Hz.
+    pub high_pass_hz: f64,
+    /// The extended model.
+    pub model: DriveModel,
+    /// Signals for plots.
+    #[serde(skip)]
+    pub traces: DriveTraces,
+}
+
+struct Problem<'a> {
+    rec: DriveRecord<'a>,
+    measured: Vec<Vec<f64>>,
+    /// 1 / (‖measured_i‖ √channels) per output.
+    weights: Vec<f64>,
+    high_pass_hz: f64,
+    initial_speed: f64,
+    /// Reference scales of the extras: drag and damping where declared zero, friction,
+    /// backlash.
+    drag_ref: Vec<f64>,
+    damping_ref: Vec<f64>,
+    friction_ref: Vec<f64>,
+    smoothing: Vec<f64>,
+    twist_rms: Vec<f64>,
+    /// Fastest rate of the declared model's linear part, 1/s.
+    rate: f64,
+}
+
+impl Problem<'_> {
+    fn nbase(&self) -> usize {
+        2 * self.rec.model.line.bodies.len() - 1
+    }
+
+    /// The model of candidate `c` at parameters `x` (base scales in log, then the extras).
+    fn build(&self, c: Candidate, x: &[f64]) -> Option<DriveModel> {
+        let limit = MAX_REFIT_FACTOR.ln();
+        let n = self.rec.model.line.bodies.len();
+        if x[..self.nbase()].iter().any(|v| v.abs() > limit) || x.iter().any(|v| !v.is_finite() || v.abs() > 40.0) {
+            return None;
+        }
+        let mut m = self.rec.model.clone();
+        for (b, s) in m.line.bodies.iter_mut().zip(&x[..n]) {
+            b.inertia *= s.exp();
+        }
+        for (c, s) in m.line.couplings.iter_mut().zip(&x[n..]) {
+            c.stiffness *= s.exp();
+        }
+        let extra = &x[self.nbase()..];
+        let dt = self.rec.dt_s;
+        let record_s = dt * self.rec.inputs[0].len() as f64;
+        match c {
+            Candidate::None => {}
+            Candidate::Damping => {
+                for (i, b) in m.line.bodies.iter_mut().enumerate() {
+                    b.drag = self.drag_ref[i] * extra[i].exp();
+                }
+                for (i, c) in m.line.couplings.iter_mut().enumerate() {
+                    c.damping = self.damping_ref[i] * extra[n + i].exp();
+                }
+            }
+            Candidate::CoulombFriction(b) => {
+                let friction = self.friction_ref[b] * extra[0].exp();
+                // no sharper than the mechanics' fastest rate: the friction's slope
+                // F_c/(v_s J) must not set the integration step
+                let smoothing_speed = self.smoothing[b].max(friction / (m.line.bodies[b].inertia * self.rate));
+                m.effects.push(Effect::CoulombFriction { body: b, friction, smoothing_speed })
+            }
+            Candidate::Backlash(k) => {
+                let backlash = self.twist_rms[k] * extra[0].exp();
+                if backlash > 100.0 * self.twist_rms[k] {
+                    return None;
+                }
+                m.effects.push(Effect::Backlash { coupling: k, backlash })
+            }
+            Candidate::TimeDelay(j) => {
+                let delay_s = dt * extra[0].exp();
+                if delay_s > 0.1 * record_s {
+                    return None;
+                }
+                m.effects.push(Effect::TimeDelay { input: j, delay_s })
+            }
+            Candidate::ActuatorLag(j) => {
+                let time_constant_s = dt * extra[0].exp();
+                if time_constant_s > 0.1 * record_s {
+                    return None;
+                }
+                m.effects.push(Effect::ActuatorLag { input: j, time_constant_s })
+            }
+        }
+        Some(m)
+    }
+
+    /// The model's outputs, high-passed as the measurement is.
+    fn simulate(&self, m: &DriveModel) -> Option<Vec<Vec<f64>>> {
+        let mut y = m.simulate(self.rec.inputs, self.rec.dt_s, self.initial_speed, self.rec.outputs).ok()?;
+        for s in y.iter_mut() {
+            filtfilt_high_pass_in_place(s, self.rec.dt_s, self.high_pass_hz);
+            if !s.iter().all(|v| v.is_finite()) {
+                return None;
+            }
+        }
+        Some(y)
+    }
+
+    fn residual_of(&self, y: &[Vec<f64>]) -> Vec<f64> {
+        let mut r = Vec::with_capacity(y.len() * y.first().map_or(0, Vec::len));
+        for ((s, m), w) in y.iter().zip(&self.measured).zip(&self.weights) {
+            r.extend(s.iter().zip(m).map(|(s, m)| (m - s) * w));
+        }
+        r
+    }
+
+    fn residual(&self, c: Candidate, x: &[f64]) -> Option<Vec<f64>> {
+        let m = self.build(c, x)?;
+        Some(self.residual_of(&self.simulate(&m)?))
+    }
+
+    /// Starting values of the candidate's own parameters to grid over.
+    fn starts(&self, c: Candidate) -> Vec<Vec<f64>> {
+        let n = self.rec.model.line.bodies.len();
+        let grid = |lo: f64, hi: f64, k: usize| -> Vec<Vec<f64>> {
+            (0..k).map(|i| vec![lo.ln() + (hi / lo).ln() * i as f64 / (k - 1) as f64]).collect()
+        };
+        match c {
+            Candidate::None => vec![vec![]],
+            Candidate::Damping => vec![vec![0.0; 2 * n - 1]],
+            Candidate::CoulombFriction(_) => grid(0.01, 1.0, 8),
+            // the play's basin: a profile over three decades of the declared model's twist
+            Candidate::Backlash(_) => grid(0.01, 10.0, 16),
+            Candidate::TimeDelay(_) | Candidate::ActuatorLag(_) => grid(0.3, 100.0, 12),
+        }
+    }
+
+    /// The candidate's parameters as reported: the re-fitted inertias and stiffnesses, then
+    /// its own.
+    fn report(&self, c: Candidate, m: &DriveModel) -> BTreeMap<String, f64> {
+        let rotational = m.line.domain == Domain::Rotational;
+        let (inertia, j_unit) = if rotational { ("inertia", "kg_m2") } else { ("mass", "kg") };
+        let (k_unit, d_unit) = if rotational { ("Nm_per_rad", "Nms_per_rad") } else { ("N_per_m", "Ns_per_m") };
+        let mut b = BTreeMap::new();
+        for body in &m.line.bodies {
+            b.insert(format!("{inertia}_{}_{j_unit}", body.name.replace(' ', "_")), body.inertia);
+        }
+        for (i, c) in m.line.couplings.iter().enumerate() {
+            b.insert(format!("stiffness_coupling{}_{k_unit}", i + 1), c.stiffness);
+        }
+        if c == Candidate::Damping {
+            for body in &m.line.bodies {
+                b.insert(format!("drag_{}_{d_unit}", body.name.replace(' ', "_")), body.drag);
+            }
+            for (i, c) in m.line.couplings.iter().enumerate() {
+                b.insert(format!("damping_coupling{}_{d_unit}", i + 1), c.damping);
+            }
+        }
+        if let Some(e) = m.effects.last().filter(|_| !matches!(c, Candidate::None | Candidate::Damping)) {
+            for (k, v) in e.parameters(m) {
+                b.insert(k, v);
+            }
+        }
+        b
+    }
+}
+
+/// Speed of body `b` per speed of body 0 (the gear stages between them).
+fn gear_to(m: &DriveModel, b: usize) -> f64 {
+    m.line.couplings[..b].iter().map(|c| 1.0 / c.ratio).product()
+}
+
+/// Diagnoses `rec`. `progress` is told each candidate's name as it finishes.
+pub fn diagnose(rec: DriveRecord, progress: &(dyn Fn(&str) + Sync)) -> Result<DriveDiagnosis> {
+    let m0 = rec.model;
+    m0.validate()?;
+    let n = m0.line.bodies.len();
+    let len = rec.inputs.first().map_or(0, Vec::len);
+    if rec.inputs.len() != m0.inputs.len() || rec.inputs.iter().any(|u| u.len() != len) {
+        return Err(IdentError::Invalid("one input signal per model input, all of one length".into()));
+    }
+    if rec.outputs.is_empty() || rec.outputs.len() != rec.measured.len() || rec.measured.iter().any(|y| y.len() != len)
+    {
+        return Err(IdentError::Invalid("one measured signal per output, as long as the inputs".into()));
+    }
+    if len < 200 {
+        return Err(IdentError::Data(format!("a record of {len} samples is too short to diagnose (need 200)")));
+    }
+    let dt = rec.dt_s;
+    let record_s = dt * len as f64;
+    let high_pass_hz = (HIGH_PASS_PERIODS / record_s).max(HIGH_PASS_MIN_HZ);
+    let mut measured: Vec<Vec<f64>> = rec.measured.to_vec();
+    let mut weights = Vec::new();
+    for (i, y) in measured.iter_mut().enumerate() {
+        filtfilt_high_pass_in_place(y, dt, high_pass_hz);
+        let norm = y.iter().map(|v| v * v).sum::<f64>().sqrt();
+        if !(norm.is_finite() && norm > 0.0) {
+            return Err(IdentError::Data(format!(
+                "output {} does not vary above {high_pass_hz:.3} Hz: nothing to compare",
+                i + 1
+            )));
+        }
+        weights.push(1.0 / (norm * (rec.outputs.len() as f64).sqrt()));
+    }
+    // the first body's speed at the start, from the first measured speed or position
+    let k0 = 10.min(len - 1);
+    let initial_speed = rec
+        .outputs
+        .iter()
+        .zip(rec.measured)
+        .find_map(|(&(q, b), y)| match q {
+            Quantity::Speed => Some(y[..k0].iter().sum::<f64>() / k0 as f64 / gear_to(m0, b)),
+            Quantity::Position => Some((y[k0] - y[0]) / (k0 as f64 * dt) / gear_to(m0, b)),
+            Quantity::CouplingForce => None,
+        })
+        .unwrap_or(0.0);
+
+    // scales of the extras from the declared model's own motion
+    let all_speeds: Vec<(Quantity, usize)> = (0..n).map(|b| (Quantity::Speed, b)).collect();
+    let all_twists: Vec<(Quantity, usize)> = (0..n - 1).map(|c| (Quantity::CouplingForce, c)).collect();
+    let declared_motion = m0
+        .simulate(rec.inputs, dt, initial_speed, &[all_speeds, all_twists].concat())
+        .map_err(|e| IdentError::Data(format!("the declared model cannot be simulated: {e}")))?;
+    let rms = |v: &[f64]| (v.iter().map(|x| x * x).sum::<f64>() / v.len() as f64).sqrt();
+    let modes = m0.line.model()?.modes()?;
+    let w_ref =
+        2.0 * std::f64::consts::PI * modes.frequencies_hz.iter().copied().filter(|f| *f > 1e-3).fold(1.0, f64::max);
+    let drag_ref: Vec<f64> =
+        m0.line.bodies.iter().map(|b| if b.drag > 0.0 { b.drag } else { 0.01 * b.inertia * w_ref }).collect();
+    let damping_ref: Vec<f64> = m0
+        .line
+        .couplings
+        .iter()
+        .enumerate()
+        .map(|(i, c)| {
+            if c.damping > 0.0 {
+                c.damping
+            } else {
+                // 1 % of critical for the two neighbours seen from the coupling's load side
+                let r2 = c.ratio * c.ratio;
+                let j = 1.0 / (1.0 / (m0.line.bodies[i].inertia * r2) + 1.0 / m0.line.bodies[i + 1].inertia);
+                0.02 * (c.stiffness * j).sqrt()
+            }
+        })
+        .collect();
+    // friction scale: the input's RMS force reflected to the body
+    let input_rms: f64 = rec.inputs.iter().zip(&m0.inputs).map(|(u, &b)| rms(u) / gear_to(m0, b)).fold(0.0, f64::max);
+    let friction_ref: Vec<f64> = (0..n).map(|b| input_rms * gear_to(m0, b)).collect();
+    let smoothing: Vec<f64> = (0..n).map(|b| FRICTION_SMOOTHING_FRACTION * rms(&declared_motion[b])).collect();
+    let twist_rms: Vec<f64> = m0
+        .line
+        .couplings
+        .iter()
+        .enumerate()
+        .map(|(i, c)| rms(&declared_motion[n + i]) / c.stiffness.max(1e-300))
+        .collect();
+
+    let (a, _) = m0.linearisation()?;
+    let rate = a.complex_eigenvalues().iter().map(|l| l.norm()).fold(1.0 / dt, f64::max);
+    let problem = Problem {
+        rec,
+        measured,
+        weights,
+        high_pass_hz,
+        initial_speed,
+        drag_ref,
+        damping_ref,
+        friction_ref,
+        smoothing,
+        twist_rms,
+        rate,
+    };
+    let sim0 = problem
+        .simulate(m0)
+        .ok_or_else(|| IdentError::Data("the declared model cannot be simulated (check its parameters)".into()))?;
+    let r0 = problem.residual_of(&sim0);
+    let error_before = r0.iter().map(|v| v * v).sum::<f64>().sqrt();
+
+    // the vocabulary at every element where it can act and the data can show it
+    let mut cands = vec![Candidate::None, Candidate::Damping];
+    for (b, (speed, &vs)) in declared_motion.iter().zip(&problem.smoothing).enumerate() {
+        // friction shows when the body's speed changes sign or comes near zero
+        if vs > 0.0 && speed.iter().any(|v| v.abs() < 10.0 * vs) {
+            cands.push(Candidate::CoulombFriction(b));
+        }
+    }
+    for c in 0..n - 1 {
+        // play shows where the coupling's force crosses zero
+        let f = &declared_motion[n + c];
+        if problem.twist_rms[c] > 0.0 && f.iter().any(|&v| v > 0.0) && f.iter().any(|&v| v < 0.0) {
+            cands.push(Candidate::Backlash(c));
+        }
+    }
+    for j in 0..m0.inputs.len() {
+        cands.push(Candidate::TimeDelay(j));
+        cands.push(Candidate::ActuatorLag(j));
+    }
+
+    let nbase = problem.nbase();
+    let next = std::sync::atomic::AtomicUsize::new(0);
+    let fit_one = |i: usize| -> (usize, Vec<f64>, f64) {
+        let c = cands[i];
+        let problem = &problem;
+        let f = |x: &[f64]| problem.residual(c, x);
+        let cost_at = |s: &Vec<f64>| {
+            let mut x = vec![0.0; nbase];
+            x.extend(s);
+            let cost = f(&x).map(|r| r.iter().map(|v| v * v).sum::<f64>());
+            (x, cost.unwrap_or(f64::INFINITY))
+        };
+        let best = problem.starts(c).iter().map(cost_at).filter(|g| g.1.is_finite()).min_by(|p, q| p.1.total_cmp(&q.1));
+        let (x, cost) = match best {
+            Some((x0, _)) => lm::minimise_to(&f, &x0, 20, LM_REL_TOL),
+            None => (vec![], f64::INFINITY),
+        };
+        progress(&match c {
+            Candidate::None | Candidate::Damping => c.name().to_string(),
+            Candidate::CoulombFriction(b) => format!("{} at {}", c.name(), m0.line.bodies[b].name),
+            Candidate::Backlash(k) => format!("{} in coupling {}", c.name(), k + 1),
+            Candidate::TimeDelay(j) | Candidate::ActuatorLag(j) => format!("{} of input {}", c.name(), j + 1),
+        });
+        (i, x, cost)
+    };
+    let mut fits: Vec<(usize, Vec<f64>, f64)> = std::thread::scope(|scope| {
+        let workers: Vec<_> = (0..2)
+            .map(|_| {
+                scope.spawn(|| {
+                    let mut done = Vec::new();
+                    loop {
+                        let i = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+                        if i >= cands.len() {
+                            break done;
+                        }
+                        done.push(fit_one(i));
+                    }
+                })
+            })
+            .collect();
+        workers.into_iter().filter_map(|h| h.join().ok()).flatten().collect()
+    });
+    fits.sort_by_key(|f| f.0);
+
+    let nres = r0.len();
+    let n_eff = effective_count(nres, lag1_autocorrelation(&r0));
+    let norm2 = 1.0; // residuals are already normalised
+    let mut scored: Vec<(CandidateScore, DriveModel, f64)> = Vec::new();
+    for (i, x, cost) in fits {
+        if !cost.is_finite() {
+            continue;
+        }
+        let c = cands[i];
+        let Some(m) = problem.build(c, &x) else { continue };
+        let rho = problem.simulate(&m).map_or(0.0, |s| lag1_autocorrelation(&problem.residual_of(&s)));
+        let at = m.effects.last().filter(|_| !matches!(c, Candidate::None | Candidate::Damping)).map(|e| e.element(&m));
+        scored.push((
+            CandidateScore {
+                effect: c.name().to_string(),
+                at,
+                parameters: problem.report(c, &m),
+                error_after: cost.sqrt(),
+                score: bic(cost * norm2, nres, n_eff, x.len()),
+                fitted_parameters: x.len(),
+            },
+            m,
+            rho,
+        ));
+    }
+    let none = scored
+        .iter()
+        .position(|s| s.0.effect == "none")
+        .ok_or_else(|| IdentError::Data("re-fitting the declared model failed".into()))?;
+    let mut best = none;
+    for (i, s) in scored.iter().enumerate() {
+        // an effect must beat the re-fitted declared model clearly: 10 % less error and a
+        // lower score
+        if s.0.score < scored[best].0.score && s.0.error_after < 0.9 * scored[none].0.error_after {
+            best = i;
+        }
+    }
+    let (chosen, model, rho) = scored[best].clone();
+    let structured_residual = rho.abs() > 0.5 && chosen.error_after > 0.02;
+    let after = problem.simulate(&model).unwrap_or_else(|| sim0.clone());
+    let traces = DriveTraces {
+        time_s: (0..len).map(|k| k as f64 * dt).collect(),
+        measured: problem.measured.clone(),
+        before: sim0,
+        after,
+    };
+    let mut candidates: Vec<CandidateScore> = scored.into_iter().map(|s| s.0).collect();
+    candidates.sort_by(|a, b| a.score.total_cmp(&b.score));
+    Ok(DriveDiagnosis {
+        effect: chosen.effect,
+        at: chosen.at,
+        parameters: chosen.parameters,
+        error_before,
+        error_after: chosen.error_after,
+        candidates,
+        structured_residual,
+        high_pass_hz,
+        model,
+        traces,
+    })
+}

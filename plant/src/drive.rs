@@ -1,0 +1,659 @@
+//! A drivetrain as one model: a [`Line`] of bodies with couplings and gear stages, the measured
+//! forces (torques) acting on some of its bodies, and the effects attached to its elements —
+//! Coulomb friction at a body, backlash in a coupling, a dead time and a first-order lag of an
+//! input. One nonlinear right-hand side, one linearisation (in contact, friction left out), one
+//! exact ZOH for a model without nonlinear effects, one fixed-step RK4 for a model with them.
+//!
+//! States x = [q (one per body); q̇; z (one per lagged input)]. Inputs are held constant over a
+//! sample (ZOH), as a DAQ's torque command is; a dead time τ = (m + f)·dt shifts the held
+//! sequence by m whole samples and splits each sample at the fraction f, so every piece
+//! between switching instants is integrated with a constant input (exactly, in the linear case).
+
+use nalgebra::{DMatrix, DVector};
+use serde::{Deserialize, Serialize};
+
+use crate::error::{PlantError, Result};
+use crate::line::{Line, Quantity};
+use crate::statespace::zoh;
+
+/// Most RK4 sub-steps per sample: a model stiffer than this at the record's sample rate is
+/// refused instead of being integrated for minutes.
+pub const MAX_SUBSTEPS: usize = 2000;
+
+/// RK4 sub-step bound: h·|λ|max ≤ this (RK4 is stable to 2.8 on both axes; 0.5 keeps the
+/// amplitude error of the fastest mode per sub-step below 1e-4).
+pub const RK4_STEP_TIMES_RATE: f64 = 0.5;
+
+/// An effect attached to an element of the line (indices 0-based).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "effect", rename_all = "snake_case")]
+pub enum Effect {
+    /// Coulomb friction at a body: F = friction · q̇/√(q̇² + smoothing_speed²) against its
+    /// motion (71 % of the friction at the smoothing speed, 97 % at 4×, 99.5 % at 10×).
+    CoulombFriction {
+        /// The body.
+        body: usize,
+        /// Friction force (torque), N (Nm).
+        friction: f64,
+        /// Smoothing speed v_s, m/s (rad/s).
+        smoothing_speed: f64,
+    },
+    /// Play in a coupling: no force while |twist| < backlash/2, the spring and damper act on
+    /// the twist beyond it (total play `backlash`).
+    Backlash {
+        /// The coupling.
+        coupling: usize,
+        /// Total play, m (rad) of the coupling's twist.
+        backlash: f64,
+    },
+    /// The input reaches the body `delay_s` later than recorded.
+    TimeDelay {
+        /// The input (position among the model's inputs).
+        input: usize,
+        /// Dead time, s.
+        delay_s: f64,
+    },
+    /// The force on the body follows the recorded input through τ ż = u − z.
+    ActuatorLag {
+        /// The input.
+        input: usize,
+        /// Time constant τ, s.
+        time_constant_s: f64,
+    },
+}
+
+impl Effect {
+    /// The vocabulary name.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Effect::CoulombFriction { .. } => "coulomb_friction",
+            Effect::Backlash { .. } => "backlash",
+            Effect::TimeDelay { .. } => "time_delay",
+            Effect::ActuatorLag { .. } => "actuator_lag",
+        }
+    }
+
+    /// Where it acts, in words ("body load", "coupling 2", "input 1"; positions 1-based).
+    pub fn element(&self, model: &DriveModel) -> String {
+        match *self {
+            Effect::CoulombFriction { body, .. } => {
+                format!("body {}", model.line.bodies.get(body).map_or("?", |b| b.name.as_str()))
+            }
+            Effect::Backlash { coupling, .. } => format!("coupling {}", coupling + 1),
+            Effect::TimeDelay { input, .. } | Effect::ActuatorLag { input, .. } => format!("input {}", input + 1),
+        }
+    }
+
+    /// Its parameters, SI, keyed with their units in the line's domain.
+    pub fn parameters(&self, model: &DriveModel) -> Vec<(String, f64)> {
+        let rotational = model.line.domain == crate::line::Domain::Rotational;
+        let (force, coordinate, speed) = if rotational { ("Nm", "rad", "radps") } else { ("N", "m", "mps") };
+        match *self {
+            Effect::CoulombFriction { friction, smoothing_speed, .. } => {
+                vec![(format!("friction_{force}"), friction), (format!("smoothing_speed_{speed}"), smoothing_speed)]
+            }
+            Effect::Backlash { backlash, .. } => vec![(format!("backlash_{coordinate}"), backlash)],
+            Effect::TimeDelay { delay_s, .. } => vec![("delay_s".into(), delay_s)],
+            Effect::ActuatorLag { time_constant_s, .. } => vec![("time_constant_s".into(), time_constant_s)],
+        }
+    }
+}
+
+/// A line of bodies, the forces measured on them and the effects: the model of a `drive_test`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct DriveModel {
+    /// Bodies and couplings.
+    pub line: Line,
+    /// The body (0-based) each input force acts on.
+    pub inputs: Vec<usize>,
+    /// Effects, at most one of each kind per element.
+    pub effects: Vec<Effect>,
+}
+
+impl DriveModel {
+    /// Checks the line, the inputs and every effect (element in range, parameter positive and
+    /// finite, no element with the same effect twice).
+    pub fn validate(&self) -> Result<()> {
+        self.line.validate()?;
+        let n = self.line.bodies.len();
+        if let Some(&b) = self.inputs.iter().find(|&&b| b >= n) {
+            return Err(PlantError::Invalid(format!("an input acts on body {} of a line of {n}", b + 1)));
+        }
+        for (i, e) in self.effects.iter().enumerate() {
+            let (index, count, values): (usize, usize, Vec<f64>) = match *e {
+                Effect::CoulombFriction { body, friction, smoothing_speed } => {
+                    (body, n, vec![friction, smoothing_speed])
+                }
+                Effect::Backlash { coupling, backlash } => (coupling, n - 1, vec![backlash]),
+                Effect::TimeDelay { input, delay_s } => (input, self.inputs.len(), vec![delay_s]),
+                Effect::ActuatorLag { input, time_constant_s } => (input, self.inputs.len(), vec![time_constant_s]),
+            };
+            if index >= count {
+                return Err(PlantError::Invalid(format!(
+                    "effects[{}] ({}) acts on element {} of {count}",
+                    i + 1,
+                    e.name(),
+                    index + 1
+                )));
+            }
+            if let Some(v) = values.iter().find(|v| !(v.is_finite() && **v > 0.0)) {
+                return Err(PlantError::Invalid(format!(
+                    "effects[{}] ({}): parameter {v}: expected a positive, finite value",
+                    i + 1,
+                    e.name()
+                )));
+            }
+            let same = |o: &Effect| o.name() == e.name() && o.element(self) == e.element(self);
+            if self.effects[..i].iter().any(same) {
+                return Err(PlantError::Invalid(format!(
+                    "effects[{}]: {} at {} is given twice",
+                    i + 1,
+                    e.name(),
+                    e.element(self)
+                )));
+            }
+        }
+        Ok(())
+    }
+
+    /// True when friction or backlash make the right-hand side nonlinear.
+    pub fn is_nonlinear(&self) -> bool {
+        self.effects.iter().any(|e| matches!(e, Effect::CoulombFriction { .. } | Effect::Backlash { .. }))
+    }
+
+    /// Number of states: angles (positions), speeds and one per lagged input.
+    pub fn nstates(&self) -> usize {
+        2 * self.line.bodies.len() + self.effects.iter().filter(|e| matches!(e, Effect::ActuatorLag { .. })).count()
+    }
+
+    /// State names: `phi_<body>`/`x_<body>`, `w_<body>`/`v_<body>`, `F_lagged_<input>`.
+    pub fn state_names(&self) -> Vec<String> {
+        let rotational = self.line.domain == crate::line::Domain::Rotational;
+        let (q, v) = if rotational { ("phi", "w") } else { ("x", "v") };
+        let body = |b: &crate::line::LineBody| b.name.replace(' ', "_");
+        let mut s: Vec<String> = self.line.bodies.iter().map(|b| format!("{q}_{}", body(b))).collect();
+        s.extend(self.line.bodies.iter().map(|b| format!("{v}_{}", body(b))));
+        for e in &self.effects {
+            if let Effect::ActuatorLag { input, .. } = e {
+                s.push(format!("F_lagged_{}", input + 1));
+            }
+        }
+        s
+    }
+
+    /// The linearisation in contact with friction left out: ẋ = A x + B u (u: the inputs after
+    /// their dead time). Exact for a model without friction and backlash.
+    pub fn linearisation(&self) -> Result<(DMatrix<f64>, DMatrix<f64>)> {
+        let p = Prepared::new(self)?;
+        Ok(p.linear())
+    }
+
+    /// Simulates the model from rest (every body at `initial_speed` of the first body, through
+    /// the gear ratios) under the sampled `inputs` (one vector per model input, sample time
+    /// `dt_s`, held over each sample) and returns the `outputs` at the sample instants.
+    pub fn simulate(
+        &self,
+        inputs: &[Vec<f64>],
+        dt_s: f64,
+        initial_speed: f64,
+        outputs: &[(Quantity, usize)],
+    ) -> Result<Vec<Vec<f64>>> {
+        let p = Prepared::new(self)?;
+        p.simulate(inputs, dt_s, initial_speed, outputs)
+    }
+}
+
+/// Everything the integrators need, in flat arrays.
+struct Prepared {
+    n: usize,
+    inv_j: Vec<f64>,
+    drag: Vec<f64>,
+    /// (stiffness, damping, 1/ratio, half play or 0) per coupling.
+    couplings: Vec<(f64, f64, f64, f64)>,
+    /// (friction, smoothing speed) per body (0: none).
+    friction: Vec<(f64, f64)>,
+    /// Per input: body, dead time, lag time constant (0: none), lag state index.
+    inputs: Vec<(usize, f64, f64, usize)>,
+    nstates: usize,
+    nonlinear: bool,
+    ratios: Vec<f64>,
+}
+
+impl Prepared {
+    fn new(m: &DriveModel) -> Result<Prepared> {
+        m.validate()?;
+        let n = m.line.bodies.len();
+        let mut couplings: Vec<(f64, f64, f64, f64)> =
+            m.line.couplings.iter().map(|c| (c.stiffness, c.damping, 1.0 / c.ratio, 0.0)).collect();
+        let mut friction = vec![(0.0, 1.0); n];
+        let mut inputs: Vec<(usize, f64, f64, usize)> = m.inputs.iter().map(|&b| (b, 0.0, 0.0, 0)).collect();
+        let mut nstates = 2 * n;
+        for e in &m.effects {
+            match *e {
+                Effect::CoulombFriction { body, friction: f, smoothing_speed } => friction[body] = (f, smoothing_speed),
+                Effect::Backlash { coupling, backlash } => couplings[coupling].3 = 0.5 * backlash,
+                Effect::TimeDelay { input, delay_s } => inputs[input].1 = delay_s,
+                Effect::ActuatorLag { input, time_constant_s } => {
+                    inputs[input].2 = time_constant_s;
+                    inputs[input].3 = nstates;
+                    nstates += 1;
+                }
+            }
+        }
+        Ok(Prepared {
+            n,
+            inv_j: m.line.bodies.iter().map(|b| 1.0 / b.inertia).collect(),
+            drag: m.line.bodies.iter().map(|b| b.drag).collect(),
+            couplings,
+            friction,
+            inputs,
+            nstates,
+            nonlinear: m.is_nonlinear(),
+            ratios: m.line.couplings.iter().map(|c| c.ratio).collect(),
+        })
+    }
+
+    /// ẋ = f(x, u): `u` the inputs after their dead time.
+    #[inline]
+    fn rhs(&self, x: &[f64], u: &[f64], dx: &mut [f64]) {
+        let n = self.n;
+        let (q, v) = (&x[..n], &x[n..2 * n]);
+        let (dq, rest) = dx.split_at_mut(n);
+        let f = &mut rest[..n];
+        for i in 0..n {
+            dq[i] = v[i];
+            let (fc, vs) = self.friction[i];
+            // Coulomb friction smoothed as F_c v/√(v² + v_s²): the slope F_c/v_s at rest of
+            // tanh(v/v_s), without its exponential
+            let friction = if fc > 0.0 { fc * v[i] / (v[i] * v[i] + vs * vs).sqrt() } else { 0.0 };
+            f[i] = -self.drag[i] * v[i] - friction;
+        }
+        for (&(body, _, tau, z), &u) in self.inputs.iter().zip(u) {
+            f[body] += if tau > 0.0 { x[z] } else { u };
+        }
+        for (i, &(c, d, inv_r, half)) in self.couplings.iter().enumerate() {
+            let t = coupling_force(c, d, half, q[i] * inv_r - q[i + 1], v[i] * inv_r - v[i + 1]);
+            f[i + 1] += t;
+            f[i] -= t * inv_r;
+        }
+        for (fi, ij) in f.iter_mut().zip(&self.inv_j) {
+            *fi *= ij;
+        }
+        for (&(_, _, tau, z), &u) in self.inputs.iter().zip(u) {
+            if tau > 0.0 {
+                rest[z - n] = (u - x[z]) / tau;
+            }
+        }
+    }
+
+    /// A and B of the contact piece without friction.
+    fn linear(&self) -> (DMatrix<f64>, DMatrix<f64>) {
+        let (ns, m) = (self.nstates, self.inputs.len());
+        let linear = Prepared {
+            couplings: self.couplings.iter().map(|&(c, d, r, _)| (c, d, r, 0.0)).collect(),
+            friction: vec![(0.0, 1.0); self.n],
+            inv_j: self.inv_j.clone(),
+            drag: self.drag.clone(),
+            inputs: self.inputs.clone(),
+            ratios: self.ratios.clone(),
+            ..*self
+        };
+        let mut a = DMatrix::zeros(ns, ns);
+        let mut b = DMatrix::zeros(ns, m);
+        let mut dx = vec![0.0; ns];
+        let zero_u = vec![0.0; m];
+        for j in 0..ns {
+            let mut x = vec![0.0; ns];
+            x[j] = 1.0;
+            linear.rhs(&x, &zero_u, &mut dx);
+            a.set_column(j, &DVector::from_column_slice(&dx));
+        }
+        let x = vec![0.0; ns];
+        for j in 0..m {
+            let mut u = vec![0.0; m];
+            u[j] = 1.0;
+            linear.rhs(&x, &u, &mut dx);
+            b.set_column(j, &DVector::from_column_slice(&dx));
+        }
+        (a, b)
+    }
+
+    fn output(&self, x: &[f64], what: (Quantity, usize)) -> f64 {
+        let n = self.n;
+        match what {
+            (Quantity::Position, i) => x[i],
+            (Quantity::Speed, i) => x[n + i],
+            (Quantity::CouplingForce, i) => {
+                let (c, d, inv_r, half) = self.couplings[i];
+                coupling_force(c, d, half, x[i] * inv_r - x[i + 1], x[n + i] * inv_r - x[n + i + 1])
+            }
+        }
+    }
+
+    fn simulate(
+        &self,
+        inputs: &[Vec<f64>],
+        dt: f64,
+        initial_speed: f64,
+        outputs: &[(Quantity, usize)],
+    ) -> Result<Vec<Vec<f64>>> {
+        let (n, ns, m) = (self.n, self.nstates, self.inputs.len());
+        if inputs.len() != m {
+            return Err(PlantError::Invalid(format!("{} input signals for a model of {m} inputs", inputs.len())));
+        }
+        let len = inputs.first().map_or(0, Vec::len);
+        if inputs.iter().any(|u| u.len() != len) || !(dt.is_finite() && dt > 0.0) {
+            return Err(PlantError::Invalid("inputs of different lengths or a bad sample time".into()));
+        }
+        for &(q, i) in outputs {
+            let count = if q == Quantity::CouplingForce { n - 1 } else { n };
+            if i >= count {
+                return Err(PlantError::Invalid(format!("output {q:?} of element {} is outside the line", i + 1)));
+            }
+        }
+        // dead times in whole samples and a fraction; the pieces of a sample start at the
+        // distinct fractions
+        let shifts: Vec<(usize, f64)> = self
+            .inputs
+            .iter()
+            .map(|&(_, delay, _, _)| {
+                let s = delay / dt;
+                let mut whole = s.floor();
+                let mut frac = s - whole;
+                if frac > 1.0 - 1e-9 {
+                    whole += 1.0;
+                    frac = 0.0;
+                }
+                if frac < 1e-9 {
+                    frac = 0.0;
+                }
+                (whole.min(len as f64) as usize, frac)
+            })
+            .collect();
+        let mut starts: Vec<f64> =
+            std::iter::once(0.0).chain(shifts.iter().map(|s| s.1).filter(|&f| f > 0.0)).collect();
+        starts.sort_by(|a, b| a.total_cmp(b));
+        starts.dedup();
+        let pieces: Vec<(f64, f64)> =
+            starts.iter().enumerate().map(|(p, &s)| (s, starts.get(p + 1).copied().unwrap_or(1.0) - s)).collect();
+
+        let mut x = vec![0.0; ns];
+        // rigid motion at the initial speed; lagged inputs start at their first value
+        let mut w = initial_speed;
+        for i in 0..n {
+            x[n + i] = w;
+            if i + 1 < n {
+                w /= self.ratios[i];
+            }
+        }
+        for (k, &(_, _, tau, z)) in self.inputs.iter().enumerate() {
+            if tau > 0.0 {
+                x[z] = inputs[k].first().copied().unwrap_or(0.0);
+            }
+        }
+        let mut y: Vec<Vec<f64>> = outputs.iter().map(|_| Vec::with_capacity(len)).collect();
+        let mut u = vec![0.0; m];
+        let input_at = |u: &mut [f64], k: usize, phase: f64| {
+            for (j, ((whole, frac), sig)) in shifts.iter().zip(inputs).enumerate() {
+                let back = whole + usize::from(phase < *frac);
+                u[j] = sig[k.saturating_sub(back)];
+            }
+        };
+
+        if !self.nonlinear {
+            // exact ZOH of each piece length
+            let (a, b) = self.linear();
+            let mut maps = Vec::with_capacity(pieces.len());
+            for &(_, frac) in &pieces {
+                let (phi, gamma) = zoh(&a, &b, frac * dt)?;
+                let flat = |mx: &DMatrix<f64>| -> Vec<f64> {
+                    (0..mx.nrows())
+                        .flat_map(|r| (0..mx.ncols()).map(move |c| (r, c)))
+                        .map(|(r, c)| mx[(r, c)])
+                        .collect()
+                };
+                maps.push((flat(&phi), flat(&gamma)));
+            }
+            let mut next = vec![0.0; ns];
+            for k in 0..len {
+                for (yo, &o) in y.iter_mut().zip(outputs) {
+                    yo.push(self.output(&x, o));
+                }
+                for (&(phase, _), (phi, gamma)) in pieces.iter().zip(&maps) {
+                    input_at(&mut u, k, phase);
+                    for r in 0..ns {
+                        let pr = &phi[r * ns..(r + 1) * ns];
+                        let gr = &gamma[r * m..(r + 1) * m];
+                        next[r] = pr.iter().zip(&x).map(|(a, b)| a * b).sum::<f64>()
+                            + gr.iter().zip(&u).map(|(a, b)| a * b).sum::<f64>();
+                    }
+                    std::mem::swap(&mut x, &mut next);
+                }
+                if !x.iter().all(|v| v.is_finite()) {
+                    return Err(PlantError::Numerical(format!("the simulation diverged at sample {k}")));
+                }
+            }
+            return Ok(y);
+        }
+
+        // RK4 sub-steps: the fastest rate of the contact piece, of the friction's smoothing
+        // slope and of the lags
+        let (a, _) = self.linear();
+        let mut rate = a.complex_eigenvalues().iter().map(|l| l.norm()).fold(0.0, f64::max);
+        for (i, &(fc, vs)) in self.friction.iter().enumerate() {
+            if fc > 0.0 {
+                rate = rate.max(fc / vs * self.inv_j[i]);
+            }
+        }
+        if !rate.is_finite() {
+            return Err(PlantError::Numerical("the model's rates are not finite".into()));
+        }
+        let per_sample = (dt * rate / RK4_STEP_TIMES_RATE).ceil().max(1.0);
+        if per_sample > MAX_SUBSTEPS as f64 {
+            return Err(PlantError::Invalid(format!(
+                "the model needs {per_sample:.0} integration steps per sample (fastest rate {rate:.3e} 1/s at a {dt} s sample): \
+                 too stiff for this sample rate (a friction smoothing speed or an element far stiffer than the data can show)"
+            )));
+        }
+        let mut work = vec![vec![0.0; ns]; 5];
+        for k in 0..len {
+            for (yo, &o) in y.iter_mut().zip(outputs) {
+                yo.push(self.output(&x, o));
+            }
+            for &(phase, frac) in &pieces {
+                input_at(&mut u, k, phase);
+                let steps = (per_sample * frac).ceil().max(1.0) as usize;
+                let h = frac * dt / steps as f64;
+                for _ in 0..steps {
+                    self.rk4(&mut x, &u, h, &mut work);
+                }
+            }
+            if !x.iter().all(|v| v.is_finite()) {
+                return Err(PlantError::Numerical(format!("the simulation diverged at sample {k}")));
+            }
+        }
+        Ok(y)
+    }
+
+    fn rk4(&self, x: &mut [f64], u: &[f64], h: f64, w: &mut [Vec<f64>]) {
+        let [k1, k2, k3, k4, xt] = w else { return };
+        self.rhs(x, u, k1);
+        for i in 0..x.len() {
+            xt[i] = x[i] + 0.5 * h * k1[i];
+        }
+        self.rhs(xt, u, k2);
+        for i in 0..x.len() {
+            xt[i] = x[i] + 0.5 * h * k2[i];
+        }
+        self.rhs(xt, u, k3);
+        for i in 0..x.len() {
+            xt[i] = x[i] + h * k3[i];
+        }
+        self.rhs(xt, u, k4);
+        for i in 0..x.len() {
+            x[i] += h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]);
+        }
+    }
+}
+
+/// Force of a coupling with play: the spring acts on the twist beyond ± half the play, the
+/// damper only in contact.
+fn coupling_force(c: f64, d: f64, half: f64, twist: f64, rate: f64) -> f64 {
+    if half <= 0.0 {
+        c * twist + d * rate
+    } else if twist > half {
+        c * (twist - half) + d * rate
+    } else if twist < -half {
+        c * (twist + half) + d * rate
+    } else {
+        0.0
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::line::{Coupling, Domain, LineBody};
+    use approx::assert_relative_eq;
+
+    fn mass(m: f64, drag: f64) -> DriveModel {
+        DriveModel {
+            line: Line {
+                domain: Domain::Translational,
+                bodies: vec![LineBody { name: "carriage".into(), inertia: m, drag }],
+                couplings: vec![],
+            },
+            inputs: vec![0],
+            effects: vec![],
+        }
+    }
+
+    fn gear_line() -> Line {
+        Line {
+            domain: Domain::Rotational,
+            bodies: vec![
+                LineBody { name: "motor".into(), inertia: 0.002, drag: 1e-4 },
+                LineBody { name: "hub".into(), inertia: 0.0004, drag: 0.0 },
+                LineBody { name: "load".into(), inertia: 0.05, drag: 0.004 },
+            ],
+            couplings: vec![
+                Coupling { stiffness: 800.0, damping: 0.02, ratio: 1.0 },
+                Coupling { stiffness: 20000.0, damping: 0.5, ratio: 4.0 },
+            ],
+        }
+    }
+
+    /// Without effects the exact ZOH equals the mechanical model's own state space
+    /// (`Line::state_space`, built from J, C, D matrices) simulated by `lsim`.
+    #[test]
+    fn the_linear_path_equals_the_mechanical_state_space() {
+        let line = gear_line();
+        let model = DriveModel { line: line.clone(), inputs: vec![0], effects: vec![] };
+        let u: Vec<f64> = (0..2000).map(|k| (k as f64 * 0.013).sin() + 0.3 * (k as f64 * 0.11).sin()).collect();
+        let outputs =
+            [(Quantity::Speed, 0), (Quantity::Speed, 2), (Quantity::CouplingForce, 1), (Quantity::Position, 2)];
+        let y = model.simulate(std::slice::from_ref(&u), 1e-3, 0.0, &outputs).unwrap();
+        let ss = line.state_space(&[0], &outputs).unwrap();
+        let reference = ss.lsim(&DMatrix::from_column_slice(u.len(), 1, &u), 1e-3, &DVector::zeros(6)).unwrap();
+        for (o, yo) in y.iter().enumerate() {
+            let scale = reference.column(o).amax();
+            for k in 0..u.len() {
+                assert!((yo[k] - reference[(k, o)]).abs() <= 1e-9 * scale, "output {o} sample {k}");
+            }
+        }
+    }
+
+    /// A free mass m under a unit force step recorded at t = 0 and a dead time of 2.4 samples:
+    /// v(t) = (t − τ)/m after the dead time, exactly, also at the fractional switching instant.
+    #[test]
+    fn a_fractional_dead_time_shifts_the_response_exactly() {
+        let (m, dt, tau) = (2.0, 1e-3, 2.4e-3);
+        let mut model = mass(m, 0.0);
+        model.effects.push(Effect::TimeDelay { input: 0, delay_s: tau });
+        let mut u = vec![1.0; 50];
+        u[0] = 0.0; // held before the start: the step is at t = dt
+        let y = model.simulate(&[u], dt, 0.0, &[(Quantity::Speed, 0)]).unwrap();
+        for (k, v) in y[0].iter().enumerate() {
+            let t = k as f64 * dt;
+            assert_relative_eq!(*v, ((t - dt - tau).max(0.0)) / m, epsilon = 1e-12);
+        }
+    }
+
+    /// A first-order lag τ on a force step of 1 at t = dt: v = ((t−dt) − τ(1 − e^(−(t−dt)/τ)))/m.
+    #[test]
+    fn an_actuator_lag_is_the_first_order_law() {
+        let (m, dt, tau) = (3.0, 1e-3, 0.02);
+        let mut model = mass(m, 0.0);
+        model.effects.push(Effect::ActuatorLag { input: 0, time_constant_s: tau });
+        let mut u = vec![1.0; 200];
+        u[0] = 0.0;
+        let y = model.simulate(&[u], dt, 0.0, &[(Quantity::Speed, 0)]).unwrap();
+        for (k, v) in y[0].iter().enumerate().skip(1) {
+            let s = (k - 1) as f64 * dt;
+            assert_relative_eq!(*v, (s - tau * (1.0 - (-s / tau).exp())) / m, epsilon = 1e-12);
+        }
+    }
+
+    /// Coulomb friction F_c under a constant force F > F_c: once the speed is well above the
+    /// smoothing speed the mass accelerates at (F − F_c)/m; the smoothing only leaves the mass
+    /// ahead of the sharp law by less than the smoothing speed.
+    #[test]
+    fn coulomb_friction_takes_its_force_off_the_drive() {
+        let (m, f, fc, vs, dt) = (5.0, 10.0, 4.0, 1e-3, 1e-3);
+        let mut model = mass(m, 0.0);
+        model.effects.push(Effect::CoulombFriction { body: 0, friction: fc, smoothing_speed: vs });
+        let y = model.simulate(&[vec![f; 1001]], dt, 0.0, &[(Quantity::Speed, 0)]).unwrap();
+        let v_end = y[0][1000];
+        let exact = (f - fc) / m * 1.0;
+        assert!((v_end - exact).abs() < vs, "{v_end} vs {exact}");
+        // and a force below the friction leaves the body (almost) at rest: v ≤ v_s (F/F_c)/√(1 − (F/F_c)²)
+        let y = model.simulate(&[vec![0.5 * fc; 1001]], dt, 0.0, &[(Quantity::Speed, 0)]).unwrap();
+        assert!(y[0][1000].abs() <= vs * 0.5 / 0.75f64.sqrt() * 1.001, "{}", y[0][1000]);
+    }
+
+    /// Two masses joined by a spring with play b, the first pushed by a constant force, no
+    /// damping: the second stays at rest until the twist reaches b/2, at t_c = √(b m₁ / F).
+    #[test]
+    fn backlash_holds_the_load_until_contact() {
+        let (m1, m2, f, b, dt) = (1.0, 1.0, 2.0, 0.01, 1e-4);
+        let model = DriveModel {
+            line: Line {
+                domain: Domain::Rotational,
+                bodies: vec![
+                    LineBody { name: "a".into(), inertia: m1, drag: 0.0 },
+                    LineBody { name: "b".into(), inertia: m2, drag: 0.0 },
+                ],
+                couplings: vec![Coupling { stiffness: 1e4, damping: 0.0, ratio: 1.0 }],
+            },
+            inputs: vec![0],
+            effects: vec![Effect::Backlash { coupling: 0, backlash: b }],
+        };
+        let y = model.simulate(&[vec![f; 2000]], dt, 0.0, &[(Quantity::Position, 0), (Quantity::Position, 1)]).unwrap();
+        let tc = (b * m1 / f).sqrt();
+        for (k, (q1, q2)) in y[0].iter().zip(&y[1]).enumerate() {
+            let t = k as f64 * dt;
+            if t < tc - dt {
+                assert_eq!(*q2, 0.0, "t = {t}");
+                assert_relative_eq!(*q1, f * t * t / (2.0 * m1), max_relative = 1e-9, epsilon = 1e-15);
+            }
+        }
+        assert!(y[1][1999] > 0.0);
+    }
+
+    #[test]
+    fn bad_effects_are_named() {
+        let mut model = mass(1.0, 0.0);
+        model.effects.push(Effect::Backlash { coupling: 0, backlash: 0.1 });
+        assert!(model.validate().unwrap_err().to_string().contains("effects[1] (backlash)"));
+        model.effects[0] = Effect::TimeDelay { input: 0, delay_s: -1.0 };
+        assert!(model.validate().unwrap_err().to_string().contains("positive"));
+        model.effects[0] = Effect::TimeDelay { input: 0, delay_s: 1e-3 };
+        model.effects.push(Effect::TimeDelay { input: 0, delay_s: 2e-3 });
+        assert!(model.validate().unwrap_err().to_string().contains("twice"));
+        // friction smoothed far below what the sample rate can resolve: refused, not ground out
+        let mut model = mass(1.0, 0.0);
+        model.effects.push(Effect::CoulombFriction { body: 0, friction: 1e3, smoothing_speed: 1e-12 });
+        let e = model.simulate(&[vec![1.0; 10]], 1e-3, 0.0, &[(Quantity::Speed, 0)]).unwrap_err();
+        assert!(e.to_string().contains("too stiff"), "{e}");
+    }
+}
