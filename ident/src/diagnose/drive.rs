@@ -179,7 +179,7 @@ impl Problem<'_> {
             }
             Candidate::Backlash(k) => {
                 let backlash = self.twist_rms[k] * extra[0].exp();
-                if backlash > 100.0 * self.twist_rms[k] {
+                if backlash > 3000.0 * self.twist_rms[k] {
                     return None;
                 }
                 m.effects.push(Effect::Backlash { coupling: k, backlash })
@@ -237,8 +237,9 @@ impl Problem<'_> {
             Candidate::None => vec![vec![]],
             Candidate::Damping => vec![vec![0.0; 2 * n - 1]],
             Candidate::CoulombFriction(_) => grid(0.01, 1.0, 8),
-            // the play's basin: a profile over three decades of the declared model's twist
-            Candidate::Backlash(_) => grid(0.01, 10.0, 16),
+            // the play's basin: a profile over five decades of the declared model's elastic
+            // twist (a play can be far wider than the twist the spring takes)
+            Candidate::Backlash(_) => grid(0.01, 1000.0, 26),
             Candidate::TimeDelay(_) | Candidate::ActuatorLag(_) => grid(0.3, 100.0, 12),
         }
     }
