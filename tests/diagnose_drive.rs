@@ -39,7 +39,7 @@ const N: usize = 12_000;
 fn excitation(seed: u64, top_hz: f64, lines_nm: f64) -> Vec<f64> {
     let mut rng = StdRng::seed_from_u64(seed);
     let lines: Vec<(f64, f64)> =
-        (0..25).map(|i| (0.3 * (top_hz / 0.3).powf(i as f64 / 24.0), rng.gen::<f64>() * 6.3)).collect();
+        (0..25).map(|i| (0.3 * (top_hz / 0.3).powf(i as f64 / 24.0), rng.random::<f64>() * 6.3)).collect();
     (0..N)
         .map(|k| {
             let t = k as f64 * DT;
