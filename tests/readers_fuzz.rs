@@ -280,3 +280,73 @@ fn the_fuzzed_mdf_base_file_loads() {
     let mid = 0.5 * ((0.100f64 * 20.0).cos() + (0.102f64 * 20.0).cos());
     assert!((b.input_data[0][101] - mid).abs() < 1e-12, "{} vs {mid}", b.input_data[0][101]);
 }
+
+/// Offsets of every block of `id` ("##DG", …) in an MDF 4 file's bytes.
+fn blocks(bytes: &[u8], id: &[u8; 4]) -> Vec<usize> {
+    bytes.windows(4).enumerate().filter(|(_, w)| *w == id).map(|(k, _)| k).collect()
+}
+
+fn put_u64(bytes: &mut [u8], at: usize, v: u64) {
+    bytes[at..at + 8].copy_from_slice(&v.to_le_bytes());
+}
+
+/// Hostile MDF 4 files made from the base file by hand — data groups linking in a loop, a link
+/// far outside the file, a data block claiming 200 GB — are refused with an error naming the
+/// file, within 10 s, without allocating what they claim (the test process would be killed
+/// long before 200 GB); a channel group claiming 10¹² records is read as the records its data
+/// block holds (falcon_mdf takes the data's size as the authority over the claimed count).
+#[test]
+fn hostile_mdf_files_are_refused_in_bounded_time() {
+    let d = scratch();
+    let base = mdf_base(&d);
+    let dg = blocks(&base, b"##DG");
+    let cg = blocks(&base, b"##CG");
+    let dt = blocks(&base, b"##DT");
+    assert!(!dg.is_empty() && !cg.is_empty() && !dt.is_empty(), "the base file has DG, CG and DT blocks");
+    let mut cases: Vec<(&str, Vec<u8>)> = Vec::new();
+    // DG: header (24 bytes), then dg_dg_next as its first link
+    let mut b = base.clone();
+    put_u64(&mut b, dg[0] + 24, dg[0] as u64);
+    cases.push(("a data group linking to itself", b));
+    let mut b = base.clone();
+    if dg.len() > 1 {
+        put_u64(&mut b, dg[1] + 24, dg[0] as u64);
+    }
+    cases.push(("two data groups linking to each other", b));
+    // HD at 64: its first link is the first data group
+    let mut b = base.clone();
+    put_u64(&mut b, 64 + 24, 1 << 50);
+    cases.push(("a link far outside the file", b));
+    // a block's length at +8
+    let mut b = base.clone();
+    put_u64(&mut b, dt[0] + 8, 200_000_000_000);
+    cases.push(("a data block claiming 200 GB", b));
+    // CG: after the header and its links, cg_record_id then cg_cycle_count
+    let mut b = base.clone();
+    let links = u64::from_le_bytes(base[cg[0] + 16..cg[0] + 24].try_into().unwrap()) as usize;
+    put_u64(&mut b, cg[0] + 24 + 8 * links + 8, 1_000_000_000_000);
+    cases.push(("a channel group claiming 10^12 records", b));
+    for (what, bytes) in cases {
+        let claims_records = what.contains("10^12");
+        let dir = d.join(what.replace(' ', "_"));
+        std::fs::create_dir_all(&dir).unwrap();
+        std::fs::write(dir.join("m.mf4"), &bytes).unwrap();
+        std::fs::write(dir.join("b.toml"), MDF_BUNDLE).unwrap();
+        let (tx, rx) = std::sync::mpsc::channel();
+        let file = dir.join("b.toml");
+        std::thread::spawn(move || {
+            let _ = tx.send(rigtwin::bundle::load_drive_test(&file).map(|b| b.input_data[0].len()));
+        });
+        match rx.recv_timeout(std::time::Duration::from_secs(10)) {
+            Ok(Ok(n)) if claims_records => assert_eq!(n, 299, "{what}: the records the data holds"),
+            Ok(Ok(n)) => panic!("{what}: read as {n} samples"),
+            Ok(Err(e)) => {
+                let msg = e.to_string();
+                assert!(msg.contains("m.mf4"), "{what}: the error names the file: {msg}");
+                eprintln!("{what}: {msg}");
+            }
+            Err(_) => panic!("{what}: no answer within 10 s"),
+        }
+    }
+    let _ = std::fs::remove_dir_all(&d);
+}
