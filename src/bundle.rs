@@ -65,13 +65,15 @@ struct Header {
     columns: Option<std::collections::BTreeMap<String, ColumnFile>>,
     time: Option<String>,
     sample_rate_hz: Option<f64>,
+    resample: Option<bool>,
 }
 
 /// Where the samples' times come from: a column (variable, channel), or a sample rate.
 #[derive(Debug, Clone, PartialEq)]
 enum TimeBase {
-    /// The time signal (the first spec) is read like the others.
-    Column,
+    /// The time signal (the first spec) is read like the others; `true`: non-uniform stamps
+    /// are resampled (the bundle's `resample = true`).
+    Column(bool),
     /// Uniform samples at this rate, starting at 0 s.
     Rate(f64),
 }
@@ -82,19 +84,24 @@ fn time_base(
     file: &Path,
     time: Option<&str>,
     rate: Option<f64>,
+    resample: Option<bool>,
     specs: &mut [SignalSpec],
 ) -> Result<TimeBase, BundleError> {
+    let resample = resample.unwrap_or(false);
+    if resample && rate.is_some() {
+        return Err(error(file, None, "`resample = true` needs time stamps: it cannot go with `sample_rate_hz`"));
+    }
     match (time, rate) {
         (Some(_), Some(_)) => {
             Err(error(file, None, "give either `time` (the time signal) or `sample_rate_hz`, not both"))
         }
         (Some(t), None) => {
             specs[0].channel = t.to_string();
-            Ok(TimeBase::Column)
+            Ok(TimeBase::Column(resample))
         }
         (None, Some(r)) if r.is_finite() && r > 0.0 => Ok(TimeBase::Rate(r)),
         (None, Some(r)) => Err(error(file, None, format!("`sample_rate_hz` = {r}: expected a positive, finite rate"))),
-        (None, None) => Ok(TimeBase::Column),
+        (None, None) => Ok(TimeBase::Column(resample)),
     }
 }
 
@@ -177,11 +184,12 @@ fn read_signals(
 ) -> Result<(Vec<Vec<f64>>, Option<String>), BundleError> {
     let extension = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
     let mdf = matches!(extension.as_deref(), Some("mf4" | "mdf"));
-    let master = mdf && *time == TimeBase::Column && specs[0].channel == "time_s";
-    let first = if *time == TimeBase::Column && !master { 0 } else { 1 };
+    let column = matches!(time, TimeBase::Column(_));
+    let master = mdf && column && specs[0].channel == "time_s";
+    let first = if column && !master { 0 } else { 1 };
     let channels: Vec<String> = specs[first..].iter().map(|s| s.channel.clone()).collect();
     let channels: Vec<&str> = channels.iter().map(String::as_str).collect();
-    let mut note = None;
+    let mut note: Option<String> = None;
     let mut cols = match extension.as_deref() {
         Some("mat") => read_mat(path, &channels)?,
         Some("mf4" | "mdf") => {
@@ -217,7 +225,76 @@ fn read_signals(
             }
         }
     }
+    if *time == TimeBase::Column(true) {
+        let (t, rest) = cols.split_first_mut().expect("a time column");
+        let n = resample_uniform(path, t, rest)?;
+        note = Some(match note {
+            Some(a) => format!("{a}; {n}"),
+            None => n,
+        });
+    }
     Ok((cols, note))
+}
+
+/// `resample = true`: samples whose stamp does not increase are dropped (the first of a
+/// repeated stamp is kept), and every signal is interpolated linearly onto a uniform grid at
+/// the median step from the first to the last stamp. Returns the note for the report (how
+/// many samples were dropped, the largest gap bridged).
+fn resample_uniform(path: &Path, t: &mut Vec<f64>, cols: &mut [Vec<f64>]) -> Result<String, BundleError> {
+    if let Some(k) = t.iter().position(|v| !v.is_finite()) {
+        return Err(error(path, Some(k + 2), format!("time stamp {} is not a number", t[k])));
+    }
+    let mut keep = vec![true; t.len()];
+    let mut last = f64::NEG_INFINITY;
+    for (k, v) in t.iter().enumerate() {
+        if *v <= last {
+            keep[k] = false;
+        } else {
+            last = *v;
+        }
+    }
+    let dropped = keep.iter().filter(|k| !**k).count();
+    let pick = |v: &[f64]| -> Vec<f64> { v.iter().zip(&keep).filter(|(_, k)| **k).map(|(v, _)| *v).collect() };
+    let ts = pick(t);
+    if ts.len() < 2 {
+        return Err(error(path, None, "fewer than two increasing time stamps: nothing to resample"));
+    }
+    let mut steps: Vec<f64> = ts.windows(2).map(|w| w[1] - w[0]).collect();
+    let gap = steps.iter().copied().fold(0.0, f64::max);
+    steps.sort_by(|a, b| a.total_cmp(b));
+    let dt = steps[steps.len() / 2];
+    let n = ((ts[ts.len() - 1] - ts[0]) / dt + 1e-9).floor() as usize + 1;
+    if n > 4 * ts.len() + 16 {
+        return Err(error(
+            path,
+            None,
+            format!(
+                "resampling at the median step {dt} s would make {n} samples of {}: the stamps are too irregular",
+                ts.len()
+            ),
+        ));
+    }
+    let grid: Vec<f64> = (0..n).map(|k| ts[0] + k as f64 * dt).collect();
+    for col in cols.iter_mut() {
+        let v = pick(col);
+        let mut j = 0;
+        *col = grid
+            .iter()
+            .map(|&g| {
+                while j + 2 < ts.len() && ts[j + 1] < g {
+                    j += 1;
+                }
+                let w = ((g - ts[j]) / (ts[j + 1] - ts[j])).clamp(0.0, 1.0);
+                v[j] + w * (v[j + 1] - v[j])
+            })
+            .collect();
+    }
+    *t = grid;
+    Ok(format!(
+        "resampled (resample = true) by linear interpolation onto {:.6} Hz: {dropped} samples with a repeated or earlier stamp dropped, largest gap {gap:.6} s ({:.1} steps)",
+        1.0 / dt,
+        gap / dt
+    ))
 }
 
 /// A record must be a regular file of sane size.
@@ -308,7 +385,7 @@ pub fn load_torsional(file: &Path) -> Result<TorsionalBundle, BundleError> {
         min_duration_s: 10.0 / lo,
     });
     let mut specs = fixed_columns(file, header.columns.as_ref(), &SWEEP_SIGNALS)?;
-    let time = time_base(file, header.time.as_deref(), header.sample_rate_hz, &mut specs)?;
+    let time = time_base(file, header.time.as_deref(), header.sample_rate_hz, header.resample, &mut specs)?;
     let (sweep, note) = read_sweep_csv(file, &csv_path, &mut specs, &time, needs.as_ref())?;
     let conversions: Vec<String> = conversions_of(&specs).into_iter().chain(note).collect();
     check_varies(
@@ -388,7 +465,7 @@ pub fn uniform_sample_time(path: &Path, t: &[f64]) -> Result<f64, BundleError> {
             return Err(error(
                 path,
                 Some(i + 3),
-                format!("`time_s` = {} is not after the previous {}: time must increase", w[1], w[0]),
+                format!("`time_s` = {} is not after the previous {}: time must increase (or set `resample = true` in the bundle to drop such samples and resample)", w[1], w[0]),
             ));
         }
         // CSV values carry a rounding of the printed digits; 1 % of a step is far above that
@@ -396,7 +473,7 @@ pub fn uniform_sample_time(path: &Path, t: &[f64]) -> Result<f64, BundleError> {
             return Err(error(
                 path,
                 Some(i + 3),
-                format!("`time_s` step {d} s differs from the typical step {median} s: sampling must be uniform"),
+                format!("`time_s` step {d} s differs from the typical step {median} s: sampling must be uniform (or set `resample = true` in the bundle to interpolate linearly onto a uniform grid)"),
             ));
         }
     }
@@ -454,6 +531,7 @@ struct BearingFile {
     columns: Option<std::collections::BTreeMap<String, ColumnFile>>,
     time: Option<String>,
     sample_rate_hz: Option<f64>,
+    resample: Option<bool>,
 }
 
 #[derive(Deserialize)]
@@ -519,7 +597,7 @@ pub fn load_bearing(file: &Path) -> Result<BearingBundle, BundleError> {
         min_duration_s: 5.0 / raw.f_min_hz.max(0.1 * raw.f_max_hz),
     };
     let mut specs = fixed_columns(file, raw.columns.as_ref(), &SHAKE_SIGNALS)?;
-    let time = time_base(file, raw.time.as_deref(), raw.sample_rate_hz, &mut specs)?;
+    let time = time_base(file, raw.time.as_deref(), raw.sample_rate_hz, raw.resample, &mut specs)?;
     let mut notes = Vec::new();
     let mut read = |path: &Path| -> Result<ident::ShakeTest, BundleError> {
         let path = path.to_path_buf();
@@ -609,6 +687,7 @@ struct DriveFile {
     model: DriveModelFile,
     time: Option<String>,
     sample_rate_hz: Option<f64>,
+    resample: Option<bool>,
     #[serde(default)]
     inputs: Vec<DriveInputFile>,
     #[serde(default)]
@@ -768,7 +847,7 @@ pub fn load_drive_test(file: &Path) -> Result<DriveTestBundle, BundleError> {
             key,
         });
     }
-    let time = time_base(file, raw.time.as_deref(), raw.sample_rate_hz, &mut specs)?;
+    let time = time_base(file, raw.time.as_deref(), raw.sample_rate_hz, raw.resample, &mut specs)?;
     let (mut cols, note) = read_signals(file, &csv_path, &mut specs, &time)?;
     let names: Vec<&str> = specs.iter().map(|s| s.channel.as_str()).collect();
     let dt_s = uniform_sample_time(&csv_path, &cols[0])?;

@@ -240,3 +240,38 @@ fn saved_signals_reproduce_the_reported_errors() {
     assert_eq!(text.lines().next().unwrap().split(',').count(), 25);
     assert!(text.lines().count() > 20);
 }
+
+/// Stamps with a repeated sample and a gap: refused with the line and the way out named; with
+/// `resample = true` the repeated stamp is dropped and the gap bridged linearly onto the median
+/// step — exact for signals linear in time, as these are (input 2 t + 1, output 3 − t).
+#[test]
+fn irregular_stamps_are_refused_unless_resampling_is_asked_for() {
+    let dir = common::scratch("records", "resample");
+    let mut stamps: Vec<f64> = (0..3000).map(|k| k as f64 * 1e-3).collect();
+    stamps.insert(1200, 1.199); // a repeated stamp (data line 1202)
+    stamps.retain(|t| !(2.0..2.0049).contains(t)); // five samples missing: a 6 ms gap
+    let mut csv = String::from("time_s,force_N,position_m\n");
+    for t in &stamps {
+        csv += &format!("{t:.6},{:.9},{:.9}\n", 2.0 * t + 1.0, 3.0 - t);
+    }
+    std::fs::write(dir.join("a.csv"), csv).unwrap();
+    let bundle = |resample: &str| {
+        format!("kind = \"drive_test\"\ndata = \"a.csv\"\ndomain = \"translational\"\n{resample}[model]\nbodies = [{{ name = \"carriage\", inertia = 20.0, drag = 60.0 }}]\n[[inputs]]\ncolumn = \"force_N\"\nbody = 1\n[[outputs]]\ncolumn = \"position_m\"\nbody = 1\nquantity = \"position\"\n")
+    };
+    std::fs::write(dir.join("b.toml"), bundle("")).unwrap();
+    let e = rigtwin::bundle::load_drive_test(&dir.join("b.toml")).unwrap_err().to_string();
+    assert!(e.contains("a.csv") && e.contains("a.csv:1202:") && e.contains("resample = true"), "{e}");
+    std::fs::write(dir.join("b.toml"), bundle("resample = true\n")).unwrap();
+    let b = rigtwin::bundle::load_drive_test(&dir.join("b.toml")).unwrap();
+    assert!((b.dt_s - 1e-3).abs() < 1e-12, "{}", b.dt_s);
+    assert_eq!(b.input_data[0].len(), 3000);
+    for (k, (u, y)) in b.input_data[0].iter().zip(&b.output_data[0]).enumerate() {
+        let t = k as f64 * 1e-3;
+        assert!((u - (2.0 * t + 1.0)).abs() < 1e-9 && (y - (3.0 - t)).abs() < 1e-9, "sample {k}: {u} {y}");
+    }
+    let note = b.conversions.join("; ");
+    assert!(note.contains("1 samples with a repeated") && note.contains("largest gap 0.006"), "{note}");
+    // a sample rate has no stamps to resample
+    std::fs::write(dir.join("b.toml"), bundle("resample = true\nsample_rate_hz = 1000.0\n")).unwrap();
+    assert!(rigtwin::bundle::load_drive_test(&dir.join("b.toml")).unwrap_err().to_string().contains("sample_rate_hz"));
+}
