@@ -200,7 +200,7 @@ fn read_signals(
                 }
             }
             if master {
-                let (t, n) = common_time_base(path, &channels, &m.times, &mut m.values)?;
+                let (t, n) = common_time_base(path, &channels, &mut m.times, &mut m.values)?;
                 note = n;
                 m.values.insert(0, t);
             } else if m.values.iter().any(|v| v.len() != m.values[0].len()) {
@@ -1000,7 +1000,11 @@ fn read_mdf_channels(path: &Path, names: &[&str]) -> Result<MdfChannels, BundleE
                 ));
             }
             out.units.push(s.unit().to_string());
-            out.times.push(s.timestamps().to_vec());
+            // channels of one group share their master times: kept once (an empty vector
+            // stands for the first channel's times), so memory holds the selected channels'
+            // values and one time base, not a time base per channel
+            let same = out.times.first().is_some_and(|t0| t0.as_slice() == s.timestamps());
+            out.times.push(if same { Vec::new() } else { s.timestamps().to_vec() });
             out.values.push(values);
         }
         Ok(out)
@@ -1018,11 +1022,15 @@ fn read_mdf_channels(path: &Path, names: &[&str]) -> Result<MdfChannels, BundleE
 fn common_time_base(
     path: &Path,
     names: &[&str],
-    times: &[Vec<f64>],
+    times: &mut [Vec<f64>],
     values: &mut [Vec<f64>],
 ) -> Result<(Vec<f64>, Option<String>), BundleError> {
-    if times.iter().all(|t| t == &times[0]) {
-        return Ok((times[0].clone(), None));
+    if times[1..].iter().all(|t| t.is_empty() || *t == times[0]) {
+        return Ok((std::mem::take(&mut times[0]), None));
+    }
+    let first = times[0].clone();
+    for t in times[1..].iter_mut().filter(|t| t.is_empty()) {
+        *t = first.clone();
     }
     let mut dt = f64::INFINITY;
     let (mut start, mut end) = (f64::NEG_INFINITY, f64::INFINITY);
@@ -1051,7 +1059,7 @@ fn common_time_base(
         ));
     }
     let grid: Vec<f64> = (0..n as usize).map(|k| start + k as f64 * dt).collect();
-    for (v, t) in values.iter_mut().zip(times) {
+    for (v, t) in values.iter_mut().zip(times.iter()) {
         let mut j = 0;
         let resampled: Vec<f64> = grid
             .iter()
@@ -1071,4 +1079,57 @@ fn common_time_base(
         grid[grid.len() - 1]
     );
     Ok((grid, Some(note)))
+}
+
+/// What `rigtwin check` prints: the bundle read and validated as a diagnosis would read it —
+/// its kind, samples, sample time, signals and the conversions applied.
+pub fn summary(file: &Path) -> anyhow::Result<String> {
+    #[derive(Deserialize)]
+    struct Kind {
+        kind: Option<String>,
+    }
+    let text = read_toml(file)?;
+    let k: Kind = toml::from_str(&text).map_err(|e| error(file, None, e.to_string().trim_end().to_string()))?;
+    let (kind, samples, dt_s, signals, conversions): (&str, usize, f64, Vec<String>, Vec<String>) =
+        match k.kind.as_deref() {
+            Some("torsional_sweep") => {
+                let b = load_torsional(file)?;
+                let names = SWEEP_SIGNALS.iter().map(|(n, _)| n.to_string()).collect();
+                ("torsional_sweep", b.sweep.torque_nm.len(), b.sweep.dt_s, names, b.conversions)
+            }
+            Some("bearing_shake") => {
+                let b = load_bearing(file)?;
+                let names = SHAKE_SIGNALS.iter().map(|(n, _)| n.to_string()).collect();
+                ("bearing_shake", b.tests[0].force_x_n.len(), b.tests[0].dt_s, names, b.conversions)
+            }
+            Some("drive_test") => {
+                let b = load_drive_test(file)?;
+                let names =
+                    b.inputs
+                        .iter()
+                        .map(|s| format!("input {} on body {}", s.column, b.line.bodies[s.at].name))
+                        .chain(b.outputs.iter().map(|s| {
+                            format!("output {} ({:?})", s.column, s.quantity.unwrap_or(plant::Quantity::Speed))
+                        }))
+                        .collect();
+                ("drive_test", b.input_data[0].len(), b.dt_s, names, b.conversions)
+            }
+            other => anyhow::bail!(
+                "{}: `kind` = {other:?}: expected torsional_sweep, bearing_shake or drive_test",
+                file.display()
+            ),
+        };
+    let mut s = format!(
+        "{}: {kind}, {samples} samples at {dt_s} s ({:.3} Hz), {:.3} s\n",
+        file.display(),
+        1.0 / dt_s,
+        samples as f64 * dt_s
+    );
+    for n in signals {
+        s += &format!("  signal: {n}\n");
+    }
+    for c in conversions {
+        s += &format!("  converted: {c}\n");
+    }
+    Ok(s)
 }

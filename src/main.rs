@@ -199,6 +199,13 @@ enum Command {
         #[arg(long, value_name = "FILE.csv")]
         save_signals: Option<PathBuf>,
     },
+    /// Read and validate a bundle as a diagnosis would: its samples, sample time, signals and
+    /// the unit conversions applied.
+    Check {
+        /// The measurement bundle.
+        #[arg(value_name = "BUNDLE.toml")]
+        bundle: PathBuf,
+    },
     /// Which additional spring and variants make j_drive and c_short identifiable.
     DesignSpring {
         /// Rig description (default: the paper's); its j_drive and c_short are the expected values.
@@ -451,6 +458,9 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                 rigtwin::plot::lines(f, &format!("rigtwin diagnose {}", bundle.display()), &d.panels)?;
             }
             out!("{}", rigtwin::diagnosis::human(&d.report));
+        }
+        Command::Check { bundle } => {
+            out!("{}", rigtwin::bundle::summary(&bundle)?);
         }
         Command::DesignSpring { rig, sigma_hz, target, model, json } => {
             let r = match &rig {
