@@ -406,7 +406,6 @@ pub fn diagnose(rec: DriveRecord, progress: &(dyn Fn(&str) + Sync)) -> Result<Dr
     }
 
     let nbase = problem.nbase();
-    let next = std::sync::atomic::AtomicUsize::new(0);
     let fit_one = |i: usize| -> (usize, Vec<f64>, f64) {
         let c = cands[i];
         let problem = &problem;
@@ -430,24 +429,7 @@ pub fn diagnose(rec: DriveRecord, progress: &(dyn Fn(&str) + Sync)) -> Result<Dr
         });
         (i, x, cost)
     };
-    let mut fits: Vec<(usize, Vec<f64>, f64)> = std::thread::scope(|scope| {
-        let workers: Vec<_> = (0..2)
-            .map(|_| {
-                scope.spawn(|| {
-                    let mut done = Vec::new();
-                    loop {
-                        let i = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-                        if i >= cands.len() {
-                            break done;
-                        }
-                        done.push(fit_one(i));
-                    }
-                })
-            })
-            .collect();
-        workers.into_iter().filter_map(|h| h.join().ok()).flatten().collect()
-    });
-    fits.sort_by_key(|f| f.0);
+    let fits: Vec<(usize, Vec<f64>, f64)> = super::on_two_workers(cands.len(), &fit_one);
 
     let nres = r0.len();
     let n_eff = effective_count(nres, lag1_autocorrelation(&r0));

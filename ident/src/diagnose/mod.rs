@@ -51,3 +51,29 @@ pub fn effective_count(n: usize, rho: f64) -> f64 {
     let rho = rho.clamp(-0.99, 0.999_999);
     (n as f64 * (1.0 - rho) / (1.0 + rho)).max(10.0)
 }
+
+/// Runs `job(i)` for i in 0..count on two worker threads taking the indices in turn (this is a
+/// 2-core machine's worth of threads: memory then holds two fits' Jacobians and simulations,
+/// not one per candidate); the results in index order.
+pub(crate) fn on_two_workers<T: Send>(count: usize, job: &(dyn Fn(usize) -> T + Sync)) -> Vec<T> {
+    let next = std::sync::atomic::AtomicUsize::new(0);
+    let mut done: Vec<(usize, T)> = std::thread::scope(|scope| {
+        let workers: Vec<_> = (0..2)
+            .map(|_| {
+                scope.spawn(|| {
+                    let mut done = Vec::new();
+                    loop {
+                        let i = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+                        if i >= count {
+                            break done;
+                        }
+                        done.push((i, job(i)));
+                    }
+                })
+            })
+            .collect();
+        workers.into_iter().filter_map(|h| h.join().ok()).flatten().collect()
+    });
+    done.sort_by_key(|d| d.0);
+    done.into_iter().map(|d| d.1).collect()
+}

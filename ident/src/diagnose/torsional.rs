@@ -312,9 +312,6 @@ pub fn diagnose(
         .unwrap_or(10.0);
 
     let cands = candidates(&problem, shuffle_hz);
-    // Two workers take the candidates in turn (this is a 2-core machine's worth of threads):
-    // memory then holds two fits' Jacobians and simulations, not one per candidate.
-    let next = std::sync::atomic::AtomicUsize::new(0);
     let fit_one = |i: usize| -> (usize, Vec<f64>, f64) {
         let c = &cands[i];
         let problem = &problem;
@@ -342,24 +339,7 @@ pub fn diagnose(
         progress(c.name);
         (i, x, cost)
     };
-    let mut fits: Vec<(usize, Vec<f64>, f64)> = std::thread::scope(|scope| {
-        let workers: Vec<_> = (0..2)
-            .map(|_| {
-                scope.spawn(|| {
-                    let mut done = Vec::new();
-                    loop {
-                        let i = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-                        if i >= cands.len() {
-                            break done;
-                        }
-                        done.push(fit_one(i));
-                    }
-                })
-            })
-            .collect();
-        workers.into_iter().filter_map(|h| h.join().ok()).flatten().collect()
-    });
-    fits.sort_by_key(|f| f.0);
+    let fits: Vec<(usize, Vec<f64>, f64)> = super::on_two_workers(cands.len(), &fit_one);
 
     let nres = 2 * n;
     let mut scored = Vec::new();
