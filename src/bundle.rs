@@ -276,18 +276,7 @@ fn resample_uniform(path: &Path, t: &mut Vec<f64>, cols: &mut [Vec<f64>]) -> Res
     }
     let grid: Vec<f64> = (0..n).map(|k| ts[0] + k as f64 * dt).collect();
     for col in cols.iter_mut() {
-        let v = pick(col);
-        let mut j = 0;
-        *col = grid
-            .iter()
-            .map(|&g| {
-                while j + 2 < ts.len() && ts[j + 1] < g {
-                    j += 1;
-                }
-                let w = ((g - ts[j]) / (ts[j + 1] - ts[j])).clamp(0.0, 1.0);
-                v[j] + w * (v[j + 1] - v[j])
-            })
-            .collect();
+        *col = interpolate(&ts, &pick(col), &grid);
     }
     *t = grid;
     Ok(format!(
@@ -295,6 +284,21 @@ fn resample_uniform(path: &Path, t: &mut Vec<f64>, cols: &mut [Vec<f64>]) -> Res
         1.0 / dt,
         gap / dt
     ))
+}
+
+/// `v` sampled at the increasing times `t` (at least two), linearly interpolated at each point
+/// of the increasing `grid` (held at the ends outside `t`).
+fn interpolate(t: &[f64], v: &[f64], grid: &[f64]) -> Vec<f64> {
+    let mut j = 0;
+    grid.iter()
+        .map(|&g| {
+            while j + 2 < t.len() && t[j + 1] < g {
+                j += 1;
+            }
+            let w = ((g - t[j]) / (t[j + 1] - t[j])).clamp(0.0, 1.0);
+            v[j] + w * (v[j + 1] - v[j])
+        })
+        .collect()
 }
 
 /// A record must be a regular file of sane size.
@@ -1060,18 +1064,7 @@ fn common_time_base(
     }
     let grid: Vec<f64> = (0..n as usize).map(|k| start + k as f64 * dt).collect();
     for (v, t) in values.iter_mut().zip(times.iter()) {
-        let mut j = 0;
-        let resampled: Vec<f64> = grid
-            .iter()
-            .map(|&g| {
-                while j + 2 < t.len() && t[j + 1] < g {
-                    j += 1;
-                }
-                let w = ((g - t[j]) / (t[j + 1] - t[j])).clamp(0.0, 1.0);
-                v[j] + w * (v[j + 1] - v[j])
-            })
-            .collect();
-        *v = resampled;
+        *v = interpolate(t, v, &grid);
     }
     let note = format!(
         "channels of different groups resampled by linear interpolation onto {:.6} Hz over {start} s to {} s",
@@ -1081,28 +1074,34 @@ fn common_time_base(
     Ok((grid, Some(note)))
 }
 
-/// What `rigtwin check` prints: the bundle read and validated as a diagnosis would read it —
-/// its kind, samples, sample time, signals and the conversions applied.
-pub fn summary(file: &Path) -> anyhow::Result<String> {
+/// The `kind` of the bundle `file` (torsional_sweep, bearing_shake, drive_test), read before
+/// the bundle itself.
+pub fn kind_of(file: &Path) -> Result<String, BundleError> {
     #[derive(Deserialize)]
     struct Kind {
         kind: Option<String>,
     }
     let text = read_toml(file)?;
     let k: Kind = toml::from_str(&text).map_err(|e| error(file, None, e.to_string().trim_end().to_string()))?;
+    k.kind.ok_or_else(|| error(file, None, "missing key `kind` (torsional_sweep, bearing_shake or drive_test)"))
+}
+
+/// What `rigtwin check` prints: the bundle read and validated as a diagnosis would read it —
+/// its kind, samples, sample time, signals and the conversions applied.
+pub fn summary(file: &Path) -> anyhow::Result<String> {
     let (kind, samples, dt_s, signals, conversions): (&str, usize, f64, Vec<String>, Vec<String>) =
-        match k.kind.as_deref() {
-            Some("torsional_sweep") => {
+        match kind_of(file)?.as_str() {
+            "torsional_sweep" => {
                 let b = load_torsional(file)?;
                 let names = SWEEP_SIGNALS.iter().map(|(n, _)| n.to_string()).collect();
                 ("torsional_sweep", b.sweep.torque_nm.len(), b.sweep.dt_s, names, b.conversions)
             }
-            Some("bearing_shake") => {
+            "bearing_shake" => {
                 let b = load_bearing(file)?;
                 let names = SHAKE_SIGNALS.iter().map(|(n, _)| n.to_string()).collect();
                 ("bearing_shake", b.tests[0].force_x_n.len(), b.tests[0].dt_s, names, b.conversions)
             }
-            Some("drive_test") => {
+            "drive_test" => {
                 let b = load_drive_test(file)?;
                 let names =
                     b.inputs
@@ -1115,7 +1114,7 @@ pub fn summary(file: &Path) -> anyhow::Result<String> {
                 ("drive_test", b.input_data[0].len(), b.dt_s, names, b.conversions)
             }
             other => anyhow::bail!(
-                "{}: `kind` = {other:?}: expected torsional_sweep, bearing_shake or drive_test",
+                "{}: `kind` = \"{other}\": expected torsional_sweep, bearing_shake or drive_test",
                 file.display()
             ),
         };

@@ -124,22 +124,9 @@ impl Diagnosis {
     }
 }
 
-fn kind_of(file: &Path) -> anyhow::Result<String> {
-    #[derive(serde::Deserialize)]
-    struct K {
-        kind: Option<String>,
-    }
-    let text = crate::files::read_text(file)?;
-    let k: K =
-        toml::from_str(&text).map_err(|e| anyhow::anyhow!("{}: {}", file.display(), e.to_string().trim_end()))?;
-    k.kind.ok_or_else(|| {
-        anyhow::anyhow!("{}: missing key `kind` (torsional_sweep, bearing_shake or drive_test)", file.display())
-    })
-}
-
 /// Diagnoses the bundle `file`; `progress` is told each candidate as it is fitted.
 pub fn diagnose(file: &Path, progress: &(dyn Fn(&str) + Sync)) -> anyhow::Result<Diagnosis> {
-    match kind_of(file)?.as_str() {
+    match crate::bundle::kind_of(file)?.as_str() {
         "torsional_sweep" => torsional(file, progress),
         "bearing_shake" => bearing(file, progress),
         "drive_test" => drive(file, progress),
@@ -168,6 +155,21 @@ fn spectrum(x: &[f64], dt: f64, f_max: f64) -> Vec<(f64, f64)> {
         .collect()
 }
 
+/// The notes of a time-domain diagnosis: `none` chosen (nothing beats re-fitting `refitted`),
+/// a residual still far from white.
+fn fit_notes(effect: &str, refitted: &str, structured_residual: bool, error_after: f64) -> Vec<String> {
+    let mut notes = Vec::new();
+    if effect == "none" {
+        notes.push(format!("no candidate beats re-fitting {refitted}"));
+    }
+    if structured_residual {
+        notes.push(format!(
+            "the best model still leaves a structured residual (lag-1 autocorrelation above 0.5, error {error_after:.3})"
+        ));
+    }
+    notes
+}
+
 /// Most points of a plotted time series.
 const PLOT_POINTS: usize = 6000;
 
@@ -175,16 +177,7 @@ fn torsional(file: &Path, progress: &(dyn Fn(&str) + Sync)) -> anyhow::Result<Di
     let b = load_torsional(file)?;
     let d = ident::diagnose::torsional::diagnose(&b.sweep, &b.model, b.variant, progress)
         .map_err(|e| anyhow::anyhow!("{}: {e}", file.display()))?;
-    let mut notes = Vec::new();
-    if d.effect == "none" {
-        notes.push("no candidate beats re-fitting the declared parameters".into());
-    }
-    if d.structured_residual {
-        notes.push(format!(
-            "the best model still leaves a structured residual (lag-1 autocorrelation above 0.5, error {:.3})",
-            d.error_after
-        ));
-    }
+    let notes = fit_notes(&d.effect, "the declared parameters", d.structured_residual, d.error_after);
     let model_toml = rig_toml(&d.model.rig, d.model.variant, &d.model.effects, None)?;
     let dt = b.sweep.dt_s;
     let t = &d.traces;
@@ -426,16 +419,7 @@ fn drive(file: &Path, progress: &(dyn Fn(&str) + Sync)) -> anyhow::Result<Diagno
         dt_s: b.dt_s,
     };
     let d = ident::diagnose::drive::diagnose(rec, progress).map_err(|e| anyhow::anyhow!("{}: {e}", file.display()))?;
-    let mut notes = Vec::new();
-    if d.effect == "none" {
-        notes.push("no candidate beats re-fitting the declared inertias and stiffnesses".into());
-    }
-    if d.structured_residual {
-        notes.push(format!(
-            "the best model still leaves a structured residual (lag-1 autocorrelation above 0.5, error {:.3})",
-            d.error_after
-        ));
-    }
+    let mut notes = fit_notes(&d.effect, "the declared inertias and stiffnesses", d.structured_residual, d.error_after);
     for e in &d.model.effects {
         if let plant::Effect::CoulombFriction { smoothing_speed, .. } = e {
             notes.push(format!(

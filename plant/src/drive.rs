@@ -188,6 +188,12 @@ impl DriveModel {
         Ok(p.linear())
     }
 
+    /// Fastest rate of the linearisation, max |λ(A)| (1/s): what sets an explicit integrator's
+    /// step.
+    pub fn fastest_linear_rate(&self) -> Result<f64> {
+        Ok(Prepared::new(self)?.linear_rate())
+    }
+
     /// Simulates the model from rest (every body at `initial_speed` of the first body, through
     /// the gear ratios) under the sampled `inputs` (one vector per model input, sample time
     /// `dt_s`, held over each sample) and returns the `outputs` at the sample instants.
@@ -216,7 +222,6 @@ struct Prepared {
     inputs: Vec<(usize, f64, f64, usize)>,
     nstates: usize,
     nonlinear: bool,
-    ratios: Vec<f64>,
 }
 
 impl Prepared {
@@ -249,7 +254,6 @@ impl Prepared {
             inputs,
             nstates,
             nonlinear: m.is_nonlinear(),
-            ratios: m.line.couplings.iter().map(|c| c.ratio).collect(),
         })
     }
 
@@ -295,7 +299,6 @@ impl Prepared {
             inv_j: self.inv_j.clone(),
             drag: self.drag.clone(),
             inputs: self.inputs.clone(),
-            ratios: self.ratios.clone(),
             ..*self
         };
         let mut a = DMatrix::zeros(ns, ns);
@@ -316,6 +319,11 @@ impl Prepared {
             b.set_column(j, &DVector::from_column_slice(&dx));
         }
         (a, b)
+    }
+
+    /// Fastest rate of the linear part, max |λ(A)|, 1/s.
+    fn linear_rate(&self) -> f64 {
+        self.linear().0.complex_eigenvalues().iter().map(|l| l.norm()).fold(0.0, f64::max)
     }
 
     fn output(&self, x: &[f64], what: (Quantity, usize)) -> f64 {
@@ -379,12 +387,9 @@ impl Prepared {
 
         let mut x = vec![0.0; ns];
         // rigid motion at the initial speed; lagged inputs start at their first value
-        let mut w = initial_speed;
-        for i in 0..n {
-            x[n + i] = w;
-            if i + 1 < n {
-                w /= self.ratios[i];
-            }
+        x[n] = initial_speed;
+        for (i, &(_, _, inv_r, _)) in self.couplings.iter().enumerate() {
+            x[n + i + 1] = x[n + i] * inv_r;
         }
         for (k, &(_, _, tau, z)) in self.inputs.iter().enumerate() {
             if tau > 0.0 {
@@ -406,13 +411,8 @@ impl Prepared {
             let mut maps = Vec::with_capacity(pieces.len());
             for &(_, frac) in &pieces {
                 let (phi, gamma) = zoh(&a, &b, frac * dt)?;
-                let flat = |mx: &DMatrix<f64>| -> Vec<f64> {
-                    (0..mx.nrows())
-                        .flat_map(|r| (0..mx.ncols()).map(move |c| (r, c)))
-                        .map(|(r, c)| mx[(r, c)])
-                        .collect()
-                };
-                maps.push((flat(&phi), flat(&gamma)));
+                // row-major: the transpose's column-major storage
+                maps.push((phi.transpose().as_slice().to_vec(), gamma.transpose().as_slice().to_vec()));
             }
             let mut next = vec![0.0; ns];
             for k in 0..len {
@@ -436,10 +436,9 @@ impl Prepared {
             return Ok(y);
         }
 
-        // RK4 sub-steps: the fastest rate of the contact piece, of the friction's smoothing
-        // slope and of the lags
-        let (a, _) = self.linear();
-        let mut rate = a.complex_eigenvalues().iter().map(|l| l.norm()).fold(0.0, f64::max);
+        // RK4 sub-steps: the fastest rate of the contact piece (lags included) and of the
+        // friction's smoothing slope
+        let mut rate = self.linear_rate();
         for (i, &(fc, vs)) in self.friction.iter().enumerate() {
             if fc > 0.0 {
                 rate = rate.max(fc / vs * self.inv_j[i]);

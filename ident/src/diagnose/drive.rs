@@ -364,8 +364,7 @@ pub fn diagnose(rec: DriveRecord, progress: &(dyn Fn(&str) + Sync)) -> Result<Dr
         .map(|(i, c)| rms(&declared_motion[n + i]) / c.stiffness.max(1e-300))
         .collect();
 
-    let (a, _) = m0.linearisation()?;
-    let rate = a.complex_eigenvalues().iter().map(|l| l.norm()).fold(1.0 / dt, f64::max);
+    let rate = m0.fastest_linear_rate()?.max(1.0 / dt);
     let problem = Problem {
         rec,
         measured,
