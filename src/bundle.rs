@@ -980,8 +980,14 @@ pub fn read_mat(path: &Path, names: &[&str]) -> Result<Vec<Vec<f64>>, BundleErro
 struct MdfChannels {
     values: Vec<Vec<f64>>,
     units: Vec<String>,
+    /// per channel its group's master time; an empty vector stands for the first channel's
+    /// times (same group), so one group's time base is held once
     times: Vec<Vec<f64>>,
 }
+
+/// Records decoded per window when streaming a channel group: the group's record buffer is
+/// never assembled whole, so memory is the selected channels' values plus one window.
+const MDF_WINDOW_RECORDS: usize = 1 << 16;
 
 fn read_mdf_channels(path: &Path, names: &[&str]) -> Result<MdfChannels, BundleError> {
     check_data_file(path)?;
@@ -990,26 +996,67 @@ fn read_mdf_channels(path: &Path, names: &[&str]) -> Result<MdfChannels, BundleE
     let result = std::panic::catch_unwind(|| -> Result<MdfChannels, BundleError> {
         let f = falcon_mdf::Mf4File::open_buffered(path)
             .map_err(|e| error(path, None, format!("not a readable MDF 4 file: {e}")))?;
-        let mut out = MdfChannels { values: Vec::new(), units: Vec::new(), times: Vec::new() };
+        let mut channels = Vec::with_capacity(names.len());
         for name in names {
-            let ch =
-                f.find_channel(name).ok_or_else(|| error(path, None, format!("no channel `{name}` in the file")))?;
-            let s = f.time_series(ch).map_err(|e| error(path, None, format!("channel `{name}`: {e}")))?;
-            let values = s.values_f64();
-            if values.len() != s.timestamps().len() {
-                return Err(error(
-                    path,
-                    None,
-                    format!("channel `{name}`: {} values for {} time stamps", values.len(), s.timestamps().len()),
-                ));
+            channels.push(
+                f.find_channel(name).ok_or_else(|| error(path, None, format!("no channel `{name}` in the file")))?,
+            );
+        }
+        let group_of = |i: usize| (channels[i].data_group_index, channels[i].channel_group_index);
+        let n = names.len();
+        let mut out =
+            MdfChannels { values: vec![Vec::new(); n], units: vec![String::new(); n], times: vec![Vec::new(); n] };
+        let mut done = vec![false; n];
+        let file_size = usize::try_from(f.file_size()).unwrap_or(usize::MAX);
+        for lead in 0..n {
+            if done[lead] {
+                continue;
             }
-            out.units.push(s.unit().to_string());
-            // channels of one group share their master times: kept once (an empty vector
-            // stands for the first channel's times), so memory holds the selected channels'
-            // values and one time base, not a time base per channel
-            let same = out.times.first().is_some_and(|t0| t0.as_slice() == s.timestamps());
-            out.times.push(if same { Vec::new() } else { s.timestamps().to_vec() });
-            out.values.push(values);
+            // one pass over the group's records: its selected channels and its master together
+            let members: Vec<usize> = (lead..n).filter(|&i| group_of(i) == group_of(lead)).collect();
+            let (dg, cg) = group_of(lead);
+            let group = &f.data_groups()[dg].channel_groups[cg];
+            let master = group.master_channel();
+            let mut read: Vec<&falcon_mdf::model::Channel> = members.iter().map(|&i| channels[i]).collect();
+            read.extend(master);
+            // the declared count is only a capacity hint, bounded by what the file can hold
+            let hint =
+                usize::try_from(group.sample_count).unwrap_or(usize::MAX).min(file_size / group.record_size(0).max(1));
+            let mut values: Vec<Vec<f64>> = read.iter().map(|_| Vec::with_capacity(hint)).collect();
+            let failed = |k: usize, e: falcon_mdf::error::Mf4Error| {
+                let name = members.get(k).map_or("its master (time)", |&i| names[i]);
+                error(path, None, format!("channel `{name}`: {e}"))
+            };
+            for window in f.signals_chunks(&read, MDF_WINDOW_RECORDS).map_err(|e| failed(0, e))? {
+                let window = window.map_err(|e| failed(0, e))?;
+                for (k, (sig, v)) in window.iter().zip(values.iter_mut()).enumerate() {
+                    v.extend_from_slice(&sig.values_f64().map_err(|e| failed(k, e))?);
+                }
+            }
+            let time = match master {
+                Some(_) => values.pop().unwrap_or_default(),
+                None => (0..values.first().map_or(0, Vec::len)).map(|k| k as f64).collect(),
+            };
+            for (&i, v) in members.iter().zip(values) {
+                if v.len() != time.len() {
+                    return Err(error(
+                        path,
+                        None,
+                        format!("channel `{}`: {} values for {} time stamps", names[i], v.len(), time.len()),
+                    ));
+                }
+                out.units[i] = channels[i].unit.clone();
+                out.values[i] = v;
+                done[i] = true;
+            }
+            if lead == 0 {
+                out.times[0] = time;
+            } else {
+                // another group than the first channel's: each of its channels carries the times
+                for &i in &members {
+                    out.times[i] = time.clone();
+                }
+            }
         }
         Ok(out)
     });
