@@ -1121,6 +1121,85 @@ fn common_time_base(
     Ok((grid, Some(note)))
 }
 
+/// Reads a drive model: a `kind = "drive_model"` file (as `rigtwin diagnose --write-model`
+/// writes it: `domain`, `[model]` bodies and couplings, `[[inputs]]` with `body` by name or
+/// 1-based position, `[[effects]]` with 1-based `body`/`coupling`/`input`) or a `drive_test`
+/// bundle's declared model (its data are not read).
+pub fn load_drive_model(file: &Path) -> Result<plant::DriveModel, BundleError> {
+    #[derive(Deserialize)]
+    #[serde(deny_unknown_fields)]
+    struct Input {
+        #[allow(dead_code)]
+        column: Option<String>,
+        body: BodyRef,
+        #[allow(dead_code)]
+        unit: Option<String>,
+        #[allow(dead_code)]
+        gain: Option<f64>,
+        #[allow(dead_code)]
+        offset: Option<f64>,
+    }
+    #[derive(Deserialize)]
+    struct ModelFile {
+        kind: String,
+        domain: plant::Domain,
+        model: DriveModelFile,
+        #[serde(default)]
+        inputs: Vec<Input>,
+        #[serde(default)]
+        effects: Vec<plant::Effect>,
+    }
+    let text = read_toml(file)?;
+    let raw: ModelFile = toml::from_str(&text).map_err(|e| error(file, None, e.to_string().trim_end().to_string()))?;
+    if raw.kind != "drive_model" && raw.kind != "drive_test" {
+        return Err(error(
+            file,
+            None,
+            format!("`kind` = \"{}\": expected \"drive_model\" or \"drive_test\"", raw.kind),
+        ));
+    }
+    if raw.kind == "drive_test" && !raw.effects.is_empty() {
+        return Err(error(file, None, "`effects` belong in a drive_model file, not in a drive_test bundle"));
+    }
+    let line = plant::Line { domain: raw.domain, bodies: raw.model.bodies, couplings: raw.model.couplings };
+    line.validate().map_err(|e| error(file, None, e.to_string()))?;
+    let n = line.bodies.len();
+    let mut inputs = Vec::with_capacity(raw.inputs.len());
+    for (k, i) in raw.inputs.iter().enumerate() {
+        let at = match &i.body {
+            BodyRef::Name(name) => line.body(name),
+            BodyRef::Position(p) => usize::try_from(*p).ok().filter(|&p| (1..=n).contains(&p)).map(|p| p - 1),
+        };
+        inputs.push(at.ok_or_else(|| {
+            error(file, None, format!("`inputs[{}].body`: expected a body's name or its position 1..={n}", k + 1))
+        })?);
+    }
+    let mut effects = Vec::with_capacity(raw.effects.len());
+    for (k, e) in raw.effects.iter().enumerate() {
+        let at = |i: usize, what: &str| {
+            i.checked_sub(1)
+                .ok_or_else(|| error(file, None, format!("`effects[{}].{what}` = 0: positions are 1-based", k + 1)))
+        };
+        effects.push(match *e {
+            plant::Effect::CoulombFriction { body, friction, smoothing_speed } => {
+                plant::Effect::CoulombFriction { body: at(body, "body")?, friction, smoothing_speed }
+            }
+            plant::Effect::Backlash { coupling, backlash } => {
+                plant::Effect::Backlash { coupling: at(coupling, "coupling")?, backlash }
+            }
+            plant::Effect::TimeDelay { input, delay_s } => {
+                plant::Effect::TimeDelay { input: at(input, "input")?, delay_s }
+            }
+            plant::Effect::ActuatorLag { input, time_constant_s } => {
+                plant::Effect::ActuatorLag { input: at(input, "input")?, time_constant_s }
+            }
+        });
+    }
+    let m = plant::DriveModel { line, inputs, effects };
+    m.validate().map_err(|e| error(file, None, e.to_string()))?;
+    Ok(m)
+}
+
 /// The `kind` of the bundle `file` (torsional_sweep, bearing_shake, drive_test), read before
 /// the bundle itself.
 pub fn kind_of(file: &Path) -> Result<String, BundleError> {

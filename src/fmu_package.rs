@@ -46,7 +46,25 @@ pub fn params_of_rig(rig: &Rig) -> anyhow::Result<FmuParams> {
         variant: rig.variant,
         bearing: rig.bearing.clone().unwrap_or(default.bearing),
         effects: rig.effects,
+        drive: None,
     })
+}
+
+/// The FMU parameter set of a file given to `--params`: a drive model (`kind = "drive_model"`,
+/// as `rigtwin diagnose --write-model` writes it for a drive test), a `drive_test` bundle's
+/// declared model, or a rig file (any other file: the paper rig's structure with its values).
+pub fn params_of_file(file: &Path) -> anyhow::Result<FmuParams> {
+    let text = crate::files::read_text(file).map_err(|e| anyhow::anyhow!("{}: {}", file.display(), e.message))?;
+    let kind = toml::from_str::<toml::Table>(&text)
+        .ok()
+        .and_then(|t| t.get("kind").and_then(|k| k.as_str()).map(str::to_string));
+    match kind.as_deref() {
+        Some("drive_model" | "drive_test") => {
+            let drive = crate::bundle::load_drive_model(file)?;
+            Ok(FmuParams { drive: Some(drive), ..FmuParams::default() })
+        }
+        _ => params_of_rig(&crate::rigfile::load_rig(file)?),
+    }
 }
 
 /// Writes both modelDescription.xml files into `dir/fmi3/` and `dir/fmi2/`.
@@ -61,8 +79,7 @@ pub fn write_descriptions(p: &FmuParams, dir: &Path) -> anyhow::Result<()> {
 /// Writes `rigtwin-fmi3.fmu` and `rigtwin-fmi2.fmu` into `out`; returns their paths.
 pub fn package(p: &FmuParams, lib: &[u8], out: &Path) -> anyhow::Result<[PathBuf; 2]> {
     // the parameters must describe a model before anything is written
-    rigtwin_fmu::model::Model::new(p)
-        .map_err(|e| anyhow::anyhow!("the parameter set does not describe a model: {e}"))?;
+    rigtwin_fmu::check(p).map_err(|e| anyhow::anyhow!("the parameter set does not describe a model: {e}"))?;
     let (p3, p2) = platform_folders()?;
     let dir = crate::files::output_dir(out, "--out")?;
     let params_json = serde_json::to_vec_pretty(p)?;

@@ -135,8 +135,10 @@ enum Command {
     },
     /// Write the FMUs (FMI 3.0 and FMI 2.0, co-simulation and model exchange).
     Fmu {
-        /// Parameter set: a rig file (its [model], variant and optional [bearing]); default:
-        /// the paper's V1/V2 powertrain with damping and the identified sfd_shake bearing.
+        /// Parameter set: a rig file (its [model], variant and optional [bearing]), a
+        /// drive_test bundle (its declared model) or a drive model written by `diagnose
+        /// --write-model` (with its effects); default: the paper's V1/V2 powertrain with
+        /// damping and the identified sfd_shake bearing.
         #[arg(long, value_name = "FILE")]
         params: Option<PathBuf>,
         /// Folder for rigtwin-fmi3.fmu and rigtwin-fmi2.fmu.
@@ -378,7 +380,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         }
         Command::Fmu { params, out, descriptions } => {
             let p = match &params {
-                Some(f) => rigtwin::fmu_package::params_of_rig(&load_rig(f)?)?,
+                Some(f) => rigtwin::fmu_package::params_of_file(f)?,
                 None => rigtwin_fmu::FmuParams::default(),
             };
             if let Some(d) = &descriptions {

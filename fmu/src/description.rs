@@ -5,14 +5,14 @@
 use std::fmt::Write as _;
 
 use crate::params::FmuParams;
-use crate::variables::{parameter_values, variant_number, Causality, Kind, Slot, Table, Variable};
+use crate::variables::{parameter_values, variant_number, Causality, Constraint, Kind, Slot, Table, Variable};
 
 /// The model identifier: the shared library's name inside the FMU.
 pub const MODEL_IDENTIFIER: &str = "rigtwin";
 
 /// Units used by the table: (name, SI base-unit exponents kg, m, s, rad, the FMI 3 type and
 /// quantity that carries it).
-const UNITS: [(&str, [i32; 4], &str); 17] = [
+const UNITS: [(&str, [i32; 4], &str); 18] = [
     ("s", [0, 0, 1, 0], "Time"),
     ("rad", [0, 0, 0, 1], "Angle"),
     ("rad/s", [0, 0, -1, 1], "AngularVelocity"),
@@ -29,6 +29,7 @@ const UNITS: [(&str, [i32; 4], &str); 17] = [
     ("m/s", [0, 1, -1, 0], "Velocity"),
     ("m/s2", [0, 1, -2, 0], "Acceleration"),
     ("N.m/s", [1, 2, -3, 0], "TorqueRate"),
+    ("N/s", [1, 1, -3, 0], "ForceRate"),
     ("1", [0, 0, 0, 0], "Ratio"),
 ];
 
@@ -67,6 +68,60 @@ fn start(p: &FmuParams, slot: Slot) -> Option<String> {
     }
 }
 
+/// The rig FMU's description and whether it needs CompletedIntegratorStep (a dead time's
+/// history is pruned there).
+fn rig_description(p: &FmuParams) -> (String, bool) {
+    let e = &p.effects;
+    let mut desc = String::from("Open-differential powertrain of a HIL test rig (Hübner & Prokop, Vehicles 2026) and a bearing K/C/M block on its support (San Andrés 2011)");
+    let on: Vec<&str> = [
+        (e.time_delay_s > 0.0, "dead time of the drive torque"),
+        (e.actuator_lag_s > 0.0, "actuator lag"),
+        (e.backlash_rad > 0.0, "side-shaft backlash"),
+        (e.compliance_stiffness_nm_per_rad > 0.0, "drive compliance"),
+    ]
+    .into_iter()
+    .filter_map(|(on, name)| on.then_some(name))
+    .collect();
+    if on.is_empty() {
+        desc += "; linear, exact zero-order-hold co-simulation step";
+    } else {
+        let _ = write!(desc, "; with {}", on.join(", "));
+        desc += if e.backlash_rad > 0.0 {
+            "; co-simulation step by RK4 of at most 0.125 ms"
+        } else {
+            "; exact zero-order-hold co-simulation step"
+        };
+    }
+    // the dead time's history is pruned at accepted integrator steps
+    (desc, e.time_delay_s > 0.0)
+}
+
+/// A drive model's description: its bodies, gear stages and effects, and the co-simulation
+/// step it takes.
+fn drive_description(m: &plant::DriveModel) -> (String, bool) {
+    let names: Vec<&str> = m.line.bodies.iter().map(|b| b.name.as_str()).collect();
+    let gears = m.line.couplings.iter().filter(|c| c.ratio != 1.0).count();
+    let domain = match m.line.domain {
+        plant::Domain::Rotational => "rotational",
+        plant::Domain::Translational => "translational",
+    };
+    let mut desc = format!("Drivetrain ({domain}): {} in line", names.join(", "));
+    if gears > 0 {
+        let _ = write!(desc, ", {gears} gear stage(s)");
+    }
+    let effects: Vec<String> = m.effects.iter().map(|e| format!("{} at {}", e.name(), e.element(m))).collect();
+    if !effects.is_empty() {
+        let _ = write!(desc, "; with {}", effects.join(", "));
+    }
+    desc += if m.is_nonlinear() {
+        "; co-simulation step by RK4 sub-steps of h |lambda|max <= 0.5, as rigtwin's diagnosis simulates"
+    } else {
+        "; linear, exact zero-order-hold co-simulation step"
+    };
+    let delayed = m.effects.iter().any(|e| matches!(e, plant::Effect::TimeDelay { .. }));
+    (desc, delayed)
+}
+
 /// Which FMI version to describe.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Version {
@@ -101,29 +156,10 @@ fn describe_with(p: &FmuParams, version: Version, token: &str) -> String {
     let table = Table::new(p);
     let vars = &table.variables;
     let mut x = String::new();
-    let e = &p.effects;
-    let mut desc = String::from("Open-differential powertrain of a HIL test rig (Hübner & Prokop, Vehicles 2026) and a bearing K/C/M block on its support (San Andrés 2011)");
-    let on: Vec<&str> = [
-        (e.time_delay_s > 0.0, "dead time of the drive torque"),
-        (e.actuator_lag_s > 0.0, "actuator lag"),
-        (e.backlash_rad > 0.0, "side-shaft backlash"),
-        (e.compliance_stiffness_nm_per_rad > 0.0, "drive compliance"),
-    ]
-    .into_iter()
-    .filter_map(|(on, name)| on.then_some(name))
-    .collect();
-    if on.is_empty() {
-        desc += "; linear, exact zero-order-hold co-simulation step";
-    } else {
-        let _ = write!(desc, "; with {}", on.join(", "));
-        desc += if e.backlash_rad > 0.0 {
-            "; co-simulation step by RK4 of at most 0.125 ms"
-        } else {
-            "; exact zero-order-hold co-simulation step"
-        };
-    }
-    // the dead time's history is pruned at accepted integrator steps
-    let needs_completed = e.time_delay_s > 0.0;
+    let (desc, needs_completed) = match &p.drive {
+        None => rig_description(p),
+        Some(m) => drive_description(m),
+    };
     let _ = writeln!(x, "<?xml version=\"1.0\" encoding=\"UTF-8\"?>");
     match version {
         Version::Fmi3 => {
@@ -148,14 +184,16 @@ fn describe_with(p: &FmuParams, version: Version, token: &str) -> String {
         }
     }
     let _ = writeln!(x, "  <UnitDefinitions>");
-    for (name, e, _) in UNITS {
+    // only the units the table uses (a translational drive declares no angles)
+    let used = |unit: &str| vars.iter().any(|v| v.unit == unit);
+    for (name, e, _) in UNITS.into_iter().filter(|u| used(u.0)) {
         let _ = writeln!(x, "    <Unit name=\"{name}\">{}</Unit>", base_unit(&e));
     }
     let _ = writeln!(x, "  </UnitDefinitions>");
     if version == Version::Fmi3 {
         // FMI 3 carries units through declared types (as the Reference FMUs do)
         let _ = writeln!(x, "  <TypeDefinitions>");
-        for (unit, _, name) in UNITS {
+        for (unit, _, name) in UNITS.into_iter().filter(|u| used(u.0)) {
             let _ = writeln!(x, "    <Float64Type name=\"{name}\" quantity=\"{name}\" unit=\"{unit}\"/>");
         }
         // the states' nominals through types of their own (rust-fmi 0.8 reads `nominal` on a
@@ -226,10 +264,10 @@ fn describe_with(p: &FmuParams, version: Version, token: &str) -> String {
                 };
                 let mut attrs = format!(
                     "name=\"{}\" valueReference=\"{}\" causality=\"{caus}\" variability=\"{}\" description=\"{}\"",
-                    xml_escape(v.name),
+                    xml_escape(&v.name),
                     v.vr,
                     if v.kind == Kind::Int32 { "fixed" } else { variability },
-                    xml_escape(v.description)
+                    xml_escape(&v.description)
                 );
                 if let Some(i) = initial {
                     let _ = write!(attrs, " initial=\"{i}\"");
@@ -240,7 +278,7 @@ fn describe_with(p: &FmuParams, version: Version, token: &str) -> String {
                         _ => type_of_unit(v.unit).to_string(),
                     };
                     let _ = write!(attrs, " declaredType=\"{declared}\"");
-                    if v.causality == Causality::Parameter && v.unit == "1" {
+                    if v.constraint == Constraint::Fraction {
                         attrs += " min=\"0\" max=\"1\"";
                     }
                 } else {
@@ -258,10 +296,10 @@ fn describe_with(p: &FmuParams, version: Version, token: &str) -> String {
             Version::Fmi2 => {
                 let mut attrs = format!(
                     "name=\"{}\" valueReference=\"{}\" causality=\"{caus}\" variability=\"{}\" description=\"{}\"",
-                    xml_escape(v.name),
+                    xml_escape(&v.name),
                     v.vr,
                     variability,
-                    xml_escape(v.description)
+                    xml_escape(&v.description)
                 );
                 if let Some(i) = initial {
                     let _ = write!(attrs, " initial=\"{i}\"");

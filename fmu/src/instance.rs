@@ -4,11 +4,10 @@
 
 use nalgebra::DVector;
 
-use crate::model::{Model, DRIVE_INPUT, NU};
+use crate::drive::DriveDynamics;
+use crate::model::{Model, DRIVE_INPUT};
 use crate::params::FmuParams;
-use crate::variables::{
-    parameter_set, parameter_values, variant_number, Causality, Kind, Slot, Table, NPARAMS, PARAMETERS,
-};
+use crate::variables::{parameter_set, parameter_values, variant_number, Causality, Kind, Slot, Table, FIRST_EFFECT};
 use plant::effects::DelayLine;
 
 /// Whether the instance simulates itself (co-simulation) or lends its derivatives to the
@@ -78,37 +77,43 @@ pub trait Logger {
     fn log(&self, status: Status, category: &str, message: &str);
 }
 
-/// A saved instance state (Get/SetFMUState): with a dead time, the drive torque's history too.
+/// A saved instance state (Get/SetFMUState): with dead times, the inputs' histories too.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Snapshot {
     mode: Mode,
     time: f64,
     x: Vec<f64>,
     u: Vec<f64>,
-    params: [f64; NPARAMS],
+    params: Vec<f64>,
     variant: i32,
-    history: Vec<(f64, f64)>,
+    history: Vec<Vec<(f64, f64)>>,
 }
 
-/// Version 3: the states are the bounded ones (twists in place of the drive's and the motor's
-/// angles), so a state saved by an older FMU is refused rather than misread.
-const SNAPSHOT_MAGIC: &[u8; 8] = b"RIGTWIN3";
-/// Magic, mode, variant, number of states, number of history records.
-const SNAPSHOT_HEADER: usize = 8 + 1 + 4 + 4 + 4;
+/// Version 4: parameters, inputs and one history per input of any model (a drive model's as
+/// well as the rig's), so a state saved by an older FMU is refused rather than misread.
+const SNAPSHOT_MAGIC: &[u8; 8] = b"RIGTWIN4";
+/// Magic, mode, variant, number of states, inputs and parameters.
+const SNAPSHOT_HEADER: usize = 8 + 1 + 4 + 4 + 4 + 4;
+/// Most states, inputs or parameters a serialized state may claim (a bound against a
+/// corrupt length, far above any model here).
+const SNAPSHOT_MAX_LEN: usize = 1 << 16;
 
 impl Snapshot {
     /// Bytes of the state (SerializeFMUState).
     pub fn to_bytes(&self) -> Vec<u8> {
-        let mut b = SNAPSHOT_MAGIC.to_vec();
+        let mut b = Vec::with_capacity(self.byte_len());
+        b.extend_from_slice(SNAPSHOT_MAGIC);
         b.push(self.mode as u8);
         b.extend(self.variant.to_le_bytes());
-        b.extend((self.x.len() as u32).to_le_bytes());
-        b.extend((self.history.len() as u32).to_le_bytes());
-        let history = self.history.iter().flat_map(|r| [r.0, r.1]);
-        for v in std::iter::once(self.time).chain(self.x.iter().copied()).chain(self.u.iter().copied()) {
-            b.extend(v.to_le_bytes());
+        for n in [self.x.len(), self.u.len(), self.params.len()] {
+            b.extend((n as u32).to_le_bytes());
         }
-        for v in self.params.iter().copied().chain(history) {
+        for h in &self.history {
+            b.extend((h.len() as u32).to_le_bytes());
+        }
+        let history = self.history.iter().flatten().flat_map(|r| [r.0, r.1]);
+        let values = std::iter::once(self.time).chain(self.x.iter().copied()).chain(self.u.iter().copied());
+        for v in values.chain(self.params.iter().copied()).chain(history) {
             b.extend(v.to_le_bytes());
         }
         b
@@ -116,7 +121,8 @@ impl Snapshot {
 
     /// Length of [`Snapshot::to_bytes`].
     pub fn byte_len(&self) -> usize {
-        SNAPSHOT_HEADER + 8 * (1 + self.x.len() + NU + NPARAMS + 2 * self.history.len())
+        let records: usize = self.history.iter().map(Vec::len).sum();
+        SNAPSHOT_HEADER + 4 * self.u.len() + 8 * (1 + self.x.len() + self.u.len() + self.params.len() + 2 * records)
     }
 
     /// The state of serialized bytes, if they are one.
@@ -124,9 +130,17 @@ impl Snapshot {
         if b.len() < SNAPSHOT_HEADER || &b[..8] != SNAPSHOT_MAGIC {
             return None;
         }
-        let nx = u32::from_le_bytes(b[13..17].try_into().ok()?) as usize;
-        let nh = u32::from_le_bytes(b[17..21].try_into().ok()?) as usize;
-        if nx > 64 || b.len() != SNAPSHOT_HEADER + 8 * (1 + nx + NU + NPARAMS + 2 * nh) {
+        let word =
+            |at: usize| -> Option<usize> { Some(u32::from_le_bytes(b.get(at..at + 4)?.try_into().ok()?) as usize) };
+        let (nx, nu, np) = (word(13)?, word(17)?, word(21)?);
+        if nx > SNAPSHOT_MAX_LEN || nu > SNAPSHOT_MAX_LEN || np > SNAPSHOT_MAX_LEN {
+            return None;
+        }
+        let lengths: Vec<usize> = (0..nu).map(|j| word(SNAPSHOT_HEADER + 4 * j)).collect::<Option<_>>()?;
+        let records = lengths.iter().try_fold(0usize, |a, &n| a.checked_add(n))?;
+        let start = SNAPSHOT_HEADER + 4 * nu;
+        let floats = (1 + nx + nu + np).checked_add(records.checked_mul(2)?)?;
+        if b.len() != start.checked_add(floats.checked_mul(8)?)? {
             return None;
         }
         let mode = [
@@ -142,22 +156,33 @@ impl Snapshot {
         .copied()?;
         let variant = i32::from_le_bytes(b[9..13].try_into().ok()?);
         let f: Vec<f64> =
-            b[SNAPSHOT_HEADER..].chunks_exact(8).map(|c| f64::from_le_bytes(c.try_into().expect("8 bytes"))).collect();
-        let mut params = [0.0; NPARAMS];
-        let p0 = 1 + nx + NU;
-        params.copy_from_slice(&f[p0..p0 + NPARAMS]);
-        let history = f[p0 + NPARAMS..].chunks_exact(2).map(|c| (c[0], c[1])).collect::<Vec<_>>();
-        DelayLine::from_records(history.clone())?;
+            b[start..].chunks_exact(8).map(|c| f64::from_le_bytes(c.try_into().expect("8 bytes"))).collect();
+        let p0 = 1 + nx + nu;
+        let mut at = p0 + np;
+        let mut history = Vec::with_capacity(nu);
+        for &n in &lengths {
+            let h: Vec<(f64, f64)> = f[at..at + 2 * n].chunks_exact(2).map(|c| (c[0], c[1])).collect();
+            DelayLine::from_records(h.clone())?;
+            history.push(h);
+            at += 2 * n;
+        }
         Some(Snapshot {
             mode,
             time: f[0],
             x: f[1..1 + nx].to_vec(),
-            u: f[1 + nx..1 + nx + NU].to_vec(),
-            params,
+            u: f[1 + nx..p0].to_vec(),
+            params: f[p0..p0 + np].to_vec(),
             variant,
             history,
         })
     }
+}
+
+/// The dynamics an instance steps: the paper rig's or a drive model's.
+#[derive(Debug)]
+enum Machine {
+    Rig(Box<Model>),
+    Drive(Box<DriveDynamics>),
 }
 
 /// One instance.
@@ -172,18 +197,24 @@ pub struct Instance {
     pub logging_on: bool,
     logger: Box<dyn Logger>,
     table: Table,
-    params: [f64; NPARAMS],
+    /// The parameter set instantiated: its structure (rig, or which drive model) is fixed.
+    spec: FmuParams,
+    params: Vec<f64>,
     variant: i32,
-    start: ([f64; NPARAMS], i32),
+    start: (Vec<f64>, i32),
     x: DVector<f64>,
     u: DVector<f64>,
-    /// History of the drive torque for its dead time.
-    delay: DelayLine,
+    /// Per input: the parameter holding its dead time, if it has one.
+    delay_param: Vec<Option<usize>>,
+    /// Per input: its history, for its dead time.
+    delays: Vec<DelayLine>,
+    /// The inputs acting now (after their dead times), scratch.
+    acting: Vec<f64>,
     time: f64,
     /// Model exchange: the last accepted time (initialisation, event, completed integrator
     /// step); SetTime may not go back before it.
     accepted_time: f64,
-    model: Option<Model>,
+    model: Option<Machine>,
 }
 
 impl Instance {
@@ -192,19 +223,33 @@ impl Instance {
         let params = parameter_values(p);
         let variant = variant_number(p.variant);
         let table = Table::new(p);
+        let nu = table.nu();
+        let delay_param = match &p.drive {
+            None => {
+                (0..nu).map(|j| (j == DRIVE_INPUT && p.effects.time_delay_s > 0.0).then_some(FIRST_EFFECT)).collect()
+            }
+            Some(m) => {
+                let list = m.parameter_list();
+                let names = m.input_names();
+                (0..nu).map(|j| list.iter().position(|q| q.name == format!("{}.delay", names[j]))).collect()
+            }
+        };
         Instance {
             name: name.to_string(),
             interface,
             mode: Mode::Instantiated,
             logging_on,
             logger,
+            start: (params.clone(), variant),
             params,
             variant,
-            start: (params, variant),
+            spec: p.clone(),
             x: DVector::zeros(table.nx()),
             table,
-            u: DVector::zeros(NU),
-            delay: DelayLine::default(),
+            u: DVector::zeros(nu),
+            delay_param,
+            delays: vec![DelayLine::default(); nu],
+            acting: vec![0.0; nu],
             time: 0.0,
             accepted_time: 0.0,
             model: None,
@@ -254,27 +299,34 @@ impl Instance {
         self.x.len()
     }
 
-    fn lookup(&self, vr: u32) -> Option<crate::variables::Variable> {
+    fn lookup(&self, vr: u32) -> Option<&crate::variables::Variable> {
         self.table.lookup(vr)
     }
 
-    /// Dead time of the drive torque, s.
-    fn delay_s(&self) -> f64 {
-        self.params[crate::variables::FIRST_EFFECT]
+    /// Dead time of input `j`, s (0: none).
+    fn delay_s(&self, j: usize) -> f64 {
+        self.delay_param.get(j).copied().flatten().map_or(0.0, |i| self.params[i])
     }
 
-    /// The drive torque acting now: the input, or with a dead time its past value.
-    fn drive_now(&self) -> f64 {
-        let tau = self.delay_s();
-        if tau > 0.0 {
-            self.delay.value_at(self.time - tau, self.u[DRIVE_INPUT])
-        } else {
-            self.u[DRIVE_INPUT]
+    /// The inputs acting now into `self.acting`: each input, or with a dead time its past
+    /// value.
+    fn update_acting(&mut self) {
+        for j in 0..self.acting.len() {
+            let tau = self.delay_s(j);
+            self.acting[j] = if tau > 0.0 { self.delays[j].value_at(self.time - tau, self.u[j]) } else { self.u[j] };
+        }
+    }
+
+    /// Drops each input's history before what its dead time still needs at the present time.
+    fn forget_history(&mut self) {
+        for j in 0..self.delays.len() {
+            let tau = self.delay_s(j);
+            self.delays[j].forget_before(self.time, tau);
         }
     }
 
     fn params(&self) -> Res<FmuParams> {
-        parameter_set(&self.params, self.variant).or_else(error)
+        parameter_set(&self.spec, &self.params, self.variant).or_else(error)
     }
 
     /// Builds the model from the parameters if a parameter changed since it was built. Callers
@@ -282,10 +334,22 @@ impl Instance {
     fn ensure_model(&mut self) -> Res<()> {
         if self.model.is_none() {
             let p = self.params()?;
-            self.model =
-                Some(Model::new(&p).or_else(|e| error(format!("the parameters do not describe a model: {e}")))?);
+            let built = match &p.drive {
+                None => Model::new(&p).map(|m| Machine::Rig(Box::new(m))),
+                Some(d) => DriveDynamics::new(d).map(|m| Machine::Drive(Box::new(m))),
+            };
+            self.model = Some(built.or_else(|e| error(format!("the parameters do not describe a model: {e}")))?);
         }
         Ok(())
+    }
+
+    /// ẋ at the present state and inputs into `out` (the model built).
+    fn evaluate_derivatives(&mut self, out: &mut [f64]) {
+        self.update_acting();
+        match self.model.as_mut().expect("built by the caller") {
+            Machine::Rig(m) => m.derivatives(self.x.as_slice(), self.u.as_slice(), self.acting[DRIVE_INPUT], out),
+            Machine::Drive(m) => m.derivatives(self.x.as_slice(), &self.acting, out),
+        }
     }
 
     /// Enter initialization mode at `start_time` (with the experiment's stop time if defined).
@@ -308,9 +372,11 @@ impl Instance {
     pub fn exit_initialization_mode(&mut self) -> Res<()> {
         self.expect("ExitInitializationMode", &[Mode::InitializationMode])?;
         self.ensure_model()?;
-        // the drive torque of the initialisation is what the dead time delivers at first
-        self.delay = DelayLine::default();
-        self.delay.record(f64::NEG_INFINITY, self.u[DRIVE_INPUT]);
+        // the inputs of the initialisation are what the dead times deliver at first
+        for (line, &u) in self.delays.iter_mut().zip(self.u.iter()) {
+            *line = DelayLine::default();
+            line.record(f64::NEG_INFINITY, u);
+        }
         self.accepted_time = self.time;
         self.mode = match self.interface {
             Interface::CoSimulation => Mode::StepMode,
@@ -329,10 +395,10 @@ impl Instance {
 
     /// Reset to the state right after instantiation.
     pub fn reset(&mut self) {
-        (self.params, self.variant) = self.start;
+        (self.params, self.variant) = self.start.clone();
         self.x.fill(0.0);
         self.u.fill(0.0);
-        self.delay = DelayLine::default();
+        self.delays.iter_mut().for_each(|d| *d = DelayLine::default());
         self.time = 0.0;
         self.accepted_time = 0.0;
         self.model = None;
@@ -372,7 +438,7 @@ impl Instance {
     pub fn completed_integrator_step(&mut self) -> Res<()> {
         self.expect("CompletedIntegratorStep", &[Mode::ContinuousTimeMode])?;
         self.accepted_time = self.time;
-        self.delay.forget_before(self.time, self.delay_s());
+        self.forget_history();
         Ok(())
     }
 
@@ -419,9 +485,7 @@ impl Instance {
             return error(format!("{} derivatives asked for; the model has {}", out.len(), self.nx()));
         }
         self.ensure_model()?;
-        let drive = self.drive_now();
-        let m = self.model.as_mut().expect("built above");
-        m.derivatives(self.x.as_slice(), self.u.as_slice(), drive, out);
+        self.evaluate_derivatives(out);
         if let Some(i) = out.iter().position(|v| !v.is_finite()) {
             return Err(self.fail(format!("the derivative of state {i} is {} at {} s", out[i], self.time)));
         }
@@ -441,12 +505,15 @@ impl Instance {
             return error(format!("currentCommunicationPoint {t} s differs from the FMU's time {} s", self.time));
         }
         self.ensure_model()?;
-        let model = self.model.as_mut().expect("built above");
-        if let Err(e) = model.step(&mut self.x, &self.u, self.time, h, &self.delay) {
+        let stepped = match self.model.as_mut().expect("built above") {
+            Machine::Rig(m) => m.step(&mut self.x, &self.u, self.time, h, &self.delays[DRIVE_INPUT]),
+            Machine::Drive(m) => m.step(&mut self.x, self.u.as_slice(), self.time, h, &self.delays),
+        };
+        if let Err(e) = stepped {
             return Err(self.fail(format!("DoStep from {t} s over {h} s: {e}")));
         }
         self.time = t + h;
-        self.delay.forget_before(self.time, self.delay_s());
+        self.forget_history();
         Ok(())
     }
 
@@ -465,11 +532,17 @@ impl Instance {
         });
         let computed = if needs_model {
             self.ensure_model()?;
-            let drive = self.drive_now();
-            let m = self.model.as_mut().expect("built above");
             let mut dx = vec![0.0; self.x.len()];
-            m.derivatives(self.x.as_slice(), self.u.as_slice(), drive, &mut dx);
-            Some((dx, m.torques(self.x.as_slice()), m.angles(self.x.as_slice())))
+            self.evaluate_derivatives(&mut dx);
+            let x = self.x.as_slice();
+            let (torques, angles) = match self.model.as_ref().expect("built above") {
+                Machine::Rig(m) => (m.torques(x).to_vec(), m.angles(x).to_vec()),
+                Machine::Drive(m) => {
+                    let couplings = self.table.variables.iter().filter(|v| matches!(v.slot, Slot::Torque(_))).count();
+                    ((0..couplings).map(|i| m.coupling_force(x, i)).collect(), Vec::new())
+                }
+            };
+            Some((dx, torques, angles))
         } else {
             None
         };
@@ -497,17 +570,17 @@ impl Instance {
         let before_init = [Mode::Instantiated, Mode::InitializationMode];
         let mut changes = Vec::with_capacity(vrs.len());
         for (&vr, &v) in vrs.iter().zip(values) {
-            let Some(var) = self.lookup(vr).filter(|x| x.kind == Kind::Float64) else {
+            let Some(var) = self.lookup(vr).filter(|x| x.kind == Kind::Float64).cloned() else {
                 return error(format!("value reference {vr} is not a Float64 variable of this FMU"));
             };
             if !v.is_finite() {
                 return error(format!("`{}` = {v}: expected a finite number", var.name));
             }
             match (var.causality, var.slot) {
-                (Causality::Parameter, Slot::Param(i)) => {
+                (Causality::Parameter, Slot::Param(_)) => {
                     self.expect(&format!("setting the fixed parameter `{}`", var.name), &before_init)?;
-                    if let Err(want) = PARAMETERS[i].3.check(v) {
-                        return error(format!("`{}` = {v} {}: expected {want}", var.name, PARAMETERS[i].1));
+                    if let Err(want) = var.constraint.check(v) {
+                        return error(format!("`{}` = {v} {}: expected {want}", var.name, var.unit));
                     }
                 }
                 (Causality::Input, _) => self.expect(
@@ -535,8 +608,8 @@ impl Instance {
                 }
                 Slot::Input(i) => {
                     self.u[i] = v;
-                    if i == DRIVE_INPUT && self.delay_s() > 0.0 {
-                        self.delay.record(self.time, v);
+                    if self.delay_s(i) > 0.0 {
+                        self.delays[i].record(self.time, v);
                     }
                 }
                 Slot::State(i) => self.x[i] = v,
@@ -593,29 +666,45 @@ impl Instance {
             time: self.time,
             x: self.x.as_slice().to_vec(),
             u: self.u.as_slice().to_vec(),
-            params: self.params,
+            params: self.params.clone(),
             variant: self.variant,
-            history: self.delay.records().to_vec(),
+            history: self.delays.iter().map(|d| d.records().to_vec()).collect(),
         }
     }
 
     /// Restores a state (SetFMUState); refuses a state of another FMU.
     pub fn restore(&mut self, s: &Snapshot) -> Res<()> {
-        if s.x.len() != self.nx() {
-            return error(format!("the state has {} continuous states; this FMU has {}", s.x.len(), self.nx()));
+        if s.x.len() != self.nx() || s.u.len() != self.u.len() || s.params.len() != self.params.len() {
+            return error(format!(
+                "the state has {} continuous states, {} inputs and {} parameters; this FMU has {}, {} and {}",
+                s.x.len(),
+                s.u.len(),
+                s.params.len(),
+                self.nx(),
+                self.u.len(),
+                self.params.len()
+            ));
         }
-        let history = DelayLine::from_records(s.history.clone())
-            .ok_or_else(|| Failure { status: Status::Error, message: "the state's history is not ordered".into() })?;
+        let history = s
+            .history
+            .iter()
+            .map(|h| DelayLine::from_records(h.clone()))
+            .collect::<Option<Vec<_>>>()
+            .filter(|h| h.len() == self.delays.len())
+            .ok_or_else(|| Failure {
+                status: Status::Error,
+                message: "the state's input history is not ordered".into(),
+            })?;
         if s.params != self.params || s.variant != self.variant {
             self.model = None;
         }
-        self.delay = history;
+        self.delays = history;
         self.mode = s.mode;
         self.time = s.time;
         self.accepted_time = s.time;
         self.x.copy_from_slice(&s.x);
         self.u.copy_from_slice(&s.u);
-        self.params = s.params;
+        self.params.clone_from(&s.params);
         self.variant = s.variant;
         Ok(())
     }
@@ -636,9 +725,18 @@ impl Instance {
         }
         self.ensure_model()?;
         let nx = self.nx();
-        let delayed = self.delay_s() > 0.0;
-        let m = self.model.as_ref().expect("built above");
-        let (a, b, torque) = m.jacobians(self.x.as_slice());
+        self.update_acting();
+        let (a, b, torque) = match self.model.as_ref().expect("built above") {
+            Machine::Rig(m) => {
+                let (a, b, t) = m.jacobians(self.x.as_slice());
+                (a.clone(), b.clone(), t.clone())
+            }
+            Machine::Drive(m) => m.jacobians(self.x.as_slice(), &self.acting),
+        };
+        let angle_gradient = |i: usize, col: usize| match self.model.as_ref() {
+            Some(Machine::Rig(m)) => m.angle_gradient(i, col),
+            _ => 0.0,
+        };
         // column of a known in [x u]
         let cols = knowns
             .iter()
@@ -656,7 +754,7 @@ impl Instance {
                     Some(Slot::Derivative(i)) => {
                         if col < nx {
                             a[(i, col)]
-                        } else if delayed && col - nx == DRIVE_INPUT {
+                        } else if self.delay_s(col - nx) > 0.0 {
                             0.0
                         } else {
                             b[(i, col - nx)]
@@ -679,7 +777,7 @@ impl Instance {
                     }
                     Some(Slot::Angle(i)) => {
                         if col < nx {
-                            m.angle_gradient(i, col)
+                            angle_gradient(i, col)
                         } else {
                             0.0
                         }

@@ -18,6 +18,7 @@
 #[doc(hidden)]
 pub mod bindings;
 pub mod description;
+pub mod drive;
 mod ffi;
 pub mod fmi2;
 pub mod fmi3;
@@ -33,6 +34,15 @@ use std::path::{Path, PathBuf};
 
 /// Name of the parameter file in the FMU's resources folder.
 pub const PARAMS_RESOURCE: &str = "params.json";
+
+/// Checks that a parameter set describes a model an FMU can run (the rig's or a drive
+/// model's); the error names what is wrong.
+pub fn check(p: &FmuParams) -> Result<(), String> {
+    match &p.drive {
+        None => model::Model::new(p).map(|_| ()),
+        Some(m) => drive::DriveDynamics::new(m).map(|_| ()),
+    }
+}
 
 /// The parameter set an instance starts from: `params.json` in the resources folder if it
 /// is there, else the built-in default.

@@ -74,6 +74,9 @@ const FASTEST_TIME_SCALE_S: f64 = 1e-15;
 impl Model {
     /// Builds the model; the error names the offending parameter.
     pub fn new(p: &FmuParams) -> Result<Self, String> {
+        if p.drive.is_some() {
+            return Err("a drive model's parameter set is built by `drive::DriveDynamics`".into());
+        }
         let powertrain = Powertrain::new(&p.powertrain, p.variant, &p.effects).map_err(|e| e.to_string())?;
         let br = p.bearing.state_space().map_err(|e| e.to_string())?;
         let table = Table::new(p);

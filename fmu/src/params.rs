@@ -1,5 +1,5 @@
 //! The parameter set an FMU is built from: the powertrain (with its variant and drive-path
-//! effects) and the bearing.
+//! effects) and the bearing, or a drivetrain model (`plant::DriveModel`).
 
 use serde::{Deserialize, Serialize};
 
@@ -19,6 +19,11 @@ pub struct FmuParams {
     /// default; the ones on add parameters and states to the FMU.
     #[serde(default)]
     pub effects: DriveEffects,
+    /// A drivetrain model in place of the paper rig (a `drive_test` bundle's model, or one
+    /// written by `rigtwin diagnose --write-model`): when given, the FMU is this model — its
+    /// parameters, inputs, outputs and effects — and the rig's fields above are not used.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub drive: Option<plant::DriveModel>,
 }
 
 impl Default for FmuParams {
@@ -57,6 +62,7 @@ impl Default for FmuParams {
                 table: None,
             },
             effects: DriveEffects::default(),
+            drive: None,
         }
     }
 }

@@ -1,7 +1,10 @@
 //! The one variable table. Both modelDescription.xml files, the value-reference map of the
 //! instances and the instantiation token are generated from it, so they cannot disagree.
 
+use std::borrow::Cow;
+
 use crate::params::FmuParams;
+use plant::{Dimension, Domain, DriveModel};
 
 /// Storage type of a variable.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -79,12 +82,12 @@ impl Constraint {
 }
 
 /// One row of the table.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct Variable {
     /// Value reference (unique over all types).
     pub vr: u32,
     /// Name (structured naming convention).
-    pub name: &'static str,
+    pub name: Cow<'static, str>,
     /// Type.
     pub kind: Kind,
     /// Causality.
@@ -94,7 +97,9 @@ pub struct Variable {
     /// Unit name (declared in the unit definitions).
     pub unit: &'static str,
     /// Description.
-    pub description: &'static str,
+    pub description: Cow<'static, str>,
+    /// The values a parameter accepts (`Finite` for the other variables).
+    pub constraint: Constraint,
 }
 
 /// Float parameters: (name, unit, description, constraint), in [`Slot::Param`] order: the
@@ -239,6 +244,8 @@ pub struct Table {
     /// Per state (state-vector order): the state-vector index of the state that is its
     /// derivative, if one is.
     pub derivative_state: Vec<Option<usize>>,
+    /// Per state (state-vector order): its nominal.
+    pub nominal: Vec<f64>,
 }
 
 /// [`STATES`] indices of a powertrain's states (`plant::effects::Powertrain` order: angles,
@@ -256,27 +263,36 @@ pub fn powertrain_states(effects: &plant::effects::DriveEffects) -> Vec<usize> {
 }
 
 impl Table {
-    /// The table of parameter set `p`.
+    /// The table of parameter set `p`: the paper rig's, or a drive model's.
     pub fn new(p: &FmuParams) -> Table {
+        if let Some(m) = &p.drive {
+            return Table::of_drive(m);
+        }
         let e = &p.effects;
         let compliant = e.compliance_stiffness_nm_per_rad > 0.0;
         let effect_on = [e.time_delay_s > 0.0, e.actuator_lag_s > 0.0, e.backlash_rad > 0.0, compliant, compliant];
         let params: Vec<usize> = (0..NPARAMS).filter(|&i| i < FIRST_EFFECT || effect_on[i - FIRST_EFFECT]).collect();
         let mut states: Vec<usize> = (0..10).collect();
         states.extend(powertrain_states(e).into_iter().filter(|&s| s >= 10));
-        let mut v = vec![Variable {
-            vr: 0,
-            name: "time",
-            kind: Kind::Float64,
-            causality: Causality::Independent,
-            slot: Slot::Time,
-            unit: "s",
-            description: "simulation time",
-        }];
-        let push = |v: &mut Vec<Variable>, name, kind, causality, slot, unit, description| {
-            let vr = v.len() as u32;
-            v.push(Variable { vr, name, kind, causality, slot, unit, description });
-        };
+        let mut v = vec![time_row()];
+        let push =
+            |v: &mut Vec<Variable>, name: &'static str, kind, causality, slot, unit, description: &'static str| {
+                let vr = v.len() as u32;
+                let constraint = match slot {
+                    Slot::Param(i) => PARAMETERS[i].3,
+                    _ => Constraint::Finite,
+                };
+                v.push(Variable {
+                    vr,
+                    name: name.into(),
+                    kind,
+                    causality,
+                    slot,
+                    unit,
+                    description: description.into(),
+                    constraint,
+                });
+            };
         let float = Kind::Float64;
         // the always-present variables first, at fixed value references
         for &i in params.iter().filter(|&&i| i < FIRST_EFFECT) {
@@ -339,32 +355,180 @@ impl Table {
             .iter()
             .map(|s| STATE_DERIVATIVES.iter().find(|d| d.0 == *s).and_then(|d| states.iter().position(|&x| x == d.1)))
             .collect();
-        Table { variables: v, states, derivative_state }
+        let nominal = states.iter().map(|&s| STATES[s].3).collect();
+        Table { variables: v, states, derivative_state, nominal }
+    }
+
+    /// The table of a drive model: its parameters (`plant::DriveModel::parameter_list`), its
+    /// states (positions and speeds as outputs, lagged inputs), the speeds' and lags'
+    /// derivatives, the couplings' forces (outputs) and the inputs; every name from the plant's
+    /// one set of signal names.
+    fn of_drive(m: &DriveModel) -> Table {
+        let domain = m.line.domain;
+        let mut v = vec![time_row()];
+        let mut push = |name: String, causality, slot, unit, description: String, constraint| {
+            let vr = v.len() as u32;
+            v.push(Variable {
+                vr,
+                name: name.into(),
+                kind: Kind::Float64,
+                causality,
+                slot,
+                unit,
+                description: description.into(),
+                constraint,
+            });
+        };
+        for (i, p) in m.parameter_list().into_iter().enumerate() {
+            let constraint = if p.zero_allowed { Constraint::NonNegative } else { Constraint::Positive };
+            push(p.name, Causality::Parameter, Slot::Param(i), unit_of(p.dimension, domain), p.description, constraint);
+        }
+        let names = m.state_names();
+        let n = m.line.bodies.len();
+        let nx = names.len();
+        let (q, w, f) = (
+            unit_of(Dimension::Coordinate, domain),
+            unit_of(Dimension::Speed, domain),
+            unit_of(Dimension::Force, domain),
+        );
+        let (acc, rate) = match domain {
+            Domain::Rotational => ("rad/s2", "N.m/s"),
+            Domain::Translational => ("m/s2", "N/s"),
+        };
+        let bodies: Vec<&str> = m.line.bodies.iter().map(|b| b.name.as_str()).collect();
+        for (k, name) in names.iter().enumerate() {
+            let (unit, description) = if k < n {
+                (q, format!("position (angle) of {}", bodies[k]))
+            } else if k < 2 * n {
+                (w, format!("speed of {}", bodies[k - n]))
+            } else {
+                (f, "force (torque) after the actuator lag".to_string())
+            };
+            push(name.clone(), Causality::Output, Slot::State(k), unit, description, Constraint::Finite);
+        }
+        for (k, name) in names.iter().enumerate().skip(n) {
+            let unit = if k < 2 * n { acc } else { rate };
+            push(
+                format!("der({name})"),
+                Causality::Local,
+                Slot::Derivative(k),
+                unit,
+                "state derivative".into(),
+                Constraint::Finite,
+            );
+        }
+        for (i, name) in m.coupling_force_names().into_iter().enumerate() {
+            let description = format!("force (torque) in coupling {} ({}-{})", i + 1, bodies[i], bodies[i + 1]);
+            push(name, Causality::Output, Slot::Torque(i), f, description, Constraint::Finite);
+        }
+        for (j, name) in m.input_names().into_iter().enumerate() {
+            let description = format!("force (torque) on {}", bodies[m.inputs[j]]);
+            push(name, Causality::Input, Slot::Input(j), f, description, Constraint::Finite);
+        }
+        let derivative_state = (0..nx).map(|k| (k < n).then_some(k + n)).collect();
+        Table { variables: v, states: Vec::new(), derivative_state, nominal: vec![1.0; nx] }
     }
 
     /// Number of continuous states.
     pub fn nx(&self) -> usize {
-        self.states.len()
+        self.nominal.len()
     }
 
     /// The nominal of each continuous state, in state-vector order.
     pub fn nominals(&self) -> impl Iterator<Item = f64> + '_ {
-        self.states.iter().map(|&s| STATES[s].3)
+        self.nominal.iter().copied()
     }
 
     /// The variable with value reference `vr`: value references are the table's indices.
-    pub fn lookup(&self, vr: u32) -> Option<Variable> {
-        self.variables.get(vr as usize).copied()
+    pub fn lookup(&self, vr: u32) -> Option<&Variable> {
+        self.variables.get(vr as usize)
     }
 
     /// The variable of `slot`.
-    pub fn find(&self, slot: Slot) -> Option<Variable> {
-        self.variables.iter().find(|v| v.slot == slot).copied()
+    pub fn find(&self, slot: Slot) -> Option<&Variable> {
+        self.variables.iter().find(|v| v.slot == slot)
+    }
+
+    /// Number of inputs.
+    pub fn nu(&self) -> usize {
+        self.variables.iter().filter(|v| v.causality == Causality::Input).count()
     }
 }
 
-/// The float parameters of a parameter set, in [`PARAMETERS`] order.
-pub fn parameter_values(p: &FmuParams) -> [f64; NPARAMS] {
+fn time_row() -> Variable {
+    Variable {
+        vr: 0,
+        name: "time".into(),
+        kind: Kind::Float64,
+        causality: Causality::Independent,
+        slot: Slot::Time,
+        unit: "s",
+        description: "simulation time".into(),
+        constraint: Constraint::Finite,
+    }
+}
+
+/// The FMI unit of a drive-model quantity in its domain.
+pub fn unit_of(d: Dimension, domain: Domain) -> &'static str {
+    let rotational = domain == Domain::Rotational;
+    match d {
+        Dimension::Inertia => {
+            if rotational {
+                "kg.m2"
+            } else {
+                "kg"
+            }
+        }
+        Dimension::Stiffness => {
+            if rotational {
+                "N.m/rad"
+            } else {
+                "N/m"
+            }
+        }
+        Dimension::Damping => {
+            if rotational {
+                "N.m.s/rad"
+            } else {
+                "N.s/m"
+            }
+        }
+        Dimension::Force => {
+            if rotational {
+                "N.m"
+            } else {
+                "N"
+            }
+        }
+        Dimension::Coordinate => {
+            if rotational {
+                "rad"
+            } else {
+                "m"
+            }
+        }
+        Dimension::Speed => {
+            if rotational {
+                "rad/s"
+            } else {
+                "m/s"
+            }
+        }
+        Dimension::Time => "s",
+        Dimension::Ratio => "1",
+    }
+}
+
+/// The float parameters of a parameter set: the rig's in [`PARAMETERS`] order, a drive
+/// model's in `plant::DriveModel::parameter_list` order.
+pub fn parameter_values(p: &FmuParams) -> Vec<f64> {
+    if let Some(m) = &p.drive {
+        return m.parameter_list().iter().map(|q| q.value).collect();
+    }
+    rig_parameter_values(p).to_vec()
+}
+
+fn rig_parameter_values(p: &FmuParams) -> [f64; NPARAMS] {
     let w = &p.powertrain;
     let b = &p.bearing;
     let (k, c, m) = (b.element.k_n_per_m, b.element.c_ns_per_m, b.element.m_kg);
@@ -407,8 +571,15 @@ pub fn parameter_values(p: &FmuParams) -> [f64; NPARAMS] {
     ]
 }
 
-/// The parameter set of float parameters `v` (in [`PARAMETERS`] order) and variant 1..=4.
-pub fn parameter_set(v: &[f64; NPARAMS], variant: i32) -> Result<FmuParams, String> {
+/// The parameter set of float parameters `v` and variant 1..=4, of the structure of `like`
+/// (the rig's, or a drive model's with its bodies, couplings, inputs and effects).
+pub fn parameter_set(like: &FmuParams, v: &[f64], variant: i32) -> Result<FmuParams, String> {
+    if let Some(m) = &like.drive {
+        let drive = m.with_parameter_values(v).map_err(|e| e.to_string())?;
+        return Ok(FmuParams { drive: Some(drive), ..like.clone() });
+    }
+    let v: &[f64; NPARAMS] =
+        v.try_into().map_err(|_| format!("{} parameter values for the rig's {NPARAMS}", v.len()))?;
     use plant::{BearingModel, Coefficients, RigParams, Support, Variant};
     let variant = match variant {
         1 => Variant::V1,
@@ -449,6 +620,7 @@ pub fn parameter_set(v: &[f64; NPARAMS], variant: i32) -> Result<FmuParams, Stri
             compliance_stiffness_nm_per_rad: v[32],
             compliance_motor_fraction: v[33],
         },
+        drive: None,
     })
 }
 
@@ -472,7 +644,7 @@ mod tests {
         assert_eq!(t.nx(), 10);
         for (i, v) in t.variables.iter().enumerate() {
             assert_eq!(v.vr as usize, i, "value references are the table's indices");
-            assert_eq!(t.lookup(v.vr), Some(*v));
+            assert_eq!(t.lookup(v.vr), Some(v));
         }
         assert_eq!(t.lookup(999), None);
         // the always-present groups keep their value references
@@ -497,7 +669,7 @@ mod tests {
         let t = Table::new(&p);
         assert_eq!(t.nx(), 13);
         assert_eq!(&t.variables[..base.variables.len()], &base.variables[..]);
-        let names: Vec<&str> = t.variables[base.variables.len()..].iter().map(|v| v.name).collect();
+        let names: Vec<&str> = t.variables[base.variables.len()..].iter().map(|v| v.name.as_ref()).collect();
         assert_eq!(
             names,
             [
@@ -524,7 +696,7 @@ mod tests {
         let p = FmuParams::default();
         let mut p = p;
         p.effects.backlash_rad = 0.002;
-        let back = parameter_set(&parameter_values(&p), variant_number(p.variant)).unwrap();
+        let back = parameter_set(&p, &parameter_values(&p), variant_number(p.variant)).unwrap();
         assert_eq!(back.effects, p.effects);
         assert_eq!(parameter_values(&back), parameter_values(&p));
         let a = p.powertrain.open_differential(p.variant).unwrap().stiffness_matrix();

@@ -99,6 +99,42 @@ impl Effect {
     }
 }
 
+/// What a parameter measures; its unit follows from the line's domain.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Dimension {
+    /// kg m² or kg.
+    Inertia,
+    /// Nm/rad or N/m.
+    Stiffness,
+    /// Nm s/rad or N s/m.
+    Damping,
+    /// Nm or N.
+    Force,
+    /// rad or m.
+    Coordinate,
+    /// rad/s or m/s.
+    Speed,
+    /// s.
+    Time,
+    /// Dimensionless.
+    Ratio,
+}
+
+/// One parameter of a [`DriveModel`]: what an FMU exposes and a fit moves.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Parameter {
+    /// Structured name, e.g. `motor.inertia`, `coupling_1.stiffness`, `M_motor.delay`.
+    pub name: String,
+    /// What it measures.
+    pub dimension: Dimension,
+    /// In words.
+    pub description: String,
+    /// Its value, SI.
+    pub value: f64,
+    /// Whether 0 is allowed (drags and dampings); else it must be > 0.
+    pub zero_allowed: bool,
+}
+
 /// A line of bodies, the forces measured on them and the effects: the model of a `drive_test`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct DriveModel {
@@ -166,32 +202,182 @@ impl DriveModel {
         2 * self.line.bodies.len() + self.effects.iter().filter(|e| matches!(e, Effect::ActuatorLag { .. })).count()
     }
 
-    /// State names: `phi_<body>`/`x_<body>`, `w_<body>`/`v_<body>`, `F_lagged_<input>`.
+    /// The bodies' names as identifiers (letters, digits, `_`; not starting with a digit), the
+    /// stem of every signal and parameter name; `body_<i>` for all when two would coincide.
+    pub fn body_labels(&self) -> Vec<String> {
+        let label = |name: &str| {
+            let mut s: String = name.chars().map(|c| if c.is_ascii_alphanumeric() { c } else { '_' }).collect();
+            if s.is_empty() || s.starts_with(|c: char| c.is_ascii_digit()) {
+                s.insert(0, '_');
+            }
+            s
+        };
+        let labels: Vec<String> = self.line.bodies.iter().map(|b| label(&b.name)).collect();
+        if (1..labels.len()).any(|i| labels[..i].contains(&labels[i])) {
+            return (1..=labels.len()).map(|i| format!("body_{i}")).collect();
+        }
+        labels
+    }
+
+    /// Signal names of one set for the CLI, the FMU, the MPC and the JSON: states
+    /// `phi_<body>`/`x_<body>`, `w_<body>`/`v_<body>`, `<input>_lagged` (the force after an actuator lag).
     pub fn state_names(&self) -> Vec<String> {
         let rotational = self.line.domain == crate::line::Domain::Rotational;
         let (q, v) = if rotational { ("phi", "w") } else { ("x", "v") };
-        let body = |b: &crate::line::LineBody| b.name.replace(' ', "_");
-        let mut s: Vec<String> = self.line.bodies.iter().map(|b| format!("{q}_{}", body(b))).collect();
-        s.extend(self.line.bodies.iter().map(|b| format!("{v}_{}", body(b))));
+        let labels = self.body_labels();
+        let mut s: Vec<String> = labels.iter().map(|b| format!("{q}_{b}")).collect();
+        s.extend(labels.iter().map(|b| format!("{v}_{b}")));
+        let inputs = self.input_names();
         for e in &self.effects {
             if let Effect::ActuatorLag { input, .. } = e {
-                s.push(format!("F_lagged_{}", input + 1));
+                s.push(format!("{}_lagged", inputs[*input]));
             }
         }
         s
     }
 
+    /// Input names: `M_<body>` (rotational) or `F_<body>`, `_2`, `_3`… for further inputs on
+    /// one body.
+    pub fn input_names(&self) -> Vec<String> {
+        let f = if self.line.domain == crate::line::Domain::Rotational { "M" } else { "F" };
+        let labels = self.body_labels();
+        let mut out: Vec<String> = Vec::with_capacity(self.inputs.len());
+        for (j, &b) in self.inputs.iter().enumerate() {
+            let before = self.inputs[..j].iter().filter(|&&o| o == b).count();
+            let stem = format!("{f}_{}", labels.get(b).map_or("?", String::as_str));
+            out.push(if before == 0 { stem } else { format!("{stem}_{}", before + 1) });
+        }
+        out
+    }
+
+    /// Coupling force names: `T_coupling_<i>` (rotational) or `F_coupling_<i>`, 1-based.
+    pub fn coupling_force_names(&self) -> Vec<String> {
+        let f = if self.line.domain == crate::line::Domain::Rotational { "T" } else { "F" };
+        (1..self.line.bodies.len()).map(|i| format!("{f}_coupling_{i}")).collect()
+    }
+
+    /// Every parameter of the model as one list: the bodies' inertias and drags, the
+    /// couplings' stiffnesses, dampings and ratios, then each effect's parameters, in the
+    /// order of `effects`. [`DriveModel::with_parameter_values`] takes values in this order.
+    pub fn parameter_list(&self) -> Vec<Parameter> {
+        use Dimension as D;
+        let labels = self.body_labels();
+        let inputs = self.input_names();
+        let p = |name: String, dimension, description: String, value, zero_allowed| Parameter {
+            name,
+            dimension,
+            description,
+            value,
+            zero_allowed,
+        };
+        let mut out = Vec::new();
+        for (b, l) in self.line.bodies.iter().zip(&labels) {
+            out.push(p(format!("{l}.inertia"), D::Inertia, format!("inertia (mass) of {}", b.name), b.inertia, false));
+            out.push(p(format!("{l}.drag"), D::Damping, format!("viscous drag of {} to ground", b.name), b.drag, true));
+        }
+        for (i, c) in self.line.couplings.iter().enumerate() {
+            let (a, b) = (&self.line.bodies[i].name, &self.line.bodies[i + 1].name);
+            let k = i + 1;
+            out.push(p(
+                format!("coupling_{k}.stiffness"),
+                D::Stiffness,
+                format!("stiffness {a}-{b}"),
+                c.stiffness,
+                false,
+            ));
+            out.push(p(format!("coupling_{k}.damping"), D::Damping, format!("damping {a}-{b}"), c.damping, true));
+            out.push(p(
+                format!("coupling_{k}.ratio"),
+                D::Ratio,
+                format!("gear ratio, speed of {a} per speed of {b}"),
+                c.ratio,
+                false,
+            ));
+        }
+        for e in &self.effects {
+            match *e {
+                Effect::CoulombFriction { body, friction, smoothing_speed } => {
+                    let l = &labels[body];
+                    out.push(p(format!("{l}.friction"), D::Force, format!("Coulomb friction at {l}"), friction, false));
+                    out.push(p(
+                        format!("{l}.friction_smoothing_speed"),
+                        D::Speed,
+                        format!("speed of the friction's smoothing F v/sqrt(v^2 + v_s^2) at {l}"),
+                        smoothing_speed,
+                        false,
+                    ));
+                }
+                Effect::Backlash { coupling, backlash } => out.push(p(
+                    format!("coupling_{}.backlash", coupling + 1),
+                    D::Coordinate,
+                    format!("total play of coupling {}", coupling + 1),
+                    backlash,
+                    false,
+                )),
+                Effect::TimeDelay { input, delay_s } => out.push(p(
+                    format!("{}.delay", inputs[input]),
+                    D::Time,
+                    format!("dead time of input {}", inputs[input]),
+                    delay_s,
+                    false,
+                )),
+                Effect::ActuatorLag { input, time_constant_s } => out.push(p(
+                    format!("{}.time_constant", inputs[input]),
+                    D::Time,
+                    format!("first-order lag of input {}", inputs[input]),
+                    time_constant_s,
+                    false,
+                )),
+            }
+        }
+        out
+    }
+
+    /// The model with parameter values `v` in [`DriveModel::parameter_list`] order (same
+    /// structure: bodies, couplings, inputs and effects kept), validated.
+    pub fn with_parameter_values(&self, v: &[f64]) -> Result<DriveModel> {
+        let expected = self.parameter_list().len();
+        if v.len() != expected {
+            return Err(PlantError::Invalid(format!("{} parameter values for a model of {expected}", v.len())));
+        }
+        let mut m = self.clone();
+        let mut it = v.iter().copied();
+        let mut next = || it.next().unwrap_or(f64::NAN);
+        for b in &mut m.line.bodies {
+            b.inertia = next();
+            b.drag = next();
+        }
+        for c in &mut m.line.couplings {
+            c.stiffness = next();
+            c.damping = next();
+            c.ratio = next();
+        }
+        for e in &mut m.effects {
+            match e {
+                Effect::CoulombFriction { friction, smoothing_speed, .. } => {
+                    *friction = next();
+                    *smoothing_speed = next();
+                }
+                Effect::Backlash { backlash, .. } => *backlash = next(),
+                Effect::TimeDelay { delay_s, .. } => *delay_s = next(),
+                Effect::ActuatorLag { time_constant_s, .. } => *time_constant_s = next(),
+            }
+        }
+        m.validate()?;
+        Ok(m)
+    }
+
     /// The linearisation in contact with friction left out: ẋ = A x + B u (u: the inputs after
     /// their dead time). Exact for a model without friction and backlash.
     pub fn linearisation(&self) -> Result<(DMatrix<f64>, DMatrix<f64>)> {
-        let p = Prepared::new(self)?;
+        let p = Dynamics::new(self)?;
         Ok(p.linear())
     }
 
     /// Fastest rate of the linearisation, max |λ(A)| (1/s): what sets an explicit integrator's
     /// step.
     pub fn fastest_linear_rate(&self) -> Result<f64> {
-        Ok(Prepared::new(self)?.linear_rate())
+        Ok(Dynamics::new(self)?.linear_rate())
     }
 
     /// Simulates the model from rest (every body at `initial_speed` of the first body, through
@@ -204,13 +390,15 @@ impl DriveModel {
         initial_speed: f64,
         outputs: &[(Quantity, usize)],
     ) -> Result<Vec<Vec<f64>>> {
-        let p = Prepared::new(self)?;
+        let p = Dynamics::new(self)?;
         p.simulate(inputs, dt_s, initial_speed, outputs)
     }
 }
 
-/// Everything the integrators need, in flat arrays.
-struct Prepared {
+/// The model's right-hand side, outputs, linearisation and RK4 step, in flat arrays: what the
+/// record simulation, the FMU and the diagnosis integrate, so all three integrate one model.
+#[derive(Debug, Clone)]
+pub struct Dynamics {
     n: usize,
     inv_j: Vec<f64>,
     drag: Vec<f64>,
@@ -224,8 +412,9 @@ struct Prepared {
     nonlinear: bool,
 }
 
-impl Prepared {
-    fn new(m: &DriveModel) -> Result<Prepared> {
+impl Dynamics {
+    /// The dynamics of a validated model.
+    pub fn new(m: &DriveModel) -> Result<Dynamics> {
         m.validate()?;
         let n = m.line.bodies.len();
         let mut couplings: Vec<(f64, f64, f64, f64)> =
@@ -245,7 +434,7 @@ impl Prepared {
                 }
             }
         }
-        Ok(Prepared {
+        Ok(Dynamics {
             n,
             inv_j: m.line.bodies.iter().map(|b| 1.0 / b.inertia).collect(),
             drag: m.line.bodies.iter().map(|b| b.drag).collect(),
@@ -259,7 +448,7 @@ impl Prepared {
 
     /// ẋ = f(x, u): `u` the inputs after their dead time.
     #[inline]
-    fn rhs(&self, x: &[f64], u: &[f64], dx: &mut [f64]) {
+    pub fn rhs(&self, x: &[f64], u: &[f64], dx: &mut [f64]) {
         let n = self.n;
         let (q, v) = (&x[..n], &x[n..2 * n]);
         let (dq, rest) = dx.split_at_mut(n);
@@ -291,9 +480,9 @@ impl Prepared {
     }
 
     /// A and B of the contact piece without friction.
-    fn linear(&self) -> (DMatrix<f64>, DMatrix<f64>) {
+    pub fn linear(&self) -> (DMatrix<f64>, DMatrix<f64>) {
         let (ns, m) = (self.nstates, self.inputs.len());
-        let linear = Prepared {
+        let linear = Dynamics {
             couplings: self.couplings.iter().map(|&(c, d, r, _)| (c, d, r, 0.0)).collect(),
             friction: vec![(0.0, 1.0); self.n],
             inv_j: self.inv_j.clone(),
@@ -326,7 +515,58 @@ impl Prepared {
         self.linear().0.complex_eigenvalues().iter().map(|l| l.norm()).fold(0.0, f64::max)
     }
 
-    fn output(&self, x: &[f64], what: (Quantity, usize)) -> f64 {
+    /// The rate an RK4 sub-step must resolve, 1/s: the fastest of the contact piece (lags
+    /// included) and of the friction's smoothing slope F_c/(v_s·J); sub-steps h ≤
+    /// [`RK4_STEP_TIMES_RATE`] / rate.
+    pub fn rk4_rate(&self) -> f64 {
+        let mut rate = self.linear_rate();
+        for (i, &(fc, vs)) in self.friction.iter().enumerate() {
+            if fc > 0.0 {
+                rate = rate.max(fc / vs * self.inv_j[i]);
+            }
+        }
+        rate
+    }
+
+    /// Number of states.
+    pub fn nstates(&self) -> usize {
+        self.nstates
+    }
+
+    /// Number of inputs.
+    pub fn ninputs(&self) -> usize {
+        self.inputs.len()
+    }
+
+    /// Dead time of input `j`, s (0: none).
+    pub fn delay_s(&self, j: usize) -> f64 {
+        self.inputs.get(j).map_or(0.0, |i| i.1)
+    }
+
+    /// True when friction or backlash make the right-hand side nonlinear.
+    pub fn is_nonlinear(&self) -> bool {
+        self.nonlinear
+    }
+
+    /// The state at rest in rigid motion: the first body at `speed`, the others at it through
+    /// the gear ratios, each lagged input at `inputs[j]` (its steady value).
+    pub fn initial_state(&self, speed: f64, inputs: &[f64]) -> Vec<f64> {
+        let n = self.n;
+        let mut x = vec![0.0; self.nstates];
+        x[n] = speed;
+        for (i, &(_, _, inv_r, _)) in self.couplings.iter().enumerate() {
+            x[n + i + 1] = x[n + i] * inv_r;
+        }
+        for (k, &(_, _, tau, z)) in self.inputs.iter().enumerate() {
+            if tau > 0.0 {
+                x[z] = inputs.get(k).copied().unwrap_or(0.0);
+            }
+        }
+        x
+    }
+
+    /// An output at state `x`: a body's position or speed, a coupling's force.
+    pub fn output(&self, x: &[f64], what: (Quantity, usize)) -> f64 {
         let n = self.n;
         match what {
             (Quantity::Position, i) => x[i],
@@ -385,17 +625,9 @@ impl Prepared {
         let pieces: Vec<(f64, f64)> =
             starts.iter().enumerate().map(|(p, &s)| (s, starts.get(p + 1).copied().unwrap_or(1.0) - s)).collect();
 
-        let mut x = vec![0.0; ns];
         // rigid motion at the initial speed; lagged inputs start at their first value
-        x[n] = initial_speed;
-        for (i, &(_, _, inv_r, _)) in self.couplings.iter().enumerate() {
-            x[n + i + 1] = x[n + i] * inv_r;
-        }
-        for (k, &(_, _, tau, z)) in self.inputs.iter().enumerate() {
-            if tau > 0.0 {
-                x[z] = inputs[k].first().copied().unwrap_or(0.0);
-            }
-        }
+        let first: Vec<f64> = inputs.iter().map(|u| u.first().copied().unwrap_or(0.0)).collect();
+        let mut x = self.initial_state(initial_speed, &first);
         let mut y: Vec<Vec<f64>> = outputs.iter().map(|_| Vec::with_capacity(len)).collect();
         let mut u = vec![0.0; m];
         let input_at = |u: &mut [f64], k: usize, phase: f64| {
@@ -436,14 +668,7 @@ impl Prepared {
             return Ok(y);
         }
 
-        // RK4 sub-steps: the fastest rate of the contact piece (lags included) and of the
-        // friction's smoothing slope
-        let mut rate = self.linear_rate();
-        for (i, &(fc, vs)) in self.friction.iter().enumerate() {
-            if fc > 0.0 {
-                rate = rate.max(fc / vs * self.inv_j[i]);
-            }
-        }
+        let rate = self.rk4_rate();
         if !rate.is_finite() {
             return Err(PlantError::Numerical("the model's rates are not finite".into()));
         }
@@ -474,7 +699,9 @@ impl Prepared {
         Ok(y)
     }
 
-    fn rk4(&self, x: &mut [f64], u: &[f64], h: f64, w: &mut [Vec<f64>]) {
+    /// One classical RK4 step of length `h` with `u` held; `w` five work vectors of the state's
+    /// length.
+    pub fn rk4(&self, x: &mut [f64], u: &[f64], h: f64, w: &mut [Vec<f64>]) {
         let [k1, k2, k3, k4, xt] = w else { return };
         self.rhs(x, u, k1);
         for i in 0..x.len() {

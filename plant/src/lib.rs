@@ -42,7 +42,7 @@ pub mod statespace;
 pub use bearing::{BearingModel, CoefficientTable, Coefficients, Support};
 pub use bending::{Beam, BeamSegment, Deflection};
 pub use chain::{Body, Chain};
-pub use drive::{DriveModel, Effect};
+pub use drive::{Dimension, DriveModel, Dynamics, Effect, Parameter};
 pub use error::{PlantError, Result};
 pub use line::{Coupling, Domain, Line, LineBody, Quantity};
 pub use mechanical::{Layout, MechanicalModel, Output, Spring};

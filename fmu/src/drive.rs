@@ -1,0 +1,241 @@
+//! The FMU's dynamics of a drivetrain model (`plant::DriveModel`: a line of bodies, couplings
+//! and gear stages with its effects). The right-hand side, the outputs and the RK4 step are
+//! `plant::Dynamics`' — the ones the diagnosis simulated the record with — so the FMU replays the
+//! diagnosis's model, not a copy of it. The states are the plant's: positions, speeds, one per
+//! lagged input. Co-simulation: the step is split where a delayed input changes (each input's
+//! own dead time, from its history); each piece is exact (ZOH of the linear model, cached per
+//! piece length) without friction and backlash, else RK4 sub-steps with h·|λ|max ≤
+//! `plant::drive::RK4_STEP_TIMES_RATE`, as the record simulation takes them.
+
+use nalgebra::{DMatrix, DVector};
+
+use plant::drive::RK4_STEP_TIMES_RATE;
+use plant::effects::DelayLine;
+use plant::{DriveModel, Dynamics, Quantity};
+
+use crate::model::MAX_PIECES;
+
+/// Discretisations kept (a master uses one or a few step sizes; dead times add piece lengths).
+const CACHE: usize = 8;
+
+/// The dynamics of one drive model and the buffers of its step.
+#[derive(Debug)]
+pub struct DriveDynamics {
+    /// The plant's model.
+    pub dynamics: Dynamics,
+    a: DMatrix<f64>,
+    b: DMatrix<f64>,
+    /// Longest exact piece, s: ‖[A B]‖₁ · piece = `plant::statespace::ZOH_MAX_NORM` / 2^10.
+    max_piece_s: f64,
+    /// The rate RK4 sub-steps resolve, 1/s.
+    rate: f64,
+    cache: Vec<(f64, DMatrix<f64>, DMatrix<f64>)>,
+    breaks: Vec<f64>,
+    segments: Vec<(f64, f64)>,
+    u_piece: Vec<f64>,
+    u_vec: DVector<f64>,
+    couplings: usize,
+    xs: DVector<f64>,
+    next: DVector<f64>,
+    work: Vec<Vec<f64>>,
+}
+
+impl DriveDynamics {
+    /// The dynamics of `m`; the error names what is wrong.
+    pub fn new(m: &DriveModel) -> Result<DriveDynamics, String> {
+        let dynamics = Dynamics::new(m).map_err(|e| e.to_string())?;
+        let (a, b) = dynamics.linear();
+        if a.iter().chain(b.iter()).any(|v| !v.is_finite()) {
+            return Err("the parameters give a system matrix with non-finite entries".into());
+        }
+        let norm = (0..a.ncols())
+            .map(|j| a.column(j).abs().sum())
+            .chain((0..b.ncols()).map(|j| b.column(j).abs().sum()))
+            .fold(0.0, f64::max);
+        let rate = dynamics.rk4_rate();
+        if !rate.is_finite() {
+            return Err("the model's rates are not finite".into());
+        }
+        let nx = dynamics.nstates();
+        let nu = dynamics.ninputs();
+        Ok(DriveDynamics {
+            max_piece_s: plant::statespace::ZOH_MAX_NORM / 1024.0 / norm.max(1e-300),
+            rate,
+            a,
+            b,
+            cache: Vec::with_capacity(CACHE),
+            breaks: Vec::new(),
+            segments: Vec::new(),
+            u_piece: vec![0.0; nu],
+            u_vec: DVector::zeros(nu),
+            couplings: m.line.couplings.len(),
+            xs: DVector::zeros(nx),
+            next: DVector::zeros(nx),
+            work: vec![vec![0.0; nx]; 5],
+            dynamics,
+        })
+    }
+
+    /// Number of states.
+    pub fn nx(&self) -> usize {
+        self.dynamics.nstates()
+    }
+
+    /// ẋ at state `x` with the inputs acting now (after their dead times).
+    pub fn derivatives(&self, x: &[f64], u_acting: &[f64], out: &mut [f64]) {
+        self.dynamics.rhs(x, u_acting, out);
+    }
+
+    /// Force (torque) of coupling `i` at state `x`.
+    pub fn coupling_force(&self, x: &[f64], i: usize) -> f64 {
+        self.dynamics.output(x, (Quantity::CouplingForce, i))
+    }
+
+    /// ∂ẋ/∂[x u] and ∂(coupling forces)/∂x at `x`, `u` by central differences of the plant's
+    /// right-hand side (exact for the linear pieces up to rounding; the friction's smoothed
+    /// slope and the backlash's piece where the state is). Steps: 1e-6 of the variable's size
+    /// or of 1e-3 (a step of 1e-6 rad on a mrad twist).
+    pub fn jacobians(&self, x: &[f64], u: &[f64]) -> (DMatrix<f64>, DMatrix<f64>, DMatrix<f64>) {
+        let (nx, nu) = (x.len(), u.len());
+        let nc = self.couplings;
+        let mut a = DMatrix::zeros(nx, nx);
+        let mut b = DMatrix::zeros(nx, nu);
+        let mut c = DMatrix::zeros(nc, nx);
+        let (mut xp, mut up) = (x.to_vec(), u.to_vec());
+        let (mut fp, mut fm) = (vec![0.0; nx], vec![0.0; nx]);
+        for j in 0..nx + nu {
+            let v = if j < nx { x[j] } else { u[j - nx] };
+            let h = 1e-6 * v.abs().max(1e-3);
+            let set = |xp: &mut Vec<f64>, up: &mut Vec<f64>, to: f64| {
+                if j < nx {
+                    xp[j] = to
+                } else {
+                    up[j - nx] = to
+                }
+            };
+            set(&mut xp, &mut up, v + h);
+            self.dynamics.rhs(&xp, &up, &mut fp);
+            let cp: Vec<f64> = (0..nc).map(|i| self.coupling_force(&xp, i)).collect();
+            set(&mut xp, &mut up, v - h);
+            self.dynamics.rhs(&xp, &up, &mut fm);
+            let cm: Vec<f64> = (0..nc).map(|i| self.coupling_force(&xp, i)).collect();
+            set(&mut xp, &mut up, v);
+            for i in 0..nx {
+                let d = (fp[i] - fm[i]) / (2.0 * h);
+                if j < nx {
+                    a[(i, j)] = d;
+                } else {
+                    b[(i, j - nx)] = d;
+                }
+            }
+            if j < nx {
+                for i in 0..nc {
+                    c[(i, j)] = (cp[i] - cm[i]) / (2.0 * h);
+                }
+            }
+        }
+        (a, b, c)
+    }
+
+    /// One communication step of `x` over [t, t + h] with the inputs `u` set now (input j's
+    /// past values in `delays[j]` when it has a dead time). A step longer than
+    /// [`MAX_PIECES`] pieces or sub-steps is refused, and so is a state that comes out
+    /// non-finite; `x` is then left as it was. Allocates only when a new piece length is
+    /// discretised.
+    pub fn step(
+        &mut self,
+        x: &mut DVector<f64>,
+        u: &[f64],
+        t: f64,
+        h: f64,
+        delays: &[DelayLine],
+    ) -> Result<(), String> {
+        let nonlinear = self.dynamics.is_nonlinear();
+        let sub_steps = if nonlinear { h * self.rate / RK4_STEP_TIMES_RATE } else { h / self.max_piece_s };
+        if sub_steps.is_nan() || sub_steps > MAX_PIECES as f64 {
+            return Err(format!("a step of {h} s needs more than {MAX_PIECES} pieces for this model"));
+        }
+        // the instants in (t, t+h) where a delayed input switches
+        self.breaks.clear();
+        self.breaks.push(t);
+        for (j, line) in delays.iter().enumerate() {
+            let tau = self.dynamics.delay_s(j);
+            if tau > 0.0 {
+                self.segments.clear();
+                line.segments(t, t + h, tau, u[j], &mut self.segments);
+                let mut at = t;
+                for &(len, _) in &self.segments[..self.segments.len().saturating_sub(1)] {
+                    at += len;
+                    self.breaks.push(at);
+                }
+            }
+        }
+        self.breaks.push(t + h);
+        self.breaks.sort_by(|a, b| a.total_cmp(b));
+        let tol = 1e-12 * h.max(t.abs());
+        self.breaks.dedup_by(|b, a| (*b - *a).abs() <= tol);
+        if self.breaks.len() < 2 {
+            self.breaks.push(t + h);
+        }
+        let mut state = std::mem::take(&mut self.xs);
+        state.copy_from(x);
+        let mut result = Ok(());
+        for p in 0..self.breaks.len() - 1 {
+            let (a, b) = (self.breaks[p], self.breaks[p + 1]);
+            let len = b - a;
+            if len <= 0.0 {
+                continue;
+            }
+            let mid = 0.5 * (a + b);
+            for (j, value) in self.u_piece.iter_mut().enumerate() {
+                let tau = self.dynamics.delay_s(j);
+                *value = if tau > 0.0 { delays[j].value_at(mid - tau, u[j]) } else { u[j] };
+            }
+            if nonlinear {
+                let n = (len * self.rate / RK4_STEP_TIMES_RATE - 1e-9).ceil().max(1.0) as usize;
+                for _ in 0..n {
+                    self.dynamics.rk4(state.as_mut_slice(), &self.u_piece, len / n as f64, &mut self.work);
+                }
+            } else {
+                let n = (len / self.max_piece_s).ceil().max(1.0) as usize;
+                let i = match self.discretise(len / n as f64) {
+                    Ok(i) => i,
+                    Err(e) => {
+                        result = Err(e);
+                        break;
+                    }
+                };
+                self.u_vec.copy_from_slice(&self.u_piece);
+                for _ in 0..n {
+                    let (_, ad, bd) = &self.cache[i];
+                    self.next.gemv(1.0, ad, &state, 0.0);
+                    self.next.gemv(1.0, bd, &self.u_vec, 1.0);
+                    state.copy_from(&self.next);
+                }
+            }
+        }
+        if result.is_ok() {
+            if let Some(i) = state.iter().position(|v| !v.is_finite()) {
+                result = Err(format!("state {i} became {} over the step from {t} s", state[i]));
+            } else {
+                x.copy_from(&state);
+            }
+        }
+        self.xs = state;
+        result
+    }
+
+    fn discretise(&mut self, h: f64) -> Result<usize, String> {
+        match self.cache.iter().position(|c| (c.0 - h).abs() <= 1e-12 * h) {
+            Some(i) => Ok(i),
+            None => {
+                let (ad, bd) = plant::zoh(&self.a, &self.b, h).map_err(|e| e.to_string())?;
+                if self.cache.len() == CACHE {
+                    self.cache.remove(0);
+                }
+                self.cache.push((h, ad, bd));
+                Ok(self.cache.len() - 1)
+            }
+        }
+    }
+}

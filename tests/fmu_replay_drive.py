@@ -1,0 +1,58 @@
+"""Replays a drive test's measured inputs through a drive model's FMUs with fmpy; writes the
+outputs as JSON.
+
+    fmu_replay_drive.py FMU_DIR DATA.csv INPUTS START.json OUTPUTS OUT.json ME_SECONDS
+
+INPUTS: comma-separated `csv_column=fmu_input`; OUTPUTS: comma-separated FMU output names.
+Called by tests/diagnose_drive.rs on the FMUs `rigtwin fmu --params` builds from the model
+`rigtwin diagnose --write-model` wrote for a drive_test. Each FMU is first validated by fmpy and
+checked by fmutool. Co-simulation (FMI 3 and 2) runs the whole record at the sampling step, the
+inputs applied at each communication point and held over the step (as a DAQ's command is);
+model exchange (FMI 3 and 2) runs the first ME_SECONDS with CVode, the inputs given as steps
+(each sample repeated at the next sample time) so that the importer holds them too.
+"""
+import csv
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import fmpy
+from fmpy.validation import validate_fmu
+
+fmu_dir, data, inputs, start_file, outputs, out_file, me_seconds = sys.argv[1:8]
+rows = list(csv.DictReader(open(data)))
+t = np.array([float(r["time_s"]) for r in rows])
+pairs = [p.split("=") for p in inputs.split(",")]
+u = {var: np.array([float(r[col]) for r in rows]) for col, var in pairs}
+outputs = outputs.split(",")
+dt = t[1] - t[0]
+start = json.loads(Path(start_file).read_text())
+report = {"validate": {}, "fmutool": {}}
+fmutool = Path(sys.executable).parent / "fmutool"
+
+dtype = [("time", np.float64)] + [(var, np.float64) for _, var in pairs]
+table = np.array([tuple([t[k]] + [u[var][k] for _, var in pairs]) for k in range(len(t))], dtype=dtype)
+n_me = int(round(float(me_seconds) / dt))
+steps = [tuple([t[0]] + [u[var][0] for _, var in pairs])]
+for k in range(1, n_me + 1):
+    steps.append(tuple([t[k]] + [u[var][k - 1] for _, var in pairs]))
+    steps.append(tuple([t[k]] + [u[var][k] for _, var in pairs]))
+held = np.array(steps, dtype=dtype)
+
+for version in ("fmi3", "fmi2"):
+    path = str(Path(fmu_dir) / f"rigtwin-{version}.fmu")
+    report["validate"][version] = [str(p) for p in validate_fmu(path)]
+    run = subprocess.run([str(fmutool), "-input", path, "-check"], capture_output=True, text=True)
+    report["fmutool"][version] = {"returncode": run.returncode, "output": run.stdout + run.stderr}
+    cs = fmpy.simulate_fmu(path, fmi_type="CoSimulation", stop_time=t[-1], step_size=dt, output_interval=dt,
+                           start_values=start, input=table, output=outputs)
+    report[f"{version}_cs"] = {name: cs[name].tolist() for name in outputs}
+    me = fmpy.simulate_fmu(path, fmi_type="ModelExchange", stop_time=t[n_me], output_interval=dt,
+                           relative_tolerance=1e-9, start_values=start, input=held, output=outputs)
+    times = me["time"]
+    keep = [int(np.searchsorted(times, tk + 1e-9)) - 1 for tk in t[: n_me + 1]]
+    report[f"{version}_me"] = {name: me[name][keep].tolist() for name in outputs}
+
+Path(out_file).write_text(json.dumps(report))
