@@ -28,6 +28,14 @@ pub const HIGH_PASS_MIN_HZ: f64 = 0.02;
 /// The fits stop when a step gains less than this fraction of the cost (a 1e-5 change of the
 /// squared error is far below what the information criterion can tell apart).
 pub const LM_REL_TOL: f64 = 1e-5;
+
+/// Levenberg–Marquardt iterations of the screen (an effect's own 1–2 parameters, the declared
+/// inertias and stiffnesses held).
+pub const SCREEN_ITERATIONS: usize = 8;
+
+/// Effects the screen passes on to the full re-fit (with the inertias and stiffnesses), beside
+/// `none` and `damping`.
+pub const SCREEN_KEEP: usize = 2;
 /// A declared inertia or stiffness may be re-fitted within this factor of its declared value.
 pub const MAX_REFIT_FACTOR: f64 = 100.0;
 /// Smoothing speed of a fitted Coulomb friction, as a fraction of the body's RMS speed in the
@@ -404,37 +412,79 @@ pub fn diagnose(rec: DriveRecord, progress: &(dyn Fn(&str) + Sync)) -> Result<Dr
         cands.push(Candidate::ActuatorLag(j));
     }
 
+    // Two stages. Screen: every effect's own parameters fitted with the declared inertias and
+    // stiffnesses held (1–2 parameters, few simulations each). Then the re-fit of everything
+    // (base + own) for `none`, `damping` and the SCREEN_KEEP effects the screen ranks best;
+    // the others keep their screened fit (reported with its own parameter count).
     let nbase = problem.nbase();
-    let fit_one = |i: usize| -> (usize, Vec<f64>, f64) {
+    let label = |c: Candidate| match c {
+        Candidate::None | Candidate::Damping => c.name().to_string(),
+        Candidate::CoulombFriction(b) => format!("{} at {}", c.name(), m0.line.bodies[b].name),
+        Candidate::Backlash(k) => format!("{} in coupling {}", c.name(), k + 1),
+        Candidate::TimeDelay(j) | Candidate::ActuatorLag(j) => format!("{} of input {}", c.name(), j + 1),
+    };
+    let screen_one = |i: usize| -> (usize, Vec<f64>, f64) {
+        let c = cands[i];
+        let problem = &problem;
+        let own = |s: &[f64]| {
+            let mut x = vec![0.0; nbase];
+            x.extend_from_slice(s);
+            problem.residual(c, &x)
+        };
+        let cost_of = |s: &Vec<f64>| own(s).map_or(f64::INFINITY, |r| r.iter().map(|v| v * v).sum::<f64>());
+        let best = problem
+            .starts(c)
+            .into_iter()
+            .map(|s| {
+                let cost = cost_of(&s);
+                (s, cost)
+            })
+            .filter(|g| g.1.is_finite())
+            .min_by(|p, q| p.1.total_cmp(&q.1));
+        let (s, cost) = match best {
+            Some((s0, _)) if !s0.is_empty() => lm::minimise_to(&own, &s0, SCREEN_ITERATIONS, LM_REL_TOL),
+            Some((s0, cost)) => (s0, cost),
+            None => (vec![], f64::INFINITY),
+        };
+        let mut x = vec![0.0; nbase];
+        x.extend(s);
+        (i, x, cost)
+    };
+    let screened: Vec<(usize, Vec<f64>, f64)> = super::on_two_workers(cands.len(), &screen_one);
+    let mut ranked: Vec<&(usize, Vec<f64>, f64)> =
+        screened.iter().filter(|s| !matches!(cands[s.0], Candidate::None | Candidate::Damping)).collect();
+    ranked.sort_by(|a, b| a.2.total_cmp(&b.2));
+    let refit: Vec<usize> = screened
+        .iter()
+        .filter(|s| matches!(cands[s.0], Candidate::None | Candidate::Damping))
+        .chain(ranked.iter().take(SCREEN_KEEP).copied())
+        .map(|s| s.0)
+        .collect();
+    let fit_one = |k: usize| -> (usize, Vec<f64>, f64) {
+        let i = refit[k];
         let c = cands[i];
         let problem = &problem;
         let f = |x: &[f64]| problem.residual(c, x);
-        let cost_at = |s: &Vec<f64>| {
-            let mut x = vec![0.0; nbase];
-            x.extend(s);
-            let cost = f(&x).map(|r| r.iter().map(|v| v * v).sum::<f64>());
-            (x, cost.unwrap_or(f64::INFINITY))
-        };
-        let best = problem.starts(c).iter().map(cost_at).filter(|g| g.1.is_finite()).min_by(|p, q| p.1.total_cmp(&q.1));
-        let (x, cost) = match best {
-            Some((x0, _)) => lm::minimise_to(&f, &x0, 20, LM_REL_TOL),
-            None => (vec![], f64::INFINITY),
-        };
-        progress(&match c {
-            Candidate::None | Candidate::Damping => c.name().to_string(),
-            Candidate::CoulombFriction(b) => format!("{} at {}", c.name(), m0.line.bodies[b].name),
-            Candidate::Backlash(k) => format!("{} in coupling {}", c.name(), k + 1),
-            Candidate::TimeDelay(j) | Candidate::ActuatorLag(j) => format!("{} of input {}", c.name(), j + 1),
-        });
+        let x0 = &screened.iter().find(|s| s.0 == i).expect("screened").1;
+        let (x, cost) = lm::minimise_to(&f, x0, 20, LM_REL_TOL);
+        progress(&label(c));
         (i, x, cost)
     };
-    let fits: Vec<(usize, Vec<f64>, f64)> = super::on_two_workers(cands.len(), &fit_one);
+    // (candidate, parameters, cost, parameters fitted)
+    let mut fits: Vec<(usize, Vec<f64>, f64, usize)> =
+        super::on_two_workers(refit.len(), &fit_one).into_iter().map(|(i, x, c)| (i, x.clone(), c, x.len())).collect();
+    for s in &screened {
+        if !refit.contains(&s.0) {
+            // held base: only the effect's own parameters were fitted
+            fits.push((s.0, s.1.clone(), s.2, s.1.len() - nbase));
+        }
+    }
 
     let nres = r0.len();
     let n_eff = effective_count(nres, lag1_autocorrelation(&r0));
     let norm2 = 1.0; // residuals are already normalised
     let mut scored: Vec<(CandidateScore, DriveModel, f64)> = Vec::new();
-    for (i, x, cost) in fits {
+    for (i, x, cost, fitted) in fits {
         if !cost.is_finite() {
             continue;
         }
@@ -448,8 +498,8 @@ pub fn diagnose(rec: DriveRecord, progress: &(dyn Fn(&str) + Sync)) -> Result<Dr
                 at,
                 parameters: problem.report(c, &m),
                 error_after: cost.sqrt(),
-                score: bic(cost * norm2, nres, n_eff, x.len()),
-                fitted_parameters: x.len(),
+                score: bic(cost * norm2, nres, n_eff, fitted),
+                fitted_parameters: fitted,
             },
             m,
             rho,
