@@ -392,7 +392,17 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         }
         Command::Mpc { horizon, scenario, blocks, formulation, params, time_limit_us, json, plot, export_qp } => {
             let p = match &params {
-                Some(f) => rigtwin::fmu_package::params_of_rig(&load_rig(f)?)?,
+                Some(f) => {
+                    let p = rigtwin::fmu_package::params_of_file(f)?;
+                    if p.drive.is_some() {
+                        anyhow::bail!(
+                            "{}: a drive model: the MPC runs on the paper rig's powertrain only (give a rig file); \
+                             the MPC of a drive model is not built yet",
+                            f.display()
+                        );
+                    }
+                    p
+                }
                 None => rigtwin_fmu::FmuParams::default(),
             };
             let mut settings = mpc::MpcSettings::powertrain(horizon);
