@@ -280,7 +280,7 @@ fn fmu_replays_the_diagnosis(dir: &std::path::Path, v: &serde_json::Value) {
     let w0 = column("speed_motor_radps")[..10].iter().sum::<f64>() / 10.0;
     let start = serde_json::json!({ "w_motor": w0, "w_hub": w0, "w_load": w0 / 4.0 });
     std::fs::write(dir.join("start.json"), start.to_string()).unwrap();
-    let script = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fmu_replay_drive.py");
+    let script = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fmu_replay.py");
     let me_seconds = 2.0;
     let out = Command::new(common::python())
         .arg(script)
@@ -293,7 +293,7 @@ fn fmu_replays_the_diagnosis(dir: &std::path::Path, v: &serde_json::Value) {
         .arg(me_seconds.to_string())
         .output()
         .unwrap();
-    assert!(out.status.success(), "fmu_replay_drive.py: {}", String::from_utf8_lossy(&out.stderr));
+    assert!(out.status.success(), "fmu_replay.py: {}", String::from_utf8_lossy(&out.stderr));
     let r: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(dir.join("replay.json")).unwrap()).unwrap();
     let series = |key: &str, name: &str| -> Vec<f64> {

@@ -1,13 +1,15 @@
-"""Replays a measured drive torque through FMUs with fmpy and writes the load speeds as JSON.
+"""Replays measured inputs through rigtwin's FMUs with fmpy; writes the outputs as JSON.
 
-    fmu_replay.py FMU_DIR BUNDLE.csv START.json OUT.json ME_SECONDS
+    fmu_replay.py FMU_DIR DATA.csv INPUTS START.json OUTPUTS OUT.json ME_SECONDS
 
-Called by tests/diagnose.rs on the FMUs (after fmpy's validation and fmutool's check of each) that `rigtwin fmu --params` builds from the model
-`rigtwin diagnose --write-model` wrote. Co-simulation (FMI 3 and 2) runs the whole record at the
-sampling step, the torque applied at each communication point and held over the step, as the
-rig's converter holds it. Model exchange (FMI 3 and 2) runs the first ME_SECONDS with CVode; the
-torque table is given as steps (each sample repeated at the next sample time), so the importer
-holds it too, and every sample time is an input event.
+INPUTS: comma-separated `csv_column=fmu_input`; OUTPUTS: comma-separated FMU output names.
+Called by tests/diagnose.rs (a sweep through the rig's FMU) and tests/diagnose_drive.rs (a
+drive_test through a drive model's FMU) on the FMUs `rigtwin fmu --params` builds from the model
+`rigtwin diagnose --write-model` wrote. Each FMU is first validated by fmpy and
+checked by fmutool. Co-simulation (FMI 3 and 2) runs the whole record at the sampling step, the
+inputs applied at each communication point and held over the step (as a DAQ's command is);
+model exchange (FMI 3 and 2) runs the first ME_SECONDS with CVode, the inputs given as steps
+(each sample repeated at the next sample time) so that the importer holds them too.
 """
 import csv
 import json
@@ -19,22 +21,25 @@ import numpy as np
 import fmpy
 from fmpy.validation import validate_fmu
 
-fmu_dir, bundle, start_file, out_file, me_seconds = sys.argv[1:6]
-rows = list(csv.DictReader(open(bundle)))
+fmu_dir, data, inputs, start_file, outputs, out_file, me_seconds = sys.argv[1:8]
+rows = list(csv.DictReader(open(data)))
 t = np.array([float(r["time_s"]) for r in rows])
-u = np.array([float(r["torque_drive_Nm"]) for r in rows])
+pairs = [p.split("=") for p in inputs.split(",")]
+u = {var: np.array([float(r[col]) for r in rows]) for col, var in pairs}
+outputs = outputs.split(",")
 dt = t[1] - t[0]
 start = json.loads(Path(start_file).read_text())
-outputs = ["w_m2", "w_m3"]
 report = {"validate": {}, "fmutool": {}}
 fmutool = Path(sys.executable).parent / "fmutool"
 
-ramp = np.array(list(zip(t, u)), dtype=[("time", np.float64), ("M_drive", np.float64)])
+dtype = [("time", np.float64)] + [(var, np.float64) for _, var in pairs]
+table = np.array([tuple([t[k]] + [u[var][k] for _, var in pairs]) for k in range(len(t))], dtype=dtype)
 n_me = int(round(float(me_seconds) / dt))
-steps = [(t[0], u[0])]
+steps = [tuple([t[0]] + [u[var][0] for _, var in pairs])]
 for k in range(1, n_me + 1):
-    steps += [(t[k], u[k - 1]), (t[k], u[k])]
-held = np.array(steps, dtype=[("time", np.float64), ("M_drive", np.float64)])
+    steps.append(tuple([t[k]] + [u[var][k - 1] for _, var in pairs]))
+    steps.append(tuple([t[k]] + [u[var][k] for _, var in pairs]))
+held = np.array(steps, dtype=dtype)
 
 for version in ("fmi3", "fmi2"):
     path = str(Path(fmu_dir) / f"rigtwin-{version}.fmu")
@@ -42,11 +47,10 @@ for version in ("fmi3", "fmi2"):
     run = subprocess.run([str(fmutool), "-input", path, "-check"], capture_output=True, text=True)
     report["fmutool"][version] = {"returncode": run.returncode, "output": run.stdout + run.stderr}
     cs = fmpy.simulate_fmu(path, fmi_type="CoSimulation", stop_time=t[-1], step_size=dt, output_interval=dt,
-                           start_values=start, input=ramp, output=outputs)
+                           start_values=start, input=table, output=outputs)
     report[f"{version}_cs"] = {name: cs[name].tolist() for name in outputs}
     me = fmpy.simulate_fmu(path, fmi_type="ModelExchange", stop_time=t[n_me], output_interval=dt,
                            relative_tolerance=1e-9, start_values=start, input=held, output=outputs)
-    # the samples at the sample times (events add points)
     times = me["time"]
     keep = [int(np.searchsorted(times, tk + 1e-9)) - 1 for tk in t[: n_me + 1]]
     report[f"{version}_me"] = {name: me[name][keep].tolist() for name in outputs}

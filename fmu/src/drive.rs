@@ -13,10 +13,7 @@ use plant::drive::RK4_STEP_TIMES_RATE;
 use plant::effects::DelayLine;
 use plant::{DriveModel, Dynamics, Quantity};
 
-use crate::model::MAX_PIECES;
-
-/// Discretisations kept (a master uses one or a few step sizes; dead times add piece lengths).
-const CACHE: usize = 8;
+use crate::model::{longest_exact_piece, ZohCache, MAX_PIECES};
 
 /// The dynamics of one drive model and the buffers of its step.
 #[derive(Debug)]
@@ -29,7 +26,7 @@ pub struct DriveDynamics {
     max_piece_s: f64,
     /// The rate RK4 sub-steps resolve, 1/s.
     rate: f64,
-    cache: Vec<(f64, DMatrix<f64>, DMatrix<f64>)>,
+    cache: ZohCache,
     breaks: Vec<f64>,
     segments: Vec<(f64, f64)>,
     u_piece: Vec<f64>,
@@ -48,10 +45,7 @@ impl DriveDynamics {
         if a.iter().chain(b.iter()).any(|v| !v.is_finite()) {
             return Err("the parameters give a system matrix with non-finite entries".into());
         }
-        let norm = (0..a.ncols())
-            .map(|j| a.column(j).abs().sum())
-            .chain((0..b.ncols()).map(|j| b.column(j).abs().sum()))
-            .fold(0.0, f64::max);
+        let max_piece_s = longest_exact_piece(&a, &b)?;
         let rate = dynamics.rk4_rate();
         if !rate.is_finite() {
             return Err("the model's rates are not finite".into());
@@ -59,11 +53,11 @@ impl DriveDynamics {
         let nx = dynamics.nstates();
         let nu = dynamics.ninputs();
         Ok(DriveDynamics {
-            max_piece_s: plant::statespace::ZOH_MAX_NORM / 1024.0 / norm.max(1e-300),
+            max_piece_s,
             rate,
             a,
             b,
-            cache: Vec::with_capacity(CACHE),
+            cache: ZohCache::default(),
             breaks: Vec::new(),
             segments: Vec::new(),
             u_piece: vec![0.0; nu],
@@ -198,7 +192,7 @@ impl DriveDynamics {
                 }
             } else {
                 let n = (len / self.max_piece_s).ceil().max(1.0) as usize;
-                let i = match self.discretise(len / n as f64) {
+                let i = match self.cache.index(&self.a, &self.b, len / n as f64) {
                     Ok(i) => i,
                     Err(e) => {
                         result = Err(e);
@@ -207,7 +201,7 @@ impl DriveDynamics {
                 };
                 self.u_vec.copy_from_slice(&self.u_piece);
                 for _ in 0..n {
-                    let (_, ad, bd) = &self.cache[i];
+                    let (ad, bd) = self.cache.get(i);
                     self.next.gemv(1.0, ad, &state, 0.0);
                     self.next.gemv(1.0, bd, &self.u_vec, 1.0);
                     state.copy_from(&self.next);
@@ -223,19 +217,5 @@ impl DriveDynamics {
         }
         self.xs = state;
         result
-    }
-
-    fn discretise(&mut self, h: f64) -> Result<usize, String> {
-        match self.cache.iter().position(|c| (c.0 - h).abs() <= 1e-12 * h) {
-            Some(i) => Ok(i),
-            None => {
-                let (ad, bd) = plant::zoh(&self.a, &self.b, h).map_err(|e| e.to_string())?;
-                if self.cache.len() == CACHE {
-                    self.cache.remove(0);
-                }
-                self.cache.push((h, ad, bd));
-                Ok(self.cache.len() - 1)
-            }
-        }
     }
 }

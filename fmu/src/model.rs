@@ -50,7 +50,7 @@ pub struct Model {
     powertrain: Powertrain,
     /// State-vector index of each powertrain state.
     map: Vec<usize>,
-    cache: Vec<(f64, DMatrix<f64>, DMatrix<f64>)>,
+    cache: ZohCache,
     scratch: DVector<f64>,
     u_eff: DVector<f64>,
     pieces: Vec<(f64, f64)>,
@@ -131,15 +131,9 @@ impl Model {
         let similar = |m: &DMatrix<f64>| &t * m * &t_inv;
         let npt = map.len();
         let (a, b) = (similar(&a_x), &t * &b_x);
-        let norm = a.column_iter().chain(b.column_iter()).map(|c| c.lp_norm(1)).fold(0.0, f64::max);
-        if norm.is_nan() || norm * FASTEST_TIME_SCALE_S > 1.0 {
-            return Err(format!(
-                "the parameters give time scales of {:.1e} s (an inertia, mass or stiffness far off)",
-                1.0 / norm
-            ));
-        }
+        let max_piece_s = longest_exact_piece(&a, &b)?;
         Ok(Model {
-            max_piece_s: plant::statespace::ZOH_MAX_NORM / 1024.0 / norm.max(1e-300),
+            max_piece_s,
             next: DVector::zeros(nx),
             a,
             b,
@@ -154,7 +148,7 @@ impl Model {
             xs: DVector::zeros(nx),
             powertrain,
             map,
-            cache: Vec::new(),
+            cache: ZohCache::default(),
             scratch: DVector::zeros(nx),
             u_eff: DVector::zeros(NU),
             pieces: Vec::new(),
@@ -300,7 +294,7 @@ impl Model {
                 };
                 self.u_eff.copy_from_slice(&u_eff);
                 for _ in 0..n {
-                    let (_, ad, bd) = &self.cache[i];
+                    let (ad, bd) = self.cache.get(i);
                     self.scratch.gemv(1.0, ad, &out, 0.0);
                     self.scratch.gemv(1.0, bd, &self.u_eff, 1.0);
                     out.copy_from(&self.scratch);
@@ -340,23 +334,56 @@ impl Model {
     /// (Ad, Bd) of step size `h` (the linear model, shafts engaged).
     pub fn discretisation(&mut self, h: f64) -> Result<(&DMatrix<f64>, &DMatrix<f64>), String> {
         let i = self.discretise(h)?;
-        Ok((&self.cache[i].1, &self.cache[i].2))
+        Ok(self.cache.get(i))
     }
 
     fn discretise(&mut self, h: f64) -> Result<usize, String> {
+        self.cache.index(&self.a, &self.b, h)
+    }
+}
+
+/// The exact (ZOH) discretisations of one linear model, per piece length: a co-simulation master
+/// uses one or a few step sizes, a dead time adds piece lengths. Shared by the rig's and the
+/// drive models' steps.
+#[derive(Debug, Clone, Default)]
+pub(crate) struct ZohCache {
+    entries: Vec<(f64, DMatrix<f64>, DMatrix<f64>)>,
+}
+
+impl ZohCache {
+    /// The entry of piece length `h`, discretised if new (the oldest of [`CACHE`] dropped).
+    pub(crate) fn index(&mut self, a: &DMatrix<f64>, b: &DMatrix<f64>, h: f64) -> Result<usize, String> {
         // piece lengths from a dead time carry rounding: equal within 1e-12 is the same
-        match self.cache.iter().position(|c| (c.0 - h).abs() <= 1e-12 * h) {
+        match self.entries.iter().position(|c| (c.0 - h).abs() <= 1e-12 * h) {
             Some(i) => Ok(i),
             None => {
-                let (ad, bd) = plant::zoh(&self.a, &self.b, h).map_err(|e| e.to_string())?;
-                if self.cache.len() == CACHE {
-                    self.cache.remove(0);
+                let (ad, bd) = plant::zoh(a, b, h).map_err(|e| e.to_string())?;
+                if self.entries.len() == CACHE {
+                    self.entries.remove(0);
                 }
-                self.cache.push((h, ad, bd));
-                Ok(self.cache.len() - 1)
+                self.entries.push((h, ad, bd));
+                Ok(self.entries.len() - 1)
             }
         }
     }
+
+    /// (Ad, Bd) of entry `i`.
+    pub(crate) fn get(&self, i: usize) -> (&DMatrix<f64>, &DMatrix<f64>) {
+        (&self.entries[i].1, &self.entries[i].2)
+    }
+}
+
+/// Longest exact piece of x' = A x + B u, s: ‖[A B]‖₁ · piece = `plant::statespace::ZOH_MAX_NORM`
+/// / 2^10; refuses time scales below `FASTEST_TIME_SCALE_S` (parameters that are no machine).
+pub(crate) fn longest_exact_piece(a: &DMatrix<f64>, b: &DMatrix<f64>) -> Result<f64, String> {
+    let norm = a.column_iter().chain(b.column_iter()).map(|c| c.lp_norm(1)).fold(0.0, f64::max);
+    if norm.is_nan() || norm * FASTEST_TIME_SCALE_S > 1.0 {
+        return Err(format!(
+            "the parameters give time scales of {:.1e} s (an inertia, mass or stiffness far off)",
+            1.0 / norm
+        ));
+    }
+    Ok(plant::statespace::ZOH_MAX_NORM / 1024.0 / norm.max(1e-300))
 }
 
 /// out = A x + B u (no allocation).
