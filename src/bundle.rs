@@ -1176,24 +1176,11 @@ pub fn load_drive_model(file: &Path) -> Result<plant::DriveModel, BundleError> {
     }
     let mut effects = Vec::with_capacity(raw.effects.len());
     for (k, e) in raw.effects.iter().enumerate() {
-        let at = |i: usize, what: &str| {
-            i.checked_sub(1)
-                .ok_or_else(|| error(file, None, format!("`effects[{}].{what}` = 0: positions are 1-based", k + 1)))
-        };
-        effects.push(match *e {
-            plant::Effect::CoulombFriction { body, friction, smoothing_speed } => {
-                plant::Effect::CoulombFriction { body: at(body, "body")?, friction, smoothing_speed }
-            }
-            plant::Effect::Backlash { coupling, backlash } => {
-                plant::Effect::Backlash { coupling: at(coupling, "coupling")?, backlash }
-            }
-            plant::Effect::TimeDelay { input, delay_s } => {
-                plant::Effect::TimeDelay { input: at(input, "input")?, delay_s }
-            }
-            plant::Effect::ActuatorLag { input, time_constant_s } => {
-                plant::Effect::ActuatorLag { input: at(input, "input")?, time_constant_s }
-            }
-        });
+        let (i, what) = e.element_index();
+        let i = i
+            .checked_sub(1)
+            .ok_or_else(|| error(file, None, format!("`effects[{}].{what}` = 0: positions are 1-based", k + 1)))?;
+        effects.push(e.at_index(i));
     }
     let m = plant::DriveModel { line, inputs, effects };
     m.validate().map_err(|e| error(file, None, e.to_string()))?;

@@ -510,22 +510,8 @@ pub fn drive_model_toml(m: &plant::DriveModel, b: &crate::bundle::DriveTestBundl
         inputs: Vec<Input<'a>>,
         effects: Vec<plant::Effect>,
     }
-    let effects = m
-        .effects
-        .iter()
-        .map(|e| match *e {
-            plant::Effect::CoulombFriction { body, friction, smoothing_speed } => {
-                plant::Effect::CoulombFriction { body: body + 1, friction, smoothing_speed }
-            }
-            plant::Effect::Backlash { coupling, backlash } => {
-                plant::Effect::Backlash { coupling: coupling + 1, backlash }
-            }
-            plant::Effect::TimeDelay { input, delay_s } => plant::Effect::TimeDelay { input: input + 1, delay_s },
-            plant::Effect::ActuatorLag { input, time_constant_s } => {
-                plant::Effect::ActuatorLag { input: input + 1, time_constant_s }
-            }
-        })
-        .collect();
+    // 1-based positions, as in the bundle
+    let effects = m.effects.iter().map(|e| e.at_index(e.element_index().0 + 1)).collect();
     let out = Out {
         kind: "drive_model",
         name: "extended model written by rigtwin diagnose",

@@ -58,8 +58,7 @@ fn xml_escape(s: &str) -> String {
 }
 
 /// Start values of the variables that have one, by value reference.
-fn start(p: &FmuParams, slot: Slot) -> Option<String> {
-    let values = parameter_values(p);
+fn start(p: &FmuParams, values: &[f64], slot: Slot) -> Option<String> {
     match slot {
         Slot::Param(i) => Some(format!("{:?}", values[i])),
         Slot::Variant => Some(variant_number(p.variant).to_string()),
@@ -155,6 +154,7 @@ pub fn describe(p: &FmuParams, version: Version) -> String {
 fn describe_with(p: &FmuParams, version: Version, token: &str) -> String {
     let table = Table::new(p);
     let vars = &table.variables;
+    let params = parameter_values(p);
     let mut x = String::new();
     let (desc, needs_completed) = match &p.drive {
         None => rig_description(p),
@@ -250,7 +250,7 @@ fn describe_with(p: &FmuParams, version: Version, token: &str) -> String {
             Slot::Derivative(i) => Some(i),
             _ => None,
         };
-        let start = start(p, v.slot);
+        let start = start(p, &params, v.slot);
         let nominal = match v.slot {
             Slot::State(i) => Some(format!("{:?}", nominals[i])),
             _ => None,

@@ -75,6 +75,11 @@ impl DriveDynamics {
         self.dynamics.nstates()
     }
 
+    /// Number of couplings (coupling-force outputs).
+    pub fn couplings(&self) -> usize {
+        self.couplings
+    }
+
     /// ẋ at state `x` with the inputs acting now (after their dead times).
     pub fn derivatives(&self, x: &[f64], u_acting: &[f64], out: &mut [f64]) {
         self.dynamics.rhs(x, u_acting, out);

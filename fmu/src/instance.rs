@@ -2,13 +2,18 @@
 //! Reference FMUs do), parameters, states, inputs, the model, and what the standard asks of
 //! each call. The version glue (`fmi2`, `fmi3`) only converts arguments and statuses.
 
-use nalgebra::DVector;
+use std::borrow::Cow;
+
+use nalgebra::{DMatrix, DVector};
 
 use crate::drive::DriveDynamics;
 use crate::model::{Model, DRIVE_INPUT};
 use crate::params::FmuParams;
 use crate::variables::{parameter_set, parameter_values, variant_number, Causality, Kind, Slot, Table, FIRST_EFFECT};
 use plant::effects::DelayLine;
+
+/// A Jacobian borrowed from the rig's model or evaluated for a drive model.
+type Matrix<'a> = Cow<'a, DMatrix<f64>>;
 
 /// Whether the instance simulates itself (co-simulation) or lends its derivatives to the
 /// importer's solver (model exchange).
@@ -537,10 +542,7 @@ impl Instance {
             let x = self.x.as_slice();
             let (torques, angles) = match self.model.as_ref().expect("built above") {
                 Machine::Rig(m) => (m.torques(x).to_vec(), m.angles(x).to_vec()),
-                Machine::Drive(m) => {
-                    let couplings = self.table.variables.iter().filter(|v| matches!(v.slot, Slot::Torque(_))).count();
-                    ((0..couplings).map(|i| m.coupling_force(x, i)).collect(), Vec::new())
-                }
+                Machine::Drive(m) => ((0..m.couplings()).map(|i| m.coupling_force(x, i)).collect(), Vec::new()),
             };
             Some((dx, torques, angles))
         } else {
@@ -726,12 +728,16 @@ impl Instance {
         self.ensure_model()?;
         let nx = self.nx();
         self.update_acting();
-        let (a, b, torque) = match self.model.as_ref().expect("built above") {
+        // the rig's matrices are borrowed; a drive model's are evaluated at the present state
+        let (a, b, torque): (Matrix<'_>, Matrix<'_>, Matrix<'_>) = match self.model.as_ref().expect("built above") {
             Machine::Rig(m) => {
                 let (a, b, t) = m.jacobians(self.x.as_slice());
-                (a.clone(), b.clone(), t.clone())
+                (Cow::Borrowed(a), Cow::Borrowed(b), Cow::Borrowed(t))
             }
-            Machine::Drive(m) => m.jacobians(self.x.as_slice(), &self.acting),
+            Machine::Drive(m) => {
+                let (a, b, t) = m.jacobians(self.x.as_slice(), &self.acting);
+                (Cow::Owned(a), Cow::Owned(b), Cow::Owned(t))
+            }
         };
         let angle_gradient = |i: usize, col: usize| match self.model.as_ref() {
             Some(Machine::Rig(m)) => m.angle_gradient(i, col),

@@ -84,6 +84,27 @@ impl Effect {
         }
     }
 
+    /// The index of the element it acts on (body, coupling or input, 0-based) and the key that
+    /// names that element in a model file (`body`, `coupling`, `input`).
+    pub fn element_index(&self) -> (usize, &'static str) {
+        match *self {
+            Effect::CoulombFriction { body, .. } => (body, "body"),
+            Effect::Backlash { coupling, .. } => (coupling, "coupling"),
+            Effect::TimeDelay { input, .. } | Effect::ActuatorLag { input, .. } => (input, "input"),
+        }
+    }
+
+    /// The same effect at element `index` (of the same kind: body, coupling or input).
+    pub fn at_index(mut self, index: usize) -> Effect {
+        match &mut self {
+            Effect::CoulombFriction { body: i, .. }
+            | Effect::Backlash { coupling: i, .. }
+            | Effect::TimeDelay { input: i, .. }
+            | Effect::ActuatorLag { input: i, .. } => *i = index,
+        }
+        self
+    }
+
     /// Its parameters, SI, keyed with their units in the line's domain.
     pub fn parameters(&self, model: &DriveModel) -> Vec<(String, f64)> {
         let rotational = model.line.domain == crate::line::Domain::Rotational;
