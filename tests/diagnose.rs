@@ -496,9 +496,9 @@ fn fmu_reproduces_the_diagnosis(truth: Truth, seed: u64, effect: &str) {
     let of = |n: &str| names.iter().position(|x| x == n).map(|i| x0[i]).unwrap();
     for (name, &value) in names.iter().zip(&x0) {
         let (name, value) = match name.as_str() {
-            "phi_cage" => ("twist".to_string(), 2.0 * value - of("phi_m2") - of("phi_m3")),
-            "phi_motor" => ("twist_motor".to_string(), value - of("phi_cage")),
-            other => (other.replace("cage", "drive"), value),
+            "phi_drive" => ("twist".to_string(), 2.0 * value - of("phi_m2") - of("phi_m3")),
+            "phi_motor" => ("twist_motor".to_string(), value - of("phi_drive")),
+            other => (other.to_string(), value),
         };
         start.insert(name, value.into());
     }

@@ -55,8 +55,15 @@ pub struct Controller {
 impl Controller {
     /// Builds the controller for the continuous plant `plant` (discretised by ZOH here).
     pub fn new(plant: &StateSpace, settings: &MpcSettings) -> Result<Self> {
+        Self::with_input_delays(plant, &[], settings)
+    }
+
+    /// As [`Controller::new`] for a plant whose input j acts `input_delays_s[j]` late (empty:
+    /// none): the prediction carries the inputs on their way as states
+    /// ([`PredictionModel::with_input_delays`]).
+    pub fn with_input_delays(plant: &StateSpace, input_delays_s: &[f64], settings: &MpcSettings) -> Result<Self> {
         settings.validate()?;
-        let model = PredictionModel::new(plant, settings.dt_s)?;
+        let model = PredictionModel::with_input_delays(plant, settings.dt_s, input_delays_s)?;
         let (n, m) = (model.nstates(), model.ninputs());
         if settings.inputs.len() != m {
             return Err(setting(
@@ -112,7 +119,9 @@ impl Controller {
         let c_meas = DMatrix::from_fn(measured.len(), n, |i, j| model.c[(measured[i], j)]);
         let v = DVector::from_vec(noise);
         let vmean = v.mean();
-        let w_x = DVector::from_element(n, settings.state_noise_ratio * vmean);
+        // the dead-time buffers hold inputs the controller applied: known, no process noise
+        let w_x =
+            DVector::from_fn(n, |i, _| if i < model.plant_states() { settings.state_noise_ratio * vmean } else { 0.0 });
         let disturbed: Vec<usize> = (0..m).filter(|&j| ins[j].disturbance_std_nm > 0.0).collect();
         let w_d = DVector::from_iterator(disturbed.len(), disturbed.iter().map(|&j| ins[j].disturbance_std_nm.powi(2)));
         let estimator = Estimator::new(&model.a, &model.b, &disturbed, &c_meas, &w_x, &w_d, &v)
@@ -188,7 +197,7 @@ impl Controller {
 
     /// Starts from the plant state `x_plant` (plant coordinates) with inputs `u`, Nm.
     pub fn reset(&mut self, x_plant: &DVector<f64>, u: &[f64]) {
-        let z = self.model.basis.transpose() * x_plant;
+        let z = self.model.state_of(x_plant, u);
         self.estimator.reset(&z);
         self.u.copy_from_slice(u);
         self.plan_valid = false;

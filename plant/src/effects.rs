@@ -78,7 +78,7 @@ impl DriveEffects {
 pub const BACKLASH_STEP_S: f64 = 1.25e-4;
 
 /// The open-differential powertrain (section 2.4) with effects, driven by the load-machine and
-/// drive torques [M_m2, M_drive, M_m3]. Coordinates: φ_m2, φ_cage, φ_m3 and, with a
+/// drive torques [M_m2, M_drive, M_m3]. Coordinates: φ_m2, φ_drive (the cage), φ_m3 and, with a
 /// compliance, φ_motor; then their speeds; then, with a lag, the lagged drive torque. The side
 /// shafts act through the generalised twist s = aᵀq, a = [−1, 2, −1] on (m2, cage, m3), as two
 /// springs in series (eq. (A1)); the drive torque acts on the motor (the cage when rigid).
@@ -159,8 +159,8 @@ impl Powertrain {
     pub fn state_names(&self) -> Vec<String> {
         let n = self.dofs();
         let mut names: Vec<String> =
-            ["phi_m2", "phi_cage", "phi_m3", "phi_motor"][..n].iter().map(|s| s.to_string()).collect();
-        names.extend(["w_m2", "w_cage", "w_m3", "w_motor"][..n].iter().map(|s| s.to_string()));
+            ["phi_m2", "phi_drive", "phi_m3", "phi_motor"][..n].iter().map(|s| s.to_string()).collect();
+        names.extend(["w_m2", "w_drive", "w_m3", "w_motor"][..n].iter().map(|s| s.to_string()));
         if self.nstates() > 2 * n {
             names.push("M_drive_lagged".into());
         }
@@ -223,6 +223,49 @@ impl Powertrain {
             input_names: vec!["M_drive".into()],
             output_names: vec!["w_m2".into(), "w_m3".into()],
         }
+    }
+
+    /// The linear part (backlash closed, the dead time left out — see [`Powertrain::delay_s`])
+    /// as the controller sees the rig: inputs [M_m2, M_drive, M_m3], outputs the speeds
+    /// [w_m2, w_drive, w_m3] (w_drive the cage's), the side-shaft torques
+    /// [T_short_side_shaft, T_long_side_shaft] and, with a compliance, w_motor. Without effects
+    /// it is `RigParams::open_differential(..).state_space(&[Speeds, SpringTorques])`.
+    pub fn control_state_space(&self) -> StateSpace {
+        let n = self.dofs();
+        let ns = self.nstates();
+        let (a, b, torques) = self.linear(true);
+        let mut rows = vec![n, n + 1, n + 2];
+        if n == 4 {
+            rows.push(n + 3);
+        }
+        let ny = 5 + usize::from(n == 4);
+        let mut c = DMatrix::zeros(ny, ns);
+        for (k, &i) in rows[..3].iter().enumerate() {
+            c[(k, i)] = 1.0;
+        }
+        c.view_mut((3, 0), (2, ns)).copy_from(&torques);
+        if n == 4 {
+            c[(5, n + 3)] = 1.0;
+        }
+        let mut output_names: Vec<String> =
+            ["w_m2", "w_drive", "w_m3", "T_short_side_shaft", "T_long_side_shaft"].map(String::from).into();
+        if n == 4 {
+            output_names.push("w_motor".into());
+        }
+        StateSpace {
+            a,
+            b,
+            d: DMatrix::zeros(ny, 3),
+            c,
+            state_names: self.state_names(),
+            input_names: ["M_m2", "M_drive", "M_m3"].map(String::from).into(),
+            output_names,
+        }
+    }
+
+    /// Dead time of each input of [`Powertrain::control_state_space`], s: the drive torque's.
+    pub fn delay_s(&self) -> [f64; 3] {
+        [0.0, self.effects.time_delay_s, 0.0]
     }
 
     /// Natural frequencies of the undamped linear part, Hz, ascending (the compliance adds
@@ -517,6 +560,21 @@ mod tests {
             assert!((&a - &ss.a).abs().max() < 1e-9 * ss.a.abs().max(), "A differs");
             assert!((&b - &ss.b).abs().max() < 1e-12 * ss.b.abs().max(), "B differs");
             assert!((&c - &ss.c).abs().max() < 1e-9 * ss.c.abs().max(), "C differs");
+        }
+    }
+
+    #[test]
+    fn control_state_space_is_the_open_differential_with_its_names() {
+        // what the MPC predicts with: the MechanicalModel path's state space, names included
+        let p = Powertrain::new(&rig(), Variant::V2, &DriveEffects::default()).unwrap();
+        let ss = p.control_state_space();
+        let reference =
+            rig().open_differential(Variant::V2).unwrap().state_space(&[Output::Speeds, Output::SpringTorques]).unwrap();
+        assert_eq!(ss.state_names, reference.state_names);
+        assert_eq!(ss.input_names, reference.input_names);
+        assert_eq!(ss.output_names, reference.output_names);
+        for (m, r) in [(&ss.a, &reference.a), (&ss.b, &reference.b), (&ss.c, &reference.c)] {
+            assert!((m - r).abs().max() < 1e-9 * r.abs().max(), "{m} vs {r}");
         }
     }
 
