@@ -3,7 +3,7 @@
 //! QPs for other solvers.
 
 use mpc::closed_loop::{
-    compare, median_p99, step_figures, Comparison, LinearPlant, Plant, Probes, RigSignals, Scenario, ScenarioKind,
+    compare, median_p99, step_figures, Comparison, Plant, Probes, RigSignals, Scenario, ScenarioKind,
     StepFigures,
 };
 use mpc::qp::QpSnapshot;
@@ -18,16 +18,25 @@ pub const SETTLING_BAND: f64 = 0.02;
 /// Every this many steps the real-time first input is compared with the exact optimum.
 pub const CHECK_EVERY: usize = 25;
 
-/// The plant the controller is built on: the open-differential state space of `params`
-/// with speed and side-shaft torque outputs. Drive-path effects are refused: the controller
-/// predicts with the linear model and would silently leave them out.
-pub fn plant_of(params: &rigtwin_fmu::FmuParams) -> anyhow::Result<StateSpace> {
-    if !params.effects.is_empty() {
-        anyhow::bail!(
-            "the rig file has an [effects] section (dead time, lag, backlash or drive compliance): \
-             rigtwin mpc predicts with the linear open-differential model, which has none of them; \
-             remove the section to control the model without them"
-        );
+/// What the controller predicts with: the open-differential powertrain of `params` with the
+/// effects its `[effects]` section declares (`plant::effects::Powertrain::control_state_space`)
+/// and the drive torque's dead time. Backlash is left out of the prediction (linear in
+/// contact): [`Prediction::notes`] says so.
+#[derive(Debug, Clone)]
+pub struct Prediction {
+    /// Continuous linear model: inputs M_m2, M_drive, M_m3; outputs w_m2, w_drive, w_m3,
+    /// T_short_side_shaft, T_long_side_shaft (and w_motor with a drive compliance).
+    pub model: StateSpace,
+    /// Dead time of each input, s.
+    pub input_delays_s: Vec<f64>,
+    /// What the prediction includes and leaves out, in words.
+    pub notes: Vec<String>,
+}
+
+/// The prediction model of `params` (see [`Prediction`]).
+pub fn prediction(params: &rigtwin_fmu::FmuParams) -> anyhow::Result<Prediction> {
+    if params.drive.is_some() {
+        anyhow::bail!("a drive model: the MPC runs on the paper rig's powertrain only (give a rig file)");
     }
     // the controller samples at 1 kHz: a rig whose modes lie beyond that loop's Nyquist
     // frequency (an inertia or stiffness far off) cannot be controlled by it, and its Riccati
@@ -48,7 +57,120 @@ pub fn plant_of(params: &rigtwin_fmu::FmuParams) -> anyhow::Result<StateSpace> {
             p.c_long()
         );
     }
-    Ok(mpc::closed_loop::rig_plant(&params.powertrain, params.variant)?)
+    let e = &params.effects;
+    let pt = plant::effects::Powertrain::new(&params.powertrain, params.variant, e)?;
+    let mut notes = Vec::new();
+    if e.time_delay_s > 0.0 {
+        notes.push(format!("drive-torque dead time {:.4} ms as input-delay states", e.time_delay_s * 1e3));
+    }
+    if e.actuator_lag_s > 0.0 {
+        notes.push(format!("actuator lag {:.4} ms as a state", e.actuator_lag_s * 1e3));
+    }
+    if e.compliance_stiffness_nm_per_rad > 0.0 {
+        notes.push(format!(
+            "drive compliance {:.1} Nm/rad (motor share {:.2}) as two states",
+            e.compliance_stiffness_nm_per_rad, e.compliance_motor_fraction
+        ));
+    }
+    if e.backlash_rad > 0.0 {
+        notes.push(format!(
+            "side-shaft backlash {:.4} mrad is NOT in the prediction: it stays linear with the shafts in contact",
+            e.backlash_rad * 1e3
+        ));
+    }
+    Ok(Prediction { model: pt.control_state_space(), input_delays_s: pt.delay_s().to_vec(), notes })
+}
+
+/// The rig as the FMU integrates it (`rigtwin_fmu::model::Model`: exact ZOH pieces split at the
+/// dead time's switching instants, RK4 with backlash), its outputs in the order of a
+/// prediction model's output names: the plant a controller is tried on.
+pub struct FmuPlant {
+    model: rigtwin_fmu::model::Model,
+    z: nalgebra::DVector<f64>,
+    u: nalgebra::DVector<f64>,
+    delay: plant::effects::DelayLine,
+    t: f64,
+    dt_s: f64,
+    /// Per output: a powertrain state index (speed) or a side-shaft torque (0, 1).
+    outputs: Vec<Source>,
+    y: Vec<f64>,
+}
+
+#[derive(Debug, Clone, Copy)]
+enum Source {
+    State(usize),
+    Torque(usize),
+}
+
+impl FmuPlant {
+    /// The plant of `params` sampled every `dt_s`, spinning steadily at `speed_radps` with no
+    /// drive torque and `u0` applied before the start, reporting `output_names`.
+    pub fn new(
+        params: &rigtwin_fmu::FmuParams,
+        dt_s: f64,
+        speed_radps: f64,
+        u0: &[f64],
+        output_names: &[String],
+    ) -> anyhow::Result<Self> {
+        let model = rigtwin_fmu::model::Model::new(params).map_err(|e| anyhow::anyhow!("the plant: {e}"))?;
+        let pt = model.powertrain();
+        let n = pt.dofs();
+        let outputs = output_names
+            .iter()
+            .map(|name| {
+                Ok(match name.as_str() {
+                    "w_m2" => Source::State(n),
+                    "w_drive" => Source::State(n + 1),
+                    "w_m3" => Source::State(n + 2),
+                    // without a compliance the motor is the drive
+                    "w_motor" => Source::State(if n == 4 { n + 3 } else { n + 1 }),
+                    "T_short_side_shaft" => Source::Torque(0),
+                    "T_long_side_shaft" => Source::Torque(1),
+                    other => anyhow::bail!("the plant has no output `{other}`"),
+                })
+            })
+            .collect::<anyhow::Result<Vec<_>>>()?;
+        let x0 = pt.steady_state(0.0, speed_radps);
+        let z = model.state_of_powertrain(&x0);
+        let mut u = nalgebra::DVector::zeros(rigtwin_fmu::model::NU);
+        u.rows_mut(0, u0.len().min(3)).copy_from_slice(&u0[..u0.len().min(3)]);
+        let mut delay = plant::effects::DelayLine::default();
+        delay.record(f64::NEG_INFINITY, u[rigtwin_fmu::model::DRIVE_INPUT]);
+        let mut p = FmuPlant { model, z, u, delay, t: 0.0, dt_s, y: vec![0.0; outputs.len()], outputs };
+        p.read();
+        Ok(p)
+    }
+
+    fn read(&mut self) {
+        let x = self.model.powertrain_part(self.z.as_slice());
+        let torques = self.model.torques(self.z.as_slice());
+        for (y, s) in self.y.iter_mut().zip(&self.outputs) {
+            *y = match *s {
+                Source::State(i) => x[i],
+                Source::Torque(k) => torques[k],
+            };
+        }
+    }
+}
+
+impl Plant for FmuPlant {
+    fn outputs(&self) -> &[f64] {
+        &self.y
+    }
+    fn advance(&mut self, u: &[f64]) -> Result<(), String> {
+        self.u.rows_mut(0, 3).copy_from_slice(&u[..3]);
+        let tau = self.model.delay_s();
+        if tau > 0.0 {
+            self.delay.record(self.t, u[rigtwin_fmu::model::DRIVE_INPUT]);
+        }
+        self.model.step(&mut self.z, &self.u, self.t, self.dt_s, &self.delay)?;
+        self.t += self.dt_s;
+        if tau > 0.0 {
+            self.delay.forget_before(self.t, tau);
+        }
+        self.read();
+        Ok(())
+    }
 }
 
 /// Median, 99th percentile and maximum, µs.
@@ -75,6 +197,15 @@ pub struct Shuffle {
     pub step_nm: f64,
     /// Settling band, relative to the step height.
     pub settling_band: f64,
+}
+
+/// Why each step run stopped early (`None`: it ran to the end).
+#[derive(Debug, Clone, Serialize)]
+pub struct Stopped {
+    /// The MPC's run.
+    pub mpc: Option<String>,
+    /// The PI baseline's run.
+    pub baseline: Option<String>,
 }
 
 /// A pair of figures.
@@ -121,6 +252,16 @@ pub struct MpcReport {
     pub shuffle: Shuffle,
     /// RMS load-speed error (both machines), rad/s.
     pub speed_error_rms_radps: Pair,
+    /// What the prediction includes and leaves out of the model's effects.
+    pub prediction: Vec<String>,
+    /// The effects of the plant the loop was closed on.
+    pub plant_effects: String,
+    /// The effects of the model the controller was designed on.
+    pub model_effects: String,
+    /// Where a step run stopped because the loop diverged.
+    pub stopped: Stopped,
+    /// Share of the step run's samples with an input at a hard bound.
+    pub input_at_bound_share: Pair,
     /// Sweep only: largest deviation of the short side-shaft torque from its quasi-static
     /// share of the drive torque (half of it) during the sweep, Nm.
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -146,6 +287,18 @@ impl MpcReport {
     /// Text for the terminal.
     pub fn human(&self) -> String {
         let mut s = String::new();
+        s += &format!(
+            "designed on a model with effects: {}; closed on a plant with effects: {}\n",
+            self.model_effects, self.plant_effects
+        );
+        for n in &self.prediction {
+            s += &format!("  prediction: {n}\n");
+        }
+        for (who, why) in [("MPC", &self.stopped.mpc), ("PI", &self.stopped.baseline)] {
+            if let Some(w) = why {
+                s += &format!("  {who} loop UNSTABLE: stopped {w}\n");
+            }
+        }
         s += &format!(
             "MPC on the open-differential rig: N = {} at {} ms, {:?}, move blocks {:?} → QP {} variables × {} constraints\n",
             self.horizon,
@@ -190,6 +343,11 @@ impl MpcReport {
             "  RMS load-speed error: MPC {:.4} rad/s, PI {:.4} rad/s\n",
             self.speed_error_rms_radps.mpc, self.speed_error_rms_radps.baseline
         );
+        s += &format!(
+            "  samples with an input at a hard bound: MPC {:.1} %, PI {:.1} %\n",
+            self.input_at_bound_share.mpc * 100.0,
+            self.input_at_bound_share.baseline * 100.0
+        );
         if let Some(p) = &self.sweep_peak_torque_deviation_nm {
             s += &format!(
                 "  sweep: peak side-shaft torque deviation from half the drive torque: MPC {:.2} Nm, PI {:.2} Nm\n",
@@ -214,16 +372,45 @@ pub struct ExportedQp {
 }
 
 fn run_on(
-    ss: &StateSpace,
+    prediction: &Prediction,
+    truth: &rigtwin_fmu::FmuParams,
     settings: &MpcSettings,
     scenario: &Scenario,
     j_load: f64,
     probes: Probes<'_>,
 ) -> anyhow::Result<Comparison> {
-    let mut make = |x0: &nalgebra::DVector<f64>| -> Result<Box<dyn Plant>, String> {
-        Ok(Box::new(LinearPlant::new(ss, settings.dt_s, x0).map_err(|e| e.to_string())?))
+    let ss = &prediction.model;
+    let (_, u0) = mpc::closed_loop::steady_spin(ss, scenario.speed_radps)?;
+    let mut make = |_: &nalgebra::DVector<f64>| -> Result<Box<dyn Plant>, String> {
+        let p = FmuPlant::new(truth, settings.dt_s, scenario.speed_radps, &u0, &ss.output_names)
+            .map_err(|e| e.to_string())?;
+        Ok(Box::new(p))
     };
-    compare(ss, &mut make, settings, scenario, j_load, PI_BANDWIDTH_HZ, probes).map_err(|e| anyhow::anyhow!(e))
+    compare(ss, &prediction.input_delays_s, &mut make, settings, scenario, j_load, PI_BANDWIDTH_HZ, probes)
+        .map_err(|e| anyhow::anyhow!(e))
+}
+
+/// The effects of a parameter set in words ("none" without).
+pub fn effects_in_words(p: &rigtwin_fmu::FmuParams) -> String {
+    let e = &p.effects;
+    let mut v = Vec::new();
+    if e.time_delay_s > 0.0 {
+        v.push(format!("time_delay {:.4} ms", e.time_delay_s * 1e3));
+    }
+    if e.actuator_lag_s > 0.0 {
+        v.push(format!("actuator_lag {:.4} ms", e.actuator_lag_s * 1e3));
+    }
+    if e.backlash_rad > 0.0 {
+        v.push(format!("backlash {:.4} mrad", e.backlash_rad * 1e3));
+    }
+    if e.compliance_stiffness_nm_per_rad > 0.0 {
+        v.push(format!("drive_compliance {:.1} Nm/rad", e.compliance_stiffness_nm_per_rad));
+    }
+    if v.is_empty() {
+        "none".into()
+    } else {
+        v.join(", ")
+    }
 }
 
 /// Runs the closed loops and measures. `allocations` reads the process's allocation counter
@@ -231,13 +418,18 @@ fn run_on(
 /// checked steps.
 pub fn report(
     params: &rigtwin_fmu::FmuParams,
+    truth: &rigtwin_fmu::FmuParams,
     settings: &MpcSettings,
     kind: ScenarioKind,
     allocations: Option<fn() -> u64>,
     mut export: Option<&mut Vec<ExportedQp>>,
 ) -> anyhow::Result<(MpcReport, Comparison)> {
-    let ss = plant_of(params)?;
-    let sig = RigSignals::of(&ss)?;
+    let prediction = prediction(params)?;
+    if truth.drive.is_some() {
+        anyhow::bail!("--plant: a drive model; the closed loop runs on the paper rig's powertrain (give a rig file)");
+    }
+    let ss = &prediction.model;
+    let sig = RigSignals::of(ss)?;
     let j_load = params.powertrain.effective(params.variant)?.j_m2;
     let scenario = Scenario::new(kind);
     let mut u0_error: f64 = 0.0;
@@ -264,19 +456,42 @@ pub fn report(
             Err(e) => failure = Some(e.to_string()),
         }
     };
-    let run = run_on(&ss, settings, &scenario, j_load, Probes { allocations, after_step: Some(&mut hook) })?;
+    let run =
+        run_on(&prediction, truth, settings, &scenario, j_load, Probes { allocations, after_step: Some(&mut hook) })?;
     if let Some(f) = failure {
         anyhow::bail!("reference solve of the exact optimum failed: {f}");
     }
     let step = if kind == ScenarioKind::Step {
         run.clone()
     } else {
-        run_on(&ss, settings, &Scenario::new(ScenarioKind::Step), j_load, Probes::default())?
+        run_on(&prediction, truth, settings, &Scenario::new(ScenarioKind::Step), j_load, Probes::default())?
     };
     let k_step = (Scenario::new(ScenarioKind::Step).start_s / settings.dt_s).round() as usize;
-    let fig =
-        |t: &mpc::closed_loop::Trace| step_figures(&t.output(sig.short_shaft), k_step, settings.dt_s, SETTLING_BAND);
+    let fig = |t: &mpc::closed_loop::Trace| {
+        if t.stopped.is_some() {
+            StepFigures { overshoot: f64::NAN, settling_time_s: f64::NAN }
+        } else {
+            step_figures(&t.output(sig.short_shaft), k_step, settings.dt_s, SETTLING_BAND)
+        }
+    };
+    // share of steps with an input at a hard bound
+    let bounds: Vec<(usize, f64, f64)> = settings
+        .inputs
+        .iter()
+        .filter_map(|u| ss.input_names.iter().position(|n| n == &u.name).map(|j| (j, u.min_nm, u.max_nm)))
+        .collect();
+    let at_bounds = |t: &mpc::closed_loop::Trace| {
+        let hit = t
+            .inputs
+            .iter()
+            .filter(|u| bounds.iter().any(|&(j, lo, hi)| u[j] <= lo + 1e-9 * lo.abs() || u[j] >= hi - 1e-9 * hi.abs()))
+            .count();
+        hit as f64 / t.inputs.len().max(1) as f64
+    };
     let speed_rms = |t: &mpc::closed_loop::Trace| {
+        if t.stopped.is_some() {
+            return f64::NAN;
+        }
         let n = t.outputs.len() as f64;
         (t.outputs
             .iter()
@@ -320,6 +535,11 @@ pub fn report(
             settling_band: SETTLING_BAND,
         },
         speed_error_rms_radps: Pair { mpc: speed_rms(&run.mpc), baseline: speed_rms(&run.baseline) },
+        prediction: prediction.notes.clone(),
+        plant_effects: effects_in_words(truth),
+        model_effects: effects_in_words(params),
+        stopped: Stopped { mpc: step.mpc.stopped.clone(), baseline: step.baseline.stopped.clone() },
+        input_at_bound_share: Pair { mpc: at_bounds(&step.mpc), baseline: at_bounds(&step.baseline) },
         sweep_peak_torque_deviation_nm: (kind == ScenarioKind::Sweep)
             .then(|| Pair { mpc: sweep_dev(&run.mpc), baseline: sweep_dev(&run.baseline) }),
     };
@@ -334,7 +554,7 @@ pub fn plot(
     kind: ScenarioKind,
 ) -> anyhow::Result<()> {
     use crate::plot::{lines, Panel};
-    let ss = plant_of(params)?;
+    let ss = prediction(params)?.model;
     let sig = RigSignals::of(&ss)?;
     let series = |t: &mpc::closed_loop::Trace, j: usize| {
         t.time_s.iter().zip(&t.outputs).map(|(&x, y)| (x, y[j])).collect::<Vec<_>>()

@@ -164,9 +164,14 @@ enum Command {
         /// QP formulation.
         #[arg(long, value_enum, default_value_t = FormulationArg::Condensed)]
         formulation: FormulationArg,
-        /// Parameter set (a rig file, as for `rigtwin fmu --params`); default: the FMU's.
+        /// The model the controller is designed on (a rig file, as for `rigtwin fmu --params`,
+        /// with its `[effects]`); default: the embedded rig.
         #[arg(long, value_name = "FILE")]
         params: Option<PathBuf>,
+        /// The plant the loop is closed on, integrated as the FMU integrates it (a rig file with
+        /// its `[effects]`); default: the model of `--params`.
+        #[arg(long, value_name = "FILE")]
+        plant: Option<PathBuf>,
         /// Wall-clock limit of one QP solve, µs; past it the shifted previous plan is applied.
         #[arg(long, default_value_t = 600.0)]
         time_limit_us: f64,
@@ -390,20 +395,25 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             let [a, b] = rigtwin::fmu_package::package(&p, &lib, &out)?;
             outln!("wrote {} and {} (token {})", a.display(), b.display(), rigtwin_fmu::token(&p));
         }
-        Command::Mpc { horizon, scenario, blocks, formulation, params, time_limit_us, json, plot, export_qp } => {
-            let p = match &params {
-                Some(f) => {
-                    let p = rigtwin::fmu_package::params_of_file(f)?;
-                    if p.drive.is_some() {
-                        anyhow::bail!(
-                            "{}: a drive model: the MPC runs on the paper rig's powertrain only (give a rig file); \
-                             the MPC of a drive model is not built yet",
-                            f.display()
-                        );
-                    }
-                    p
+        Command::Mpc { horizon, scenario, blocks, formulation, params, plant, time_limit_us, json, plot, export_qp } => {
+            let rig_of = |f: &PathBuf, flag: &str| -> anyhow::Result<rigtwin_fmu::FmuParams> {
+                let p = rigtwin::fmu_package::params_of_file(f)?;
+                if p.drive.is_some() {
+                    anyhow::bail!(
+                        "{flag} {}: a drive model: the MPC runs on the paper rig's powertrain only (give a rig file); \
+                         the MPC of a drive model is not built yet",
+                        f.display()
+                    );
                 }
+                Ok(p)
+            };
+            let p = match &params {
+                Some(f) => rig_of(f, "--params")?,
                 None => rigtwin_fmu::FmuParams::default(),
+            };
+            let truth = match &plant {
+                Some(f) => rig_of(f, "--plant")?,
+                None => p.clone(),
             };
             let mut settings = mpc::MpcSettings::powertrain(horizon);
             settings.move_blocks = if blocks == 0 { Vec::new() } else { mpc::exponential_blocks(horizon, blocks) };
@@ -422,6 +432,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             let export_qp = export_qp.map(|f| rigtwin::files::output(&f, "--export-qp", &[])).transpose()?;
             let (rep, run) = rigtwin::control::report(
                 &p,
+                &truth,
                 &settings,
                 kind,
                 Some(mpc::alloc_counter::allocations),

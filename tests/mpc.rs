@@ -103,7 +103,7 @@ impl Plant for FmuPlant {
 #[test]
 fn closed_loop_with_the_fmu_matches_the_plant() {
     let params = FmuParams::default();
-    let ss = rigtwin::control::plant_of(&params).unwrap();
+    let ss = rigtwin::control::prediction(&params).unwrap().model;
     let sig = RigSignals::of(&ss).unwrap();
     let mut settings = MpcSettings::powertrain(50);
     settings.solver.time_limit_s = 1.0; // identical solves in both runs, whatever the clock
@@ -112,11 +112,11 @@ fn closed_loop_with_the_fmu_matches_the_plant() {
     let names = ss.output_names.clone();
     let mut fmu =
         |x0: &nalgebra::DVector<f64>| -> Result<Box<dyn Plant>, String> { Ok(Box::new(FmuPlant::new(x0, &names))) };
-    let with_fmu = compare(&ss, &mut fmu, &settings, &scenario, j_load, 5.0, Probes::default()).unwrap();
+    let with_fmu = compare(&ss, &[], &mut fmu, &settings, &scenario, j_load, 5.0, Probes::default()).unwrap();
     let mut lin = |x0: &nalgebra::DVector<f64>| -> Result<Box<dyn Plant>, String> {
         Ok(Box::new(LinearPlant::new(&ss, 1e-3, x0).map_err(|e| e.to_string())?))
     };
-    let with_plant = compare(&ss, &mut lin, &settings, &scenario, j_load, 5.0, Probes::default()).unwrap();
+    let with_plant = compare(&ss, &[], &mut lin, &settings, &scenario, j_load, 5.0, Probes::default()).unwrap();
     for (a, b) in with_fmu.mpc.outputs.iter().zip(&with_plant.mpc.outputs) {
         for &j in &sig.speeds {
             assert!((a[j] - b[j]).abs() < 1e-6, "speed {j}: FMU {} vs plant {}", a[j], b[j]);

@@ -163,6 +163,11 @@ impl Model {
         self.a.nrows()
     }
 
+    /// The powertrain with its effects.
+    pub fn powertrain(&self) -> &Powertrain {
+        &self.powertrain
+    }
+
     /// Dead time of the drive torque, s (0: none).
     pub fn delay_s(&self) -> f64 {
         self.powertrain.effects.time_delay_s
@@ -172,8 +177,18 @@ impl Model {
         self.powertrain.effects.backlash_rad > 0.0
     }
 
+    /// The state vector z of the powertrain state `x` (absolute angles, the order of
+    /// `Powertrain::state_names`), the bearing at rest.
+    pub fn state_of_powertrain(&self, x: &[f64]) -> DVector<f64> {
+        let mut full = DVector::zeros(self.nx());
+        for (&i, &v) in self.map.iter().zip(x) {
+            full[i] = v;
+        }
+        &self.t * full
+    }
+
     /// The powertrain's states (absolute angles, its own order) of state vector `z`.
-    fn powertrain_part(&self, z: &[f64]) -> Vec<f64> {
+    pub fn powertrain_part(&self, z: &[f64]) -> Vec<f64> {
         let x = &self.t_inv * DVector::from_column_slice(z);
         self.map.iter().map(|&i| x[i]).collect()
     }

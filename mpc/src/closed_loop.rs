@@ -127,8 +127,17 @@ impl Control for PiBaseline {
     }
 }
 
+/// Advances `plant` and checks that its outputs stay finite and within ±[`DIVERGED`].
+fn advance(plant: &mut dyn Plant, u: &[f64]) -> std::result::Result<(), String> {
+    plant.advance(u)?;
+    match plant.outputs().iter().position(|y| !(y.abs() < DIVERGED)) {
+        Some(i) => Err(format!("output {i} is {} (the loop diverged)", plant.outputs()[i])),
+        None => Ok(()),
+    }
+}
+
 /// A recorded closed-loop run.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Default, Serialize)]
 pub struct Trace {
     /// Sample times, s.
     pub time_s: Vec<f64>,
@@ -138,7 +147,13 @@ pub struct Trace {
     pub inputs: Vec<Vec<f64>>,
     /// References per sample.
     pub references: Vec<Vec<f64>>,
+    /// Why the run stopped early (the plant's state diverged or could not be integrated);
+    /// `None`: it ran to the end.
+    pub stopped: Option<String>,
 }
+
+/// A run is stopped when an output leaves ±this (rad/s, Nm): the loop has gone unstable.
+pub const DIVERGED: f64 = 1e6;
 
 impl Trace {
     /// The output column `j`.
@@ -157,7 +172,7 @@ pub fn simulate(
     u0: &[f64],
     reference: &dyn Fn(usize) -> Vec<f64>,
 ) -> std::result::Result<Trace, String> {
-    let mut trace = Trace { time_s: Vec::new(), outputs: Vec::new(), inputs: Vec::new(), references: Vec::new() };
+    let mut trace = Trace::default();
     let mut u = u0.to_vec();
     for k in 0..samples {
         let r = reference(k);
@@ -167,7 +182,10 @@ pub fn simulate(
         trace.outputs.push(y);
         trace.inputs.push(u.clone());
         trace.references.push(r);
-        plant.advance(&u)?;
+        if let Err(e) = advance(plant, &u) {
+            trace.stopped = Some(format!("at {:.4} s: {e}", k as f64 * dt_s));
+            break;
+        }
     }
     Ok(trace)
 }
@@ -362,11 +380,16 @@ pub struct Probes<'a> {
     pub after_step: Option<AfterStep<'a>>,
 }
 
-/// Runs the MPC (with `settings`) and the PI baseline (speed loops of `pi_bandwidth_hz` on load
-/// inertia `j_load`) on `plant` through `scenario`, each from the steady spin at the scenario's
-/// speed. `make_plant` gives a fresh plant per run (the linear plant, an FMU, …).
+/// Runs the MPC (with `settings`, predicting with `plant` whose inputs act `input_delays_s` late)
+/// and the PI baseline (speed loops of `pi_bandwidth_hz` on load inertia `j_load`) through
+/// `scenario`, each from the steady spin at the scenario's speed. `make_plant` gives a fresh
+/// plant per run (the linear plant, an FMU, a plant with effects the prediction lacks, …),
+/// whose outputs are in the order of `plant`'s. A run whose plant diverges stops there
+/// ([`Trace::stopped`]).
+#[allow(clippy::too_many_arguments)]
 pub fn compare(
     plant: &StateSpace,
+    input_delays_s: &[f64],
     make_plant: MakePlant<'_>,
     settings: &crate::settings::MpcSettings,
     scenario: &Scenario,
@@ -377,7 +400,7 @@ pub fn compare(
     let sig = RigSignals::of(plant).map_err(|e| e.to_string())?;
     let dt = settings.dt_s;
     let (x0, u0) = steady_spin(plant, scenario.speed_radps).map_err(|e| e.to_string())?;
-    let mut controller = Controller::new(plant, settings).map_err(|e| e.to_string())?;
+    let mut controller = Controller::with_input_delays(plant, input_delays_s, settings).map_err(|e| e.to_string())?;
     controller.reset(&x0, &u0);
     let names = controller.reference_names();
     let want = ["w_m2", "w_m3", "M_drive"];
@@ -392,7 +415,7 @@ pub fn compare(
     };
 
     let mut p = make_plant(&x0)?;
-    let mut trace = Trace { time_s: Vec::new(), outputs: Vec::new(), inputs: Vec::new(), references: Vec::new() };
+    let mut trace = Trace::default();
     let (mut times, mut allocs, mut iters) = (Vec::new(), Vec::new(), Vec::new());
     let mut y = vec![0.0; p.outputs().len()];
     let mut r = vec![0.0; names.len()];
@@ -414,7 +437,10 @@ pub fn compare(
         trace.outputs.push(y.clone());
         trace.inputs.push(u.clone());
         trace.references.push(r.clone());
-        p.advance(&u)?;
+        if let Err(e) = advance(p.as_mut(), &u) {
+            trace.stopped = Some(format!("at {:.4} s: {e}", k as f64 * dt));
+            break;
+        }
     }
 
     let ref_speed = |name: &str| order.iter().position(|&i| want[i] == name);
