@@ -3,8 +3,7 @@
 //! QPs for other solvers.
 
 use mpc::closed_loop::{
-    compare, median_p99, step_figures, Comparison, Plant, Probes, RigSignals, Scenario, ScenarioKind,
-    StepFigures,
+    compare, median_p99, step_figures, Comparison, Plant, Probes, RigSignals, Scenario, ScenarioKind, StepFigures,
 };
 use mpc::qp::QpSnapshot;
 use mpc::{Controller, MpcSettings, StepInfo};

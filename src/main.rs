@@ -395,7 +395,18 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             let [a, b] = rigtwin::fmu_package::package(&p, &lib, &out)?;
             outln!("wrote {} and {} (token {})", a.display(), b.display(), rigtwin_fmu::token(&p));
         }
-        Command::Mpc { horizon, scenario, blocks, formulation, params, plant, time_limit_us, json, plot, export_qp } => {
+        Command::Mpc {
+            horizon,
+            scenario,
+            blocks,
+            formulation,
+            params,
+            plant,
+            time_limit_us,
+            json,
+            plot,
+            export_qp,
+        } => {
             let rig_of = |f: &PathBuf, flag: &str| -> anyhow::Result<rigtwin_fmu::FmuParams> {
                 let p = rigtwin::fmu_package::params_of_file(f)?;
                 if p.drive.is_some() {

@@ -568,8 +568,11 @@ mod tests {
         // what the MPC predicts with: the MechanicalModel path's state space, names included
         let p = Powertrain::new(&rig(), Variant::V2, &DriveEffects::default()).unwrap();
         let ss = p.control_state_space();
-        let reference =
-            rig().open_differential(Variant::V2).unwrap().state_space(&[Output::Speeds, Output::SpringTorques]).unwrap();
+        let reference = rig()
+            .open_differential(Variant::V2)
+            .unwrap()
+            .state_space(&[Output::Speeds, Output::SpringTorques])
+            .unwrap();
         assert_eq!(ss.state_names, reference.state_names);
         assert_eq!(ss.input_names, reference.input_names);
         assert_eq!(ss.output_names, reference.output_names);
