@@ -7,7 +7,6 @@ use mpc::closed_loop::{
 };
 use mpc::qp::QpSnapshot;
 use mpc::{Controller, MpcSettings, StepInfo};
-use plant::statespace::StateSpace;
 use serde::Serialize;
 
 /// The PI baseline's speed-loop crossover, Hz (a typical rig's load-machine speed loop).
@@ -17,67 +16,14 @@ pub const SETTLING_BAND: f64 = 0.02;
 /// Every this many steps the real-time first input is compared with the exact optimum.
 pub const CHECK_EVERY: usize = 25;
 
-/// What the controller predicts with: the open-differential powertrain of `params` with the
-/// effects its `[effects]` section declares (`plant::effects::Powertrain::control_state_space`)
-/// and the drive torque's dead time. Backlash is left out of the prediction (linear in
-/// contact): [`Prediction::notes`] says so.
-#[derive(Debug, Clone)]
-pub struct Prediction {
-    /// Continuous linear model: inputs M_m2, M_drive, M_m3; outputs w_m2, w_drive, w_m3,
-    /// T_short_side_shaft, T_long_side_shaft (and w_motor with a drive compliance).
-    pub model: StateSpace,
-    /// Dead time of each input, s.
-    pub input_delays_s: Vec<f64>,
-    /// What the prediction includes and leaves out, in words.
-    pub notes: Vec<String>,
-}
+pub use mpc::rig::Prediction;
 
-/// The prediction model of `params` (see [`Prediction`]).
+/// The prediction model of `params` (see [`Prediction`]); a drive model is refused.
 pub fn prediction(params: &rigtwin_fmu::FmuParams) -> anyhow::Result<Prediction> {
     if params.drive.is_some() {
         anyhow::bail!("a drive model: the MPC runs on the paper rig's powertrain only (give a rig file)");
     }
-    // the controller samples at 1 kHz: a rig whose modes lie beyond that loop's Nyquist
-    // frequency (an inertia or stiffness far off) cannot be controlled by it, and its Riccati
-    // equations would fail with a message about residuals instead of the parameters
-    let modes = params.powertrain.open_differential(params.variant)?.modes()?;
-    let top = modes.frequencies_hz.iter().copied().fold(0.0, f64::max);
-    let nyquist = 0.5 / mpc::MpcSettings::powertrain(1).dt_s;
-    if top.is_nan() || top >= nyquist {
-        let p = &params.powertrain;
-        anyhow::bail!(
-            "the rig's fastest mode is at {top:.4e} Hz, beyond the {nyquist} Hz a controller sampling every \
-             {} s can see: check [model] (j_m2 = {}, j_drive = {}, j_m3 = {} kg m^2, c_short = {}, c_long = {} Nm/rad)",
-            1.0 / (2.0 * nyquist),
-            p.j_m2,
-            p.j_drive,
-            p.j_m3,
-            p.c_short,
-            p.c_long()
-        );
-    }
-    let e = &params.effects;
-    let pt = plant::effects::Powertrain::new(&params.powertrain, params.variant, e)?;
-    let mut notes = Vec::new();
-    if e.time_delay_s > 0.0 {
-        notes.push(format!("drive-torque dead time {:.4} ms as input-delay states", e.time_delay_s * 1e3));
-    }
-    if e.actuator_lag_s > 0.0 {
-        notes.push(format!("actuator lag {:.4} ms as a state", e.actuator_lag_s * 1e3));
-    }
-    if e.compliance_stiffness_nm_per_rad > 0.0 {
-        notes.push(format!(
-            "drive compliance {:.1} Nm/rad (motor share {:.2}) as two states",
-            e.compliance_stiffness_nm_per_rad, e.compliance_motor_fraction
-        ));
-    }
-    if e.backlash_rad > 0.0 {
-        notes.push(format!(
-            "side-shaft backlash {:.4} mrad is NOT in the prediction: it stays linear with the shafts in contact",
-            e.backlash_rad * 1e3
-        ));
-    }
-    Ok(Prediction { model: pt.control_state_space(), input_delays_s: pt.delay_s().to_vec(), notes })
+    Ok(mpc::rig::prediction(&params.powertrain, params.variant, &params.effects, 1e-3)?)
 }
 
 /// The rig as the FMU integrates it (`rigtwin_fmu::model::Model`: exact ZOH pieces split at the

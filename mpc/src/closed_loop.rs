@@ -130,7 +130,7 @@ impl Control for PiBaseline {
 /// Advances `plant` and checks that its outputs stay finite and within ±[`DIVERGED`].
 fn advance(plant: &mut dyn Plant, u: &[f64]) -> std::result::Result<(), String> {
     plant.advance(u)?;
-    match plant.outputs().iter().position(|y| !(y.abs() < DIVERGED)) {
+    match plant.outputs().iter().position(|y| y.is_nan() || y.abs() >= DIVERGED) {
         Some(i) => Err(format!("output {i} is {} (the loop diverged)", plant.outputs()[i])),
         None => Ok(()),
     }

@@ -14,6 +14,7 @@
 //! - [`controller`]: one allocation-free step; the shifted previous plan when a solve fails.
 //! - [`closed_loop`]: simulation against a plant, the PI baseline, step figures.
 //! - [`riccati`]: the discrete Riccati equation (`dare`).
+//! - [`rig`]: the paper rig with its effects as a prediction model.
 #![warn(missing_docs)]
 
 pub mod alloc_counter;
@@ -24,6 +25,7 @@ pub mod estimator;
 pub mod model;
 pub mod qp;
 pub mod riccati;
+pub mod rig;
 pub mod settings;
 pub mod solver;
 

@@ -1,0 +1,158 @@
+//! The C API from C: `tests/c/replay.c` is compiled against `include/rigtwin_mpc.h` and linked
+//! once with the static and once with the shared library; it replays the measurements and
+//! references of a Rust closed loop — `rigtwin mpc`'s controller (`rigtwin::control::prediction`,
+//! `mpc::Controller`) on the rig with a dead time as the FMU integrates it — and must command
+//! the same torques. It also checks the API's refusals (a missing file named, NULL, NaN).
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use mpc::closed_loop::{steady_spin, Plant};
+use mpc::{Controller, MpcSettings};
+
+/// target/<profile>, where cargo puts this crate's static and shared library: `cargo test`
+/// builds only the rlib the tests link, so the libraries a C program links are built here (in
+/// the same target directory and profile, so only this crate's last step is compiled).
+fn library_dir() -> PathBuf {
+    let exe = std::env::current_exe().unwrap();
+    let dir = exe.parent().unwrap().parent().unwrap().to_path_buf();
+    let profile = dir.file_name().unwrap().to_str().unwrap().to_string();
+    let target = dir.parent().unwrap();
+    let mut cmd = Command::new(env!("CARGO"));
+    cmd.args(["build", "--quiet", "-p", "rigtwin-mpc", "--lib", "--target-dir"]).arg(target);
+    match profile.as_str() {
+        "debug" => {}
+        "release" => {
+            cmd.arg("--release");
+        }
+        other => {
+            cmd.args(["--profile", other]);
+        }
+    }
+    let out = cmd.output().unwrap();
+    assert!(out.status.success(), "cargo build -p rigtwin-mpc: {}", String::from_utf8_lossy(&out.stderr));
+    dir
+}
+
+fn compile(out: &Path, link: &[&str]) {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let status = Command::new("cc")
+        .arg("-std=c99")
+        .arg("-Wall")
+        .arg("-Werror")
+        .arg("-I")
+        .arg(root.join("include"))
+        .arg(root.join("tests/c/replay.c"))
+        .arg("-o")
+        .arg(out)
+        .args(link)
+        .output()
+        .expect("a C compiler `cc`");
+    assert!(status.status.success(), "cc: {}", String::from_utf8_lossy(&status.stderr));
+}
+
+#[test]
+fn c_program_commands_what_the_rust_loop_commands() {
+    let dir = std::env::temp_dir().join(format!("rigtwin-capi-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    // the paper rig with a 4.3 ms dead time of the drive torque: input-delay states in the
+    // prediction, a split sample in the plant
+    let rig = dir.join("rig.toml");
+    let paper = include_str!("../../rigs/paper.toml");
+    std::fs::write(&rig, format!("{paper}\n[effects]\ntime_delay_s = 0.0043\n")).unwrap();
+
+    // the Rust closed loop, assembled as `rigtwin mpc` assembles it
+    let params = rigtwin::fmu_package::params_of_file(&rig).unwrap();
+    let p = rigtwin::control::prediction(&params).unwrap();
+    let mut settings = MpcSettings::powertrain(50);
+    settings.solver.time_limit_s = 1.0;
+    let mut c = Controller::with_input_delays(&p.model, &p.input_delays_s, &settings).unwrap();
+    let speed = 10.0;
+    let (x0, u0) = steady_spin(&p.model, speed).unwrap();
+    c.reset(&x0, &u0);
+    let mut plant = rigtwin::control::FmuPlant::new(&params, settings.dt_s, speed, &u0, &p.model.output_names).unwrap();
+    let (mut record, mut commands) = (format!("{speed}\n"), Vec::new());
+    for k in 0..300 {
+        let y = plant.outputs().to_vec();
+        let r = [speed, speed, if k >= 50 { 40.0 } else { 0.0 }];
+        let (u, info) = c.step(&y, &r);
+        assert!(!info.fallback);
+        let u = u.to_vec();
+        record += &format!("{:.17e} {:.17e} {:.17e} {} {} {}\n", y[0], y[1], y[2], r[0], r[1], r[2]);
+        commands.push(u.clone());
+        plant.advance(&u).unwrap();
+    }
+    assert_eq!(&p.model.output_names[..3], ["w_m2", "w_drive", "w_m3"]);
+    assert_eq!(p.model.input_names, ["M_m2", "M_drive", "M_m3"]);
+    let record_file = dir.join("record.txt");
+    std::fs::write(&record_file, record).unwrap();
+
+    let lib = library_dir();
+    let stat = dir.join("replay_static");
+    compile(&stat, &[lib.join("librigtwin_mpc.a").to_str().unwrap(), "-lm", "-lpthread", "-ldl"]);
+    let shared = dir.join("replay_shared");
+    let rpath = format!("-Wl,-rpath,{}", lib.display());
+    compile(&shared, &["-L", lib.to_str().unwrap(), "-lrigtwin_mpc", &rpath, "-lm"]);
+
+    for exe in [stat, shared] {
+        let out = Command::new(&exe).arg(&rig).arg(&record_file).output().unwrap();
+        assert!(
+            out.status.success(),
+            "{}: exit {:?}: {}",
+            exe.display(),
+            out.status.code(),
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let text = String::from_utf8(out.stdout).unwrap();
+        let rows: Vec<Vec<f64>> =
+            text.lines().map(|l| l.split_whitespace().map(|v| v.parse().unwrap()).collect()).collect();
+        assert_eq!(rows.len(), commands.len());
+        let mut worst: f64 = 0.0;
+        for (row, u) in rows.iter().zip(&commands) {
+            assert_eq!(row[3], 0.0, "status {} (0 = OK)", row[3]);
+            for j in 0..3 {
+                worst = worst.max((row[j] - u[j]).abs());
+            }
+        }
+        // the same code on the same numbers: equal to round-off (the record is printed with
+        // 17 digits, so the C side sees the Rust side's doubles exactly)
+        assert!(worst < 1e-9, "{}: torques differ by up to {worst:e} Nm", exe.display());
+        let step = commands.iter().map(|u| u[1]).fold(0.0f64, f64::max);
+        assert!(step > 30.0, "the drive torque followed its step ({step} Nm)");
+    }
+}
+
+/// The Rust side of the boundary: NULL, a bad file and a NaN are refused with statuses and
+/// messages, never a panic.
+#[test]
+fn refusals_at_the_boundary() {
+    use rigtwin_mpc::*;
+    let mut err = vec![0 as std::ffi::c_char; 256];
+    let path = std::ffi::CString::new("/nonexistent/rig.toml").unwrap();
+    // SAFETY: valid pointers and lengths
+    let c = unsafe { rigtwin_mpc_create(path.as_ptr(), std::ptr::null(), err.as_mut_ptr(), err.len()) };
+    assert!(c.is_null());
+    // SAFETY: NUL-terminated by rigtwin_mpc_create
+    let msg = unsafe { std::ffi::CStr::from_ptr(err.as_ptr()) }.to_string_lossy().into_owned();
+    assert!(msg.contains("/nonexistent/rig.toml"), "{msg}");
+    let bad = Options { horizon: 0, ..Options::default() };
+    // SAFETY: valid pointers
+    let c = unsafe { rigtwin_mpc_create(std::ptr::null(), &bad, err.as_mut_ptr(), err.len()) };
+    assert!(c.is_null());
+    // SAFETY: as above
+    let msg = unsafe { std::ffi::CStr::from_ptr(err.as_ptr()) }.to_string_lossy().into_owned();
+    assert!(msg.contains("horizon"), "{msg}");
+    // SAFETY: NULL is allowed
+    let c = unsafe { rigtwin_mpc_create(std::ptr::null(), std::ptr::null(), std::ptr::null_mut(), 0) };
+    assert!(!c.is_null());
+    let (m, r, mut t) = ([10.0, 10.0, 10.0], [10.0, 10.0, f64::INFINITY], [0.0; 3]);
+    // SAFETY: live controller, arrays of 3
+    unsafe {
+        assert_eq!(rigtwin_mpc_reset(c, 10.0), Status::Ok);
+        assert_eq!(rigtwin_mpc_reset(c, f64::NAN), Status::BadInput);
+        assert_eq!(rigtwin_mpc_step(c, m.as_ptr(), r.as_ptr(), t.as_mut_ptr()), Status::BadInput);
+        assert!(t.iter().all(|v| v.is_finite()));
+        assert_eq!(rigtwin_mpc_step(c, m.as_ptr(), std::ptr::null(), t.as_mut_ptr()), Status::Invalid);
+        rigtwin_mpc_free(c);
+    }
+}

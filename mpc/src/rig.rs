@@ -1,0 +1,65 @@
+//! The paper rig as the controller sees it: the open-differential powertrain with the effects a
+//! rig file declares (or the diagnosis found), as a linear prediction model with input dead times.
+
+use plant::effects::{DriveEffects, Powertrain};
+use plant::rig::{RigParams, Variant};
+use plant::statespace::StateSpace;
+
+use crate::error::{MpcError, Result};
+
+/// What the controller predicts with: the open-differential powertrain with its effects
+/// (`plant::effects::Powertrain::control_state_space`) and the drive torque's dead time.
+/// Backlash is left out of the prediction (linear in contact): [`Prediction::notes`] says so.
+#[derive(Debug, Clone)]
+pub struct Prediction {
+    /// Continuous linear model: inputs M_m2, M_drive, M_m3; outputs w_m2, w_drive, w_m3,
+    /// T_short_side_shaft, T_long_side_shaft (and w_motor with a drive compliance).
+    pub model: StateSpace,
+    /// Dead time of each input, s.
+    pub input_delays_s: Vec<f64>,
+    /// What the prediction includes and leaves out, in words.
+    pub notes: Vec<String>,
+}
+
+/// The prediction model of the rig `rig` in `variant` with `effects`, for a controller sampling
+/// every `dt_s`. Refused when the rig's modes lie beyond that loop's Nyquist frequency (an
+/// inertia or stiffness far off): it could not be controlled, and its Riccati equations would
+/// fail with a message about residuals instead of the parameters.
+pub fn prediction(rig: &RigParams, variant: Variant, effects: &DriveEffects, dt_s: f64) -> Result<Prediction> {
+    let modes = rig.open_differential(variant)?.modes()?;
+    let top = modes.frequencies_hz.iter().copied().fold(0.0, f64::max);
+    let nyquist = 0.5 / dt_s;
+    if top.is_nan() || top >= nyquist {
+        return Err(MpcError::Numerical(format!(
+            "the rig's fastest mode is at {top:.4e} Hz, beyond the {nyquist} Hz a controller sampling every \
+             {dt_s} s can see: check [model] (j_m2 = {}, j_drive = {}, j_m3 = {} kg m^2, c_short = {}, c_long = {} Nm/rad)",
+            rig.j_m2,
+            rig.j_drive,
+            rig.j_m3,
+            rig.c_short,
+            rig.c_long()
+        )));
+    }
+    let pt = Powertrain::new(rig, variant, effects)?;
+    let e = effects;
+    let mut notes = Vec::new();
+    if e.time_delay_s > 0.0 {
+        notes.push(format!("drive-torque dead time {:.4} ms as input-delay states", e.time_delay_s * 1e3));
+    }
+    if e.actuator_lag_s > 0.0 {
+        notes.push(format!("actuator lag {:.4} ms as a state", e.actuator_lag_s * 1e3));
+    }
+    if e.compliance_stiffness_nm_per_rad > 0.0 {
+        notes.push(format!(
+            "drive compliance {:.1} Nm/rad (motor share {:.2}) as two states",
+            e.compliance_stiffness_nm_per_rad, e.compliance_motor_fraction
+        ));
+    }
+    if e.backlash_rad > 0.0 {
+        notes.push(format!(
+            "side-shaft backlash {:.4} mrad is NOT in the prediction: it stays linear with the shafts in contact",
+            e.backlash_rad * 1e3
+        ));
+    }
+    Ok(Prediction { model: pt.control_state_space(), input_delays_s: pt.delay_s().to_vec(), notes })
+}
