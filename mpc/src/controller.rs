@@ -256,6 +256,48 @@ impl Controller {
         (self.u.as_slice(), info)
     }
 
+    /// Length of the record of [`Controller::save_state`].
+    pub fn state_len(&self) -> usize {
+        self.estimator.state_len() + self.u.len() + self.plan.len() + 3
+    }
+
+    /// Writes what the controller carries from step to step — the Kalman filter's estimates,
+    /// the last input, the plan and where in it the controller is, the fallback count — into
+    /// `out` (length [`Controller::state_len`]); no allocation. With
+    /// [`Controller::restore_state`], an FMU's get/set/serialize state.
+    pub fn save_state(&self, out: &mut [f64]) {
+        let ne = self.estimator.state_len();
+        let (m, np) = (self.u.len(), self.plan.len());
+        self.estimator.save(&mut out[..ne]);
+        out[ne..ne + m].copy_from_slice(self.u.as_slice());
+        out[ne + m..ne + m + np].copy_from_slice(self.plan.as_slice());
+        out[ne + m + np] = self.plan_step as f64;
+        out[ne + m + np + 1] = f64::from(u8::from(self.plan_valid));
+        out[ne + m + np + 2] = self.fallbacks as f64;
+    }
+
+    /// Restores a record of [`Controller::save_state`] from a controller of the same
+    /// structure (horizon, model); false (and nothing changed) when its length or content
+    /// cannot be one.
+    pub fn restore_state(&mut self, s: &[f64]) -> bool {
+        if s.len() != self.state_len() || s.iter().any(|v| !v.is_finite()) {
+            return false;
+        }
+        let ne = self.estimator.state_len();
+        let (m, np) = (self.u.len(), self.plan.len());
+        let count = |v: f64| (v >= 0.0 && v.fract() == 0.0 && v < 1e12).then_some(v as usize);
+        let (Some(step), Some(fallbacks)) = (count(s[ne + m + np]), count(s[ne + m + np + 2])) else {
+            return false;
+        };
+        self.estimator.restore(&s[..ne]);
+        self.u.as_mut_slice().copy_from_slice(&s[ne..ne + m]);
+        self.plan.as_mut_slice().copy_from_slice(&s[ne + m..ne + m + np]);
+        self.plan_step = step;
+        self.plan_valid = s[ne + m + np + 1] != 0.0;
+        self.fallbacks = fallbacks;
+        true
+    }
+
     /// Steps that used the fallback so far.
     pub fn fallbacks(&self) -> usize {
         self.fallbacks

@@ -131,6 +131,27 @@ impl Estimator {
         &self.d_full
     }
 
+    /// Length of [`Estimator::save`]'s record: prior and posterior estimates, disturbances.
+    pub fn state_len(&self) -> usize {
+        2 * self.prior.len() + self.d_full.len()
+    }
+
+    /// Writes the filter's state into `out` (length [`Estimator::state_len`]); no allocation.
+    pub fn save(&self, out: &mut [f64]) {
+        let na = self.prior.len();
+        out[..na].copy_from_slice(self.prior.as_slice());
+        out[na..2 * na].copy_from_slice(self.posterior.as_slice());
+        out[2 * na..].copy_from_slice(self.d_full.as_slice());
+    }
+
+    /// Restores a state written by [`Estimator::save`].
+    pub fn restore(&mut self, s: &[f64]) {
+        let na = self.prior.len();
+        self.prior.as_mut_slice().copy_from_slice(&s[..na]);
+        self.posterior.as_mut_slice().copy_from_slice(&s[na..2 * na]);
+        self.d_full.as_mut_slice().copy_from_slice(&s[2 * na..]);
+    }
+
     /// The gain L.
     pub fn gain(&self) -> &DMatrix<f64> {
         &self.gain

@@ -246,3 +246,46 @@ fn bad_settings_are_named() {
     let e = Controller::new(&ss, &s).err().unwrap().to_string();
     assert!(e.contains("disturbances"), "{e}");
 }
+
+/// A saved state restored into the same controller, or into a fresh one of the same
+/// structure, replays the same inputs (the FMU's get/set/serialize state rests on this).
+#[test]
+fn saved_state_replays_the_same_inputs() {
+    let ss = nominal();
+    let mut s = MpcSettings::powertrain(30);
+    s.solver.time_limit_s = 1.0;
+    let (x0, u0) = steady_spin(&ss, 10.0).unwrap();
+    let mut c = Controller::new(&ss, &s).unwrap();
+    c.reset(&x0, &u0);
+    let mut p = LinearPlant::new(&ss, 1e-3, &x0).unwrap();
+    let run = |c: &mut Controller, p: &mut LinearPlant, from: usize, n: usize| -> Vec<Vec<f64>> {
+        (from..from + n)
+            .map(|k| {
+                let y = p.outputs().to_vec();
+                let u = c.step(&y, &step_ref(k)).0.to_vec();
+                p.advance(&u).unwrap();
+                u
+            })
+            .collect()
+    };
+    run(&mut c, &mut p, 0, 60);
+    let mut saved = vec![0.0; c.state_len()];
+    c.save_state(&mut saved);
+    let p_saved = p.state().clone();
+    let first = run(&mut c, &mut p, 60, 40);
+    // into the same controller
+    assert!(c.restore_state(&saved));
+    let mut p2 = LinearPlant::new(&ss, 1e-3, &p_saved).unwrap();
+    assert_eq!(run(&mut c, &mut p2, 60, 40), first);
+    // into a fresh one
+    let mut fresh = Controller::new(&ss, &s).unwrap();
+    assert!(fresh.restore_state(&saved));
+    let mut p3 = LinearPlant::new(&ss, 1e-3, &p_saved).unwrap();
+    assert_eq!(run(&mut fresh, &mut p3, 60, 40), first);
+    // a record of another length, or with a NaN, is refused
+    assert!(!fresh.restore_state(&saved[1..]));
+    let mut bad = saved.clone();
+    bad[0] = f64::NAN;
+    assert!(!fresh.restore_state(&bad));
+    assert!(first.iter().flatten().any(|&u| u > 30.0), "the step was taken");
+}
