@@ -47,6 +47,7 @@ pub fn params_of_rig(rig: &Rig) -> anyhow::Result<FmuParams> {
         bearing: rig.bearing.clone().unwrap_or(default.bearing),
         effects: rig.effects,
         drive: None,
+        controller: None,
     })
 }
 
@@ -76,7 +77,8 @@ pub fn write_descriptions(p: &FmuParams, dir: &Path) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// Writes `rigtwin-fmi3.fmu` and `rigtwin-fmi2.fmu` into `out`; returns their paths.
+/// Writes `rigtwin-fmi3.fmu` and `rigtwin-fmi2.fmu` into `out` (`rigtwin-mpc-fmi3.fmu` and
+/// `rigtwin-mpc-fmi2.fmu` for the controller); returns their paths.
 pub fn package(p: &FmuParams, lib: &[u8], out: &Path) -> anyhow::Result<[PathBuf; 2]> {
     // the parameters must describe a model before anything is written
     rigtwin_fmu::check(p).map_err(|e| anyhow::anyhow!("the parameter set does not describe a model: {e}"))?;
@@ -84,7 +86,9 @@ pub fn package(p: &FmuParams, lib: &[u8], out: &Path) -> anyhow::Result<[PathBuf
     let dir = crate::files::output_dir(out, "--out")?;
     let params_json = serde_json::to_vec_pretty(p)?;
     let mut written = Vec::new();
-    for (version, platform, name) in [(Version::Fmi3, p3, "rigtwin-fmi3.fmu"), (Version::Fmi2, p2, "rigtwin-fmi2.fmu")]
+    let stem = if p.controller.is_some() { "rigtwin-mpc" } else { "rigtwin" };
+    for (version, platform, name) in
+        [(Version::Fmi3, p3, format!("{stem}-fmi3.fmu")), (Version::Fmi2, p2, format!("{stem}-fmi2.fmu"))]
     {
         let mut buf = std::io::Cursor::new(Vec::new());
         {
@@ -98,8 +102,8 @@ pub fn package(p: &FmuParams, lib: &[u8], out: &Path) -> anyhow::Result<[PathBuf
             zip.write_all(&params_json)?;
             zip.finish()?;
         }
-        crate::files::write_new(&dir.join(name), "--out", buf.get_ref())?;
-        written.push(out.join(name));
+        crate::files::write_new(&dir.join(&name), "--out", buf.get_ref())?;
+        written.push(out.join(&name));
     }
     Ok([written.remove(0), written.remove(0)])
 }

@@ -147,6 +147,17 @@ enum Command {
         /// Also write both modelDescription.xml files into this folder (e.g. modelDescription).
         #[arg(long, value_name = "DIR")]
         descriptions: Option<PathBuf>,
+        /// Write the controller FMUs instead (rigtwin-mpc-fmi3.fmu, rigtwin-mpc-fmi2.fmu):
+        /// `rigtwin mpc`'s controller of the rig of --params (with its [effects]) as a
+        /// co-simulation FMU stepping every 1 ms.
+        #[arg(long)]
+        controller: bool,
+        /// The controller's prediction horizon, steps of 1 ms (with --controller).
+        #[arg(long, default_value_t = 50, requires = "controller")]
+        horizon: usize,
+        /// The controller's number of move blocks, 0: every step free (with --controller).
+        #[arg(long, default_value_t = 4, requires = "controller")]
+        blocks: usize,
     },
     /// Model-predictive control of the rig (section 1.2): the closed loop with the MPC and
     /// with PI speed control after a drive-torque step or during a sweep; step time,
@@ -383,11 +394,17 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                 out!("{}", rep.human());
             }
         }
-        Command::Fmu { params, out, descriptions } => {
-            let p = match &params {
+        Command::Fmu { params, out, descriptions, controller, horizon, blocks } => {
+            let mut p = match &params {
                 Some(f) => rigtwin::fmu_package::params_of_file(f)?,
                 None => rigtwin_fmu::FmuParams::default(),
             };
+            if controller {
+                if p.drive.is_some() {
+                    anyhow::bail!("--controller: the controller FMU is the paper rig's MPC; --params is a drive model");
+                }
+                p.controller = Some(rigtwin_fmu::controller::ControllerSpec::new(horizon, blocks));
+            }
             if let Some(d) = &descriptions {
                 rigtwin::fmu_package::write_descriptions(&p, d)?;
             }

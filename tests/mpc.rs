@@ -145,3 +145,86 @@ fn osqp_and_daqp_solve_the_same_qps() {
     assert!(e < 1e-2, "Clarabel's first input {e} Nm from DAQP's");
     assert!(v["osqp"]["median_us"].as_f64().unwrap() > 0.0 && v["daqp"]["median_us"].as_f64().unwrap() > 0.0);
 }
+
+/// Issue 16, items 3 and 4: the controller as an FMU. `rigtwin fmu --controller` and `rigtwin
+/// fmu` write the controller and plant FMUs of a rig with a 4.3 ms drive dead time; fmpy
+/// validates the controller FMUs and fmutool checks them, and a small fmpy master
+/// (`tests/closed_loop_fmus.py`) closes the loop FMI 3 with FMI 3 and FMI 2 with FMI 2. The
+/// speeds and commands match the in-process closed loop (the controller assembled as `rigtwin
+/// mpc` assembles it, the plant as the FMU integrates it) to the issue's 1e-6.
+#[test]
+fn controller_fmu_closes_the_loop_in_fmpy() {
+    let dir = std::env::temp_dir().join(format!("rigtwin-ctrl-fmu-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let rig = dir.join("rig.toml");
+    let paper = include_str!("../rigs/paper.toml");
+    std::fs::write(&rig, format!("{paper}\n[effects]\ntime_delay_s = 0.0043\n")).unwrap();
+    let (plant_dir, ctrl_dir) = (dir.join("plant"), dir.join("controller"));
+    for (args, out) in [(vec!["fmu"], &plant_dir), (vec!["fmu", "--controller"], &ctrl_dir)] {
+        let mut a = args.clone();
+        a.extend(["--params", rig.to_str().unwrap(), "--out", out.to_str().unwrap()]);
+        let o = rigtwin(&a);
+        assert!(o.status.success(), "{a:?}: {}", String::from_utf8_lossy(&o.stderr));
+    }
+
+    // the in-process loop
+    let params = rigtwin::fmu_package::params_of_file(&rig).unwrap();
+    let p = rigtwin::control::prediction(&params).unwrap();
+    let mut settings = MpcSettings::powertrain(50);
+    settings.solver.time_limit_s = 1.0;
+    let mut c = mpc::Controller::with_input_delays(&p.model, &p.input_delays_s, &settings).unwrap();
+    let speed = 10.0;
+    let (x0, u0) = mpc::closed_loop::steady_spin(&p.model, speed).unwrap();
+    c.reset(&x0, &u0);
+    let mut plant = rigtwin::control::FmuPlant::new(&params, settings.dt_s, speed, &u0, &p.model.output_names).unwrap();
+    let (steps, step_at) = (400, 50);
+    let mut rows = Vec::new();
+    for k in 0..steps {
+        let y = plant.outputs().to_vec();
+        let r = [speed, speed, if k >= step_at { 40.0 } else { 0.0 }];
+        let u = c.step(&y, &r).0.to_vec();
+        rows.push([y[0], y[1], y[2], u[0], u[1], u[2]]);
+        plant.advance(&u).unwrap();
+    }
+
+    let start = serde_json::json!({
+        "plant": {"w_m2": speed, "w_drive": speed, "w_m3": speed, "M_m2": u0[0], "M_drive": u0[1], "M_m3": u0[2]},
+        "controller": {"mpc.time_limit": 1.0},
+        "speed_radps": speed, "step_at": step_at, "step_nm": 40.0,
+    });
+    let start_file = dir.join("start.json");
+    std::fs::write(&start_file, start.to_string()).unwrap();
+    let report = dir.join("report.json");
+    let script = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/closed_loop_fmus.py");
+    let out = Command::new(common::python())
+        .arg(script)
+        .args([&plant_dir, &ctrl_dir, &start_file])
+        .arg(steps.to_string())
+        .arg(&report)
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "closed_loop_fmus.py: {}", String::from_utf8_lossy(&out.stderr));
+    let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&report).unwrap()).unwrap();
+    for version in ["fmi3", "fmi2"] {
+        let problems = v["validate"][version].as_array().unwrap();
+        assert!(problems.is_empty(), "fmpy validate {version}: {problems:?}");
+        assert_eq!(v["fmutool"][version]["returncode"], 0, "fmutool {version}: {}", v["fmutool"][version]);
+        let got = v[version].as_array().unwrap();
+        assert_eq!(got.len(), rows.len());
+        let (mut speed_err, mut torque_err): (f64, f64) = (0.0, 0.0);
+        for (g, r) in got.iter().zip(&rows) {
+            let g: Vec<f64> = g.as_array().unwrap().iter().map(|x| x.as_f64().unwrap()).collect();
+            for j in 0..3 {
+                speed_err = speed_err.max((g[j] - r[j]).abs());
+                torque_err = torque_err.max((g[3 + j] - r[3 + j]).abs());
+            }
+        }
+        eprintln!(
+            "{version}: fmpy master vs in-process loop: speeds {speed_err:.2e} rad/s, commands {torque_err:.2e} Nm"
+        );
+        assert!(speed_err < 1e-6, "{version}: speeds differ by {speed_err} rad/s");
+        assert!(torque_err < 1e-4, "{version}: commands differ by {torque_err} Nm");
+    }
+    let last = rows.last().unwrap();
+    assert!((last[4] - 40.0).abs() < 1.0, "the drive torque followed its step: {last:?}");
+}

@@ -121,6 +121,33 @@ fn drive_description(m: &plant::DriveModel) -> (String, bool) {
     (desc, delayed)
 }
 
+/// The controller FMU's communication step (its control period), s.
+pub const CONTROL_PERIOD_S: f64 = 1e-3;
+
+/// The controller FMU's description: what it controls and with which prediction model.
+fn controller_description(p: &FmuParams, c: &crate::controller::ControllerSpec) -> String {
+    let e = &p.effects;
+    let on: Vec<&str> = [
+        (e.time_delay_s > 0.0, "the drive torque's dead time"),
+        (e.actuator_lag_s > 0.0, "an actuator lag"),
+        (e.compliance_stiffness_nm_per_rad > 0.0, "a drive compliance"),
+    ]
+    .into_iter()
+    .filter_map(|(on, name)| on.then_some(name))
+    .collect();
+    let mut d = format!(
+        "rigtwin's model-predictive controller of the open-differential HIL rig (Clarabel QP, horizon {} steps of {} s, Kalman filter with input disturbances): the load machines hold their speed references, the drive follows its torque reference, the side-shaft oscillation is penalised",
+        c.horizon, CONTROL_PERIOD_S
+    );
+    if !on.is_empty() {
+        let _ = write!(d, "; the prediction includes {}", on.join(", "));
+    }
+    if e.backlash_rad > 0.0 {
+        d += "; the side-shaft backlash is not in the prediction (linear in contact)";
+    }
+    d
+}
+
 /// Which FMI version to describe.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Version {
@@ -156,9 +183,11 @@ fn describe_with(p: &FmuParams, version: Version, token: &str) -> String {
     let vars = &table.variables;
     let params = parameter_values(p);
     let mut x = String::new();
-    let (desc, needs_completed) = match &p.drive {
-        None => rig_description(p),
-        Some(m) => drive_description(m),
+    let controller = p.controller.is_some();
+    let (desc, needs_completed) = match (&p.drive, &p.controller) {
+        (_, Some(c)) => (controller_description(p, c), false),
+        (None, None) => rig_description(p),
+        (Some(m), None) => drive_description(m),
     };
     let _ = writeln!(x, "<?xml version=\"1.0\" encoding=\"UTF-8\"?>");
     match version {
@@ -169,8 +198,12 @@ fn describe_with(p: &FmuParams, version: Version, token: &str) -> String {
                 xml_escape(&desc),
                 env!("CARGO_PKG_VERSION")
             );
-            let _ = writeln!(x, "  <ModelExchange modelIdentifier=\"{MODEL_IDENTIFIER}\" canGetAndSetFMUState=\"true\" canSerializeFMUState=\"true\" providesDirectionalDerivatives=\"true\" needsCompletedIntegratorStep=\"{needs_completed}\"/>");
-            let _ = writeln!(x, "  <CoSimulation modelIdentifier=\"{MODEL_IDENTIFIER}\" canHandleVariableCommunicationStepSize=\"true\" canGetAndSetFMUState=\"true\" canSerializeFMUState=\"true\" providesDirectionalDerivatives=\"true\" hasEventMode=\"false\"/>");
+            if controller {
+                let _ = writeln!(x, "  <CoSimulation modelIdentifier=\"{MODEL_IDENTIFIER}\" canHandleVariableCommunicationStepSize=\"false\" fixedInternalStepSize=\"{CONTROL_PERIOD_S:?}\" canGetAndSetFMUState=\"true\" canSerializeFMUState=\"true\" hasEventMode=\"false\"/>");
+            } else {
+                let _ = writeln!(x, "  <ModelExchange modelIdentifier=\"{MODEL_IDENTIFIER}\" canGetAndSetFMUState=\"true\" canSerializeFMUState=\"true\" providesDirectionalDerivatives=\"true\" needsCompletedIntegratorStep=\"{needs_completed}\"/>");
+                let _ = writeln!(x, "  <CoSimulation modelIdentifier=\"{MODEL_IDENTIFIER}\" canHandleVariableCommunicationStepSize=\"true\" canGetAndSetFMUState=\"true\" canSerializeFMUState=\"true\" providesDirectionalDerivatives=\"true\" hasEventMode=\"false\"/>");
+            }
         }
         Version::Fmi2 => {
             let _ = writeln!(
@@ -179,8 +212,12 @@ fn describe_with(p: &FmuParams, version: Version, token: &str) -> String {
                 xml_escape(&desc),
                 env!("CARGO_PKG_VERSION")
             );
-            let _ = writeln!(x, "  <ModelExchange modelIdentifier=\"{MODEL_IDENTIFIER}\" canGetAndSetFMUstate=\"true\" canSerializeFMUstate=\"true\" providesDirectionalDerivative=\"true\" completedIntegratorStepNotNeeded=\"{}\"/>", !needs_completed);
-            let _ = writeln!(x, "  <CoSimulation modelIdentifier=\"{MODEL_IDENTIFIER}\" canHandleVariableCommunicationStepSize=\"true\" canGetAndSetFMUstate=\"true\" canSerializeFMUstate=\"true\" providesDirectionalDerivative=\"true\"/>");
+            if controller {
+                let _ = writeln!(x, "  <CoSimulation modelIdentifier=\"{MODEL_IDENTIFIER}\" canHandleVariableCommunicationStepSize=\"false\" canGetAndSetFMUstate=\"true\" canSerializeFMUstate=\"true\"/>");
+            } else {
+                let _ = writeln!(x, "  <ModelExchange modelIdentifier=\"{MODEL_IDENTIFIER}\" canGetAndSetFMUstate=\"true\" canSerializeFMUstate=\"true\" providesDirectionalDerivative=\"true\" completedIntegratorStepNotNeeded=\"{}\"/>", !needs_completed);
+                let _ = writeln!(x, "  <CoSimulation modelIdentifier=\"{MODEL_IDENTIFIER}\" canHandleVariableCommunicationStepSize=\"true\" canGetAndSetFMUstate=\"true\" canSerializeFMUstate=\"true\" providesDirectionalDerivative=\"true\"/>");
+            }
         }
     }
     let _ = writeln!(x, "  <UnitDefinitions>");
@@ -220,7 +257,7 @@ fn describe_with(p: &FmuParams, version: Version, token: &str) -> String {
         let _ = writeln!(x, "    <Category name=\"{c}\" description=\"{d}\"/>");
     }
     let _ = writeln!(x, "  </LogCategories>");
-    let _ = writeln!(x, "  <DefaultExperiment startTime=\"0\" stopTime=\"2\" stepSize=\"0.001\"/>");
+    let _ = writeln!(x, "  <DefaultExperiment startTime=\"0\" stopTime=\"2\" stepSize=\"{CONTROL_PERIOD_S:?}\"/>");
     let _ = writeln!(x, "  <ModelVariables>");
     // FMI 2 refers to variables by their 1-based position; FMI 3 by value reference
     let derivative_of = |state: usize| table.derivative_state.iter().position(|d| *d == Some(state));
@@ -238,7 +275,10 @@ fn describe_with(p: &FmuParams, version: Version, token: &str) -> String {
             Causality::Independent => "independent",
         };
         let (variability, initial) = match (v.causality, v.slot) {
+            (Causality::Parameter, _) if controller => ("tunable", Some("exact")),
             (Causality::Parameter, _) => ("fixed", Some("exact")),
+            // the commands change at communication points only
+            (_, Slot::Command(_)) => ("discrete", Some("calculated")),
             (Causality::Independent, _) => ("continuous", None),
             (Causality::Input, _) => ("continuous", None),
             (_, Slot::State(_)) => ("continuous", Some("exact")),
@@ -339,32 +379,53 @@ fn describe_with(p: &FmuParams, version: Version, token: &str) -> String {
         })
         .collect();
     let initial_unknowns: Vec<usize> = (0..vars.len())
-        .filter(|&i| matches!(vars[i].slot, Slot::Derivative(_) | Slot::Torque(_) | Slot::Angle(_)))
+        .filter(|&i| matches!(vars[i].slot, Slot::Derivative(_) | Slot::Torque(_) | Slot::Angle(_) | Slot::Command(_)))
         .collect();
+    // the controller's commands depend directly on every input; the other models' outputs are
+    // left to the standard's default (they may depend on all knowns)
+    let inputs: Vec<usize> = (0..vars.len()).filter(|&i| vars[i].causality == Causality::Input).collect();
+    let depends = |i: usize, version: Version| -> String {
+        if !matches!(vars[i].slot, Slot::Command(_)) {
+            return String::new();
+        }
+        let list: Vec<String> = inputs
+            .iter()
+            .map(|&j| match version {
+                Version::Fmi3 => vars[j].vr.to_string(),
+                Version::Fmi2 => (j + 1).to_string(),
+            })
+            .collect();
+        format!(" dependencies=\"{}\"", list.join(" "))
+    };
     match version {
         Version::Fmi3 => {
             for &i in &outputs {
-                let _ = writeln!(x, "    <Output valueReference=\"{}\"/>", vars[i].vr);
+                let _ = writeln!(x, "    <Output valueReference=\"{}\"{}/>", vars[i].vr, depends(i, version));
             }
             for &i in &derivatives {
                 let _ = writeln!(x, "    <ContinuousStateDerivative valueReference=\"{}\"/>", vars[i].vr);
             }
             for &i in &initial_unknowns {
-                let _ = writeln!(x, "    <InitialUnknown valueReference=\"{}\"/>", vars[i].vr);
+                let _ = writeln!(x, "    <InitialUnknown valueReference=\"{}\"{}/>", vars[i].vr, depends(i, version));
             }
         }
         Version::Fmi2 => {
             let _ = writeln!(x, "    <Outputs>");
             for &i in &outputs {
-                let _ = writeln!(x, "      <Unknown index=\"{}\"/>", i + 1);
+                let _ = writeln!(x, "      <Unknown index=\"{}\"{}/>", i + 1, depends(i, version));
             }
-            let _ = writeln!(x, "    </Outputs>\n    <Derivatives>");
-            for &i in &derivatives {
-                let _ = writeln!(x, "      <Unknown index=\"{}\"/>", i + 1);
+            let _ = writeln!(x, "    </Outputs>");
+            // the schema refuses an empty list (the controller has no states)
+            if !derivatives.is_empty() {
+                let _ = writeln!(x, "    <Derivatives>");
+                for &i in &derivatives {
+                    let _ = writeln!(x, "      <Unknown index=\"{}\"/>", i + 1);
+                }
+                let _ = writeln!(x, "    </Derivatives>");
             }
-            let _ = writeln!(x, "    </Derivatives>\n    <InitialUnknowns>");
+            let _ = writeln!(x, "    <InitialUnknowns>");
             for &i in &initial_unknowns {
-                let _ = writeln!(x, "      <Unknown index=\"{}\"/>", i + 1);
+                let _ = writeln!(x, "      <Unknown index=\"{}\"{}/>", i + 1, depends(i, version));
             }
             let _ = writeln!(x, "    </InitialUnknowns>");
         }

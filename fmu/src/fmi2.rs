@@ -126,6 +126,9 @@ pub unsafe extern "C" fn fmi2Instantiate(
         let location = str_of(resource_location);
         let resources = if location.is_empty() { None } else { crate::path_of_uri(location) };
         let params = crate::checked_params(resources.as_deref(), str_of(guid), "GUID")?;
+        if params.controller.is_some() && interface == Interface::ModelExchange {
+            return Err("the controller FMU is a co-simulation FMU only".to_string());
+        }
         Ok((interface, params))
     }));
     match result {

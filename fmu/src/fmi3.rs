@@ -72,7 +72,11 @@ unsafe fn instantiate(
     let logger = Fmi3Logger { callback: log, env };
     let result = catch_unwind(AssertUnwindSafe(|| {
         let resources = (!resource_path.is_null()).then(|| Path::new(str_of(resource_path)).to_path_buf());
-        crate::checked_params(resources.as_deref(), str_of(token), "instantiation token")
+        let params = crate::checked_params(resources.as_deref(), str_of(token), "instantiation token")?;
+        if params.controller.is_some() && interface == Interface::ModelExchange {
+            return Err("the controller FMU is a co-simulation FMU only".to_string());
+        }
+        Ok(params)
     }));
     match result {
         Ok(Ok(params)) => {

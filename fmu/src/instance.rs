@@ -6,6 +6,7 @@ use std::borrow::Cow;
 
 use nalgebra::{DMatrix, DVector};
 
+use crate::controller::ControllerMachine;
 use crate::drive::DriveDynamics;
 use crate::model::{Model, DRIVE_INPUT};
 use crate::params::FmuParams;
@@ -92,13 +93,16 @@ pub struct Snapshot {
     params: Vec<f64>,
     variant: i32,
     history: Vec<Vec<(f64, f64)>>,
+    /// The controller FMU's state (`ControllerMachine::save`); empty for the other models.
+    internal: Vec<f64>,
 }
 
-/// Version 4: parameters, inputs and one history per input of any model (a drive model's as
-/// well as the rig's), so a state saved by an older FMU is refused rather than misread.
-const SNAPSHOT_MAGIC: &[u8; 8] = b"RIGTWIN4";
-/// Magic, mode, variant, number of states, inputs and parameters.
-const SNAPSHOT_HEADER: usize = 8 + 1 + 4 + 4 + 4 + 4;
+/// Version 5: parameters, inputs and one history per input of any model (a drive model's as
+/// well as the rig's) and the controller's state, so a state saved by an older FMU is refused
+/// rather than misread.
+const SNAPSHOT_MAGIC: &[u8; 8] = b"RIGTWIN5";
+/// Magic, mode, variant, number of states, inputs, parameters and controller values.
+const SNAPSHOT_HEADER: usize = 8 + 1 + 4 + 4 + 4 + 4 + 4;
 /// Most states, inputs or parameters a serialized state may claim (a bound against a
 /// corrupt length, far above any model here).
 const SNAPSHOT_MAX_LEN: usize = 1 << 16;
@@ -110,7 +114,7 @@ impl Snapshot {
         b.extend_from_slice(SNAPSHOT_MAGIC);
         b.push(self.mode as u8);
         b.extend(self.variant.to_le_bytes());
-        for n in [self.x.len(), self.u.len(), self.params.len()] {
+        for n in [self.x.len(), self.u.len(), self.params.len(), self.internal.len()] {
             b.extend((n as u32).to_le_bytes());
         }
         for h in &self.history {
@@ -118,7 +122,7 @@ impl Snapshot {
         }
         let history = self.history.iter().flatten().flat_map(|r| [r.0, r.1]);
         let values = std::iter::once(self.time).chain(self.x.iter().copied()).chain(self.u.iter().copied());
-        for v in values.chain(self.params.iter().copied()).chain(history) {
+        for v in values.chain(self.params.iter().copied()).chain(self.internal.iter().copied()).chain(history) {
             b.extend(v.to_le_bytes());
         }
         b
@@ -127,7 +131,9 @@ impl Snapshot {
     /// Length of [`Snapshot::to_bytes`].
     pub fn byte_len(&self) -> usize {
         let records: usize = self.history.iter().map(Vec::len).sum();
-        SNAPSHOT_HEADER + 4 * self.u.len() + 8 * (1 + self.x.len() + self.u.len() + self.params.len() + 2 * records)
+        SNAPSHOT_HEADER
+            + 4 * self.u.len()
+            + 8 * (1 + self.x.len() + self.u.len() + self.params.len() + self.internal.len() + 2 * records)
     }
 
     /// The state of serialized bytes, if they are one.
@@ -137,14 +143,14 @@ impl Snapshot {
         }
         let word =
             |at: usize| -> Option<usize> { Some(u32::from_le_bytes(b.get(at..at + 4)?.try_into().ok()?) as usize) };
-        let (nx, nu, np) = (word(13)?, word(17)?, word(21)?);
-        if nx > SNAPSHOT_MAX_LEN || nu > SNAPSHOT_MAX_LEN || np > SNAPSHOT_MAX_LEN {
+        let (nx, nu, np, ni) = (word(13)?, word(17)?, word(21)?, word(25)?);
+        if [nx, nu, np, ni].iter().any(|&n| n > SNAPSHOT_MAX_LEN) {
             return None;
         }
         let lengths: Vec<usize> = (0..nu).map(|j| word(SNAPSHOT_HEADER + 4 * j)).collect::<Option<_>>()?;
         let records = lengths.iter().try_fold(0usize, |a, &n| a.checked_add(n))?;
         let start = SNAPSHOT_HEADER + 4 * nu;
-        let floats = (1 + nx + nu + np).checked_add(records.checked_mul(2)?)?;
+        let floats = (1 + nx + nu + np + ni).checked_add(records.checked_mul(2)?)?;
         if b.len() != start.checked_add(floats.checked_mul(8)?)? {
             return None;
         }
@@ -163,7 +169,7 @@ impl Snapshot {
         let f: Vec<f64> =
             b[start..].chunks_exact(8).map(|c| f64::from_le_bytes(c.try_into().expect("8 bytes"))).collect();
         let p0 = 1 + nx + nu;
-        let mut at = p0 + np;
+        let mut at = p0 + np + ni;
         let mut history = Vec::with_capacity(nu);
         for &n in &lengths {
             let h: Vec<(f64, f64)> = f[at..at + 2 * n].chunks_exact(2).map(|c| (c[0], c[1])).collect();
@@ -177,6 +183,7 @@ impl Snapshot {
             x: f[1..1 + nx].to_vec(),
             u: f[1 + nx..p0].to_vec(),
             params: f[p0..p0 + np].to_vec(),
+            internal: f[p0 + np..p0 + np + ni].to_vec(),
             variant,
             history,
         })
@@ -188,6 +195,7 @@ impl Snapshot {
 enum Machine {
     Rig(Box<Model>),
     Drive(Box<DriveDynamics>),
+    Controller(Box<ControllerMachine>),
 }
 
 /// One instance.
@@ -220,6 +228,9 @@ pub struct Instance {
     /// step); SetTime may not go back before it.
     accepted_time: f64,
     model: Option<Machine>,
+    /// The controller FMU: its state carried over a change of its tunable parameters (the
+    /// controller is rebuilt, its estimates and plan kept).
+    carry: Option<Vec<f64>>,
 }
 
 impl Instance {
@@ -230,6 +241,8 @@ impl Instance {
         let table = Table::new(p);
         let nu = table.nu();
         let delay_param = match &p.drive {
+            // the controller's inputs act at once (the dead time is in its prediction)
+            _ if p.controller.is_some() => vec![None; nu],
             None => {
                 (0..nu).map(|j| (j == DRIVE_INPUT && p.effects.time_delay_s > 0.0).then_some(FIRST_EFFECT)).collect()
             }
@@ -258,6 +271,7 @@ impl Instance {
             time: 0.0,
             accepted_time: 0.0,
             model: None,
+            carry: None,
         }
     }
 
@@ -339,9 +353,15 @@ impl Instance {
     fn ensure_model(&mut self) -> Res<()> {
         if self.model.is_none() {
             let p = self.params()?;
-            let built = match &p.drive {
-                None => Model::new(&p).map(|m| Machine::Rig(Box::new(m))),
-                Some(d) => DriveDynamics::new(d).map(|m| Machine::Drive(Box::new(m))),
+            let built = match (&p.drive, &p.controller) {
+                (_, Some(_)) => ControllerMachine::new(&p).map(|mut m| {
+                    if let Some(s) = self.carry.take() {
+                        m.restore(&s);
+                    }
+                    Machine::Controller(Box::new(m))
+                }),
+                (None, None) => Model::new(&p).map(|m| Machine::Rig(Box::new(m))),
+                (Some(d), None) => DriveDynamics::new(d).map(|m| Machine::Drive(Box::new(m))),
             };
             self.model = Some(built.or_else(|e| error(format!("the parameters do not describe a model: {e}")))?);
         }
@@ -354,6 +374,7 @@ impl Instance {
         match self.model.as_mut().expect("built by the caller") {
             Machine::Rig(m) => m.derivatives(self.x.as_slice(), self.u.as_slice(), self.acting[DRIVE_INPUT], out),
             Machine::Drive(m) => m.derivatives(self.x.as_slice(), &self.acting, out),
+            Machine::Controller(_) => {}
         }
     }
 
@@ -377,6 +398,11 @@ impl Instance {
     pub fn exit_initialization_mode(&mut self) -> Res<()> {
         self.expect("ExitInitializationMode", &[Mode::InitializationMode])?;
         self.ensure_model()?;
+        // the controller starts from steady spinning at the measured speeds' mean
+        if let Some(Machine::Controller(m)) = self.model.as_mut() {
+            let speed = (self.u[0] + self.u[1] + self.u[2]) / 3.0;
+            m.reset(speed).or_else(|e| error(format!("the controller cannot start at {speed} rad/s: {e}")))?;
+        }
         // the inputs of the initialisation are what the dead times deliver at first
         for (line, &u) in self.delays.iter_mut().zip(self.u.iter()) {
             *line = DelayLine::default();
@@ -407,6 +433,7 @@ impl Instance {
         self.time = 0.0;
         self.accepted_time = 0.0;
         self.model = None;
+        self.carry = None;
         self.mode = Mode::Instantiated;
     }
 
@@ -513,6 +540,7 @@ impl Instance {
         let stepped = match self.model.as_mut().expect("built above") {
             Machine::Rig(m) => m.step(&mut self.x, &self.u, self.time, h, &self.delays[DRIVE_INPUT]),
             Machine::Drive(m) => m.step(&mut self.x, self.u.as_slice(), self.time, h, &self.delays),
+            Machine::Controller(m) => m.advance(self.time, h, self.u.as_slice()),
         };
         if let Err(e) = stepped {
             return Err(self.fail(format!("DoStep from {t} s over {h} s: {e}")));
@@ -532,6 +560,26 @@ impl Instance {
         if vrs.len() != out.len() {
             return error("the number of value references and values differ");
         }
+        let commands = if vrs.iter().any(|&v| matches!(self.lookup(v).map(|x| x.slot), Some(Slot::Command(_)))) {
+            self.ensure_model()?;
+            let (t, u) = (self.time, self.u.as_slice());
+            let stepping = self.mode == Mode::StepMode;
+            match self.model.as_mut().expect("built above") {
+                // before the first step: the steady state's commands at the measured speeds
+                Machine::Controller(m) if !stepping => {
+                    let speed = (u[0] + u[1] + u[2]) / 3.0;
+                    m.reset(speed).or_else(|e| error(format!("the controller cannot start at {speed} rad/s: {e}")))?;
+                    m.commands()
+                }
+                Machine::Controller(m) => match m.outputs(t, u) {
+                    Ok(c) => c,
+                    Err(e) => return Err(self.fail(format!("the controller's step at {t} s: {e}"))),
+                },
+                _ => return error("torque commands belong to the controller FMU"),
+            }
+        } else {
+            [0.0; 3]
+        };
         let needs_model = vrs.iter().any(|&v| {
             matches!(self.lookup(v).map(|x| x.slot), Some(Slot::Derivative(_) | Slot::Torque(_) | Slot::Angle(_)))
         });
@@ -543,6 +591,7 @@ impl Instance {
             let (torques, angles) = match self.model.as_ref().expect("built above") {
                 Machine::Rig(m) => (m.torques(x).to_vec(), m.angles(x).to_vec()),
                 Machine::Drive(m) => ((0..m.couplings()).map(|i| m.coupling_force(x, i)).collect(), Vec::new()),
+                Machine::Controller(_) => (Vec::new(), Vec::new()),
             };
             Some((dx, torques, angles))
         } else {
@@ -558,6 +607,7 @@ impl Instance {
                 Some(Slot::Derivative(i)) => computed.as_ref().expect("computed above").0[i],
                 Some(Slot::Torque(i)) => computed.as_ref().expect("computed above").1[i],
                 Some(Slot::Angle(i)) => computed.as_ref().expect("computed above").2[i],
+                Some(Slot::Command(i)) => commands[i],
                 _ => return error(format!("value reference {vr} is not a Float64 variable of this FMU")),
             };
         }
@@ -580,7 +630,15 @@ impl Instance {
             }
             match (var.causality, var.slot) {
                 (Causality::Parameter, Slot::Param(_)) => {
-                    self.expect(&format!("setting the fixed parameter `{}`", var.name), &before_init)?;
+                    if self.spec.controller.is_some() {
+                        // the controller's settings are tunable
+                        self.expect(
+                            &format!("setting the tunable parameter `{}`", var.name),
+                            &[Mode::Instantiated, Mode::InitializationMode, Mode::StepMode],
+                        )?;
+                    } else {
+                        self.expect(&format!("setting the fixed parameter `{}`", var.name), &before_init)?;
+                    }
                     if let Err(want) = var.constraint.check(v) {
                         return error(format!("`{}` = {v} {}: expected {want}", var.name, var.unit));
                     }
@@ -606,7 +664,11 @@ impl Instance {
             match slot {
                 Slot::Param(i) => {
                     self.params[i] = v;
-                    self.model = None;
+                    if let Some(Machine::Controller(m)) = self.model.take() {
+                        let mut state = vec![0.0; m.state_len()];
+                        m.save(&mut state);
+                        self.carry = Some(state);
+                    }
                 }
                 Slot::Input(i) => {
                     self.u[i] = v;
@@ -671,6 +733,14 @@ impl Instance {
             params: self.params.clone(),
             variant: self.variant,
             history: self.delays.iter().map(|d| d.records().to_vec()).collect(),
+            internal: match self.model.as_ref() {
+                Some(Machine::Controller(m)) => {
+                    let mut v = vec![0.0; m.state_len()];
+                    m.save(&mut v);
+                    v
+                }
+                _ => self.carry.clone().unwrap_or_default(),
+            },
         }
     }
 
@@ -699,6 +769,17 @@ impl Instance {
             })?;
         if s.params != self.params || s.variant != self.variant {
             self.model = None;
+        }
+        // the controller's state goes into the controller, or waits for it to be built
+        match (self.model.as_mut(), s.internal.is_empty()) {
+            (_, true) => self.carry = None,
+            (Some(Machine::Controller(m)), false) => {
+                if !m.restore(&s.internal) {
+                    return error("the state's controller record does not fit this controller");
+                }
+                self.carry = None;
+            }
+            (_, false) => self.carry = Some(s.internal.clone()),
         }
         self.delays = history;
         self.mode = s.mode;
@@ -738,6 +819,7 @@ impl Instance {
                 let (a, b, t) = m.jacobians(self.x.as_slice(), &self.acting);
                 (Cow::Owned(a), Cow::Owned(b), Cow::Owned(t))
             }
+            Machine::Controller(_) => return error("the controller FMU provides no directional derivatives"),
         };
         let angle_gradient = |i: usize, col: usize| match self.model.as_ref() {
             Some(Machine::Rig(m)) => m.angle_gradient(i, col),

@@ -7,6 +7,7 @@
 //! - [`params`]: the parameter set an FMU is built from;
 //! - [`variables`]: the one variable table — both modelDescription.xml files ([`description`]),
 //!   the value-reference map and the instantiation token come from it;
+//! - [`controller`]: rigtwin's MPC as a co-simulation FMU;
 //! - [`model`]: the linear dynamics, with the exact zero-order-hold co-simulation step;
 //! - [`instance`]: the state machine every call goes through, version-independent;
 //! - [`fmi3`], [`fmi2`]: thin `extern "C"` glue, the exported C API. Every body runs under `catch_unwind`, so no panic
@@ -17,6 +18,7 @@
 
 #[doc(hidden)]
 pub mod bindings;
+pub mod controller;
 pub mod description;
 pub mod drive;
 mod ffi;
@@ -38,6 +40,9 @@ pub const PARAMS_RESOURCE: &str = "params.json";
 /// Checks that a parameter set describes a model an FMU can run (the rig's or a drive
 /// model's); the error names what is wrong.
 pub fn check(p: &FmuParams) -> Result<(), String> {
+    if p.controller.is_some() {
+        return controller::ControllerMachine::new(p).map(|_| ());
+    }
     match &p.drive {
         None => model::Model::new(p).map(|_| ()),
         Some(m) => drive::DriveDynamics::new(m).map(|_| ()),

@@ -24,6 +24,10 @@ pub struct FmuParams {
     /// parameters, inputs, outputs and effects — and the rig's fields above are not used.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub drive: Option<plant::DriveModel>,
+    /// The controller FMU: when given, the FMU is rigtwin's MPC of the rig above (with its
+    /// effects) instead of the rig itself (`crate::controller`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub controller: Option<crate::controller::ControllerSpec>,
 }
 
 impl Default for FmuParams {
@@ -63,6 +67,7 @@ impl Default for FmuParams {
             },
             effects: DriveEffects::default(),
             drive: None,
+            controller: None,
         }
     }
 }

@@ -49,6 +49,8 @@ pub enum Slot {
     Torque(usize),
     /// Absolute angle `i` of [`ANGLES`] that is not a state (computed from the states).
     Angle(usize),
+    /// Torque command `i` of the controller FMU (computed from the inputs).
+    Command(usize),
 }
 
 /// What values a parameter accepts.
@@ -265,6 +267,9 @@ pub fn powertrain_states(effects: &plant::effects::DriveEffects) -> Vec<usize> {
 impl Table {
     /// The table of parameter set `p`: the paper rig's, or a drive model's.
     pub fn new(p: &FmuParams) -> Table {
+        if p.controller.is_some() {
+            return Table::of_controller();
+        }
         if let Some(m) = &p.drive {
             return Table::of_drive(m);
         }
@@ -429,6 +434,36 @@ impl Table {
         Table { variables: v, states: Vec::new(), derivative_state, nominal: vec![1.0; nx] }
     }
 
+    /// The table of the controller FMU (`crate::controller`): its tunable settings, the
+    /// measured speeds and references as inputs, the torque commands as outputs; no states.
+    fn of_controller() -> Table {
+        use crate::controller::{INPUTS, OUTPUTS, PARAMETERS};
+        let mut v = vec![time_row()];
+        let mut push = |name: &'static str, causality, slot, unit, description: &'static str, constraint| {
+            let vr = v.len() as u32;
+            v.push(Variable {
+                vr,
+                name: name.into(),
+                kind: Kind::Float64,
+                causality,
+                slot,
+                unit,
+                description: description.into(),
+                constraint,
+            });
+        };
+        for (i, &(name, unit, description, constraint)) in PARAMETERS.iter().enumerate() {
+            push(name, Causality::Parameter, Slot::Param(i), unit, description, constraint);
+        }
+        for (i, &(name, unit, description)) in INPUTS.iter().enumerate() {
+            push(name, Causality::Input, Slot::Input(i), unit, description, Constraint::Finite);
+        }
+        for (i, &(name, description)) in OUTPUTS.iter().enumerate() {
+            push(name, Causality::Output, Slot::Command(i), "N.m", description, Constraint::Finite);
+        }
+        Table { variables: v, states: Vec::new(), derivative_state: Vec::new(), nominal: Vec::new() }
+    }
+
     /// Number of continuous states.
     pub fn nx(&self) -> usize {
         self.nominal.len()
@@ -522,6 +557,9 @@ pub fn unit_of(d: Dimension, domain: Domain) -> &'static str {
 /// The float parameters of a parameter set: the rig's in [`PARAMETERS`] order, a drive
 /// model's in `plant::DriveModel::parameter_list` order.
 pub fn parameter_values(p: &FmuParams) -> Vec<f64> {
+    if let Some(c) = &p.controller {
+        return c.values.clone();
+    }
     if let Some(m) = &p.drive {
         return m.parameter_list().iter().map(|q| q.value).collect();
     }
@@ -574,6 +612,10 @@ fn rig_parameter_values(p: &FmuParams) -> [f64; NPARAMS] {
 /// The parameter set of float parameters `v` and variant 1..=4, of the structure of `like`
 /// (the rig's, or a drive model's with its bodies, couplings, inputs and effects).
 pub fn parameter_set(like: &FmuParams, v: &[f64], variant: i32) -> Result<FmuParams, String> {
+    if let Some(c) = &like.controller {
+        let spec = crate::controller::ControllerSpec { values: v.to_vec(), ..c.clone() };
+        return Ok(FmuParams { controller: Some(spec), ..like.clone() });
+    }
     if let Some(m) = &like.drive {
         let drive = m.with_parameter_values(v).map_err(|e| e.to_string())?;
         return Ok(FmuParams { drive: Some(drive), ..like.clone() });
@@ -621,6 +663,7 @@ pub fn parameter_set(like: &FmuParams, v: &[f64], variant: i32) -> Result<FmuPar
             compliance_motor_fraction: v[33],
         },
         drive: None,
+        controller: None,
     })
 }
 
