@@ -614,55 +614,53 @@ impl Instance {
         Ok(())
     }
 
-    /// Sets Float64 values; nothing is changed if any value is refused.
+    /// Sets Float64 values; nothing is changed if any value is refused. Allocation-free unless
+    /// a value is refused (the message) or a parameter changes (the model is rebuilt).
     pub fn set_f64(&mut self, vrs: &[u32], values: &[f64]) -> Res<()> {
         if vrs.len() != values.len() {
             return error("the number of value references and values differ");
         }
-        let before_init = [Mode::Instantiated, Mode::InitializationMode];
-        let mut changes = Vec::with_capacity(vrs.len());
+        const BEFORE_INIT: &[Mode] = &[Mode::Instantiated, Mode::InitializationMode];
+        const TUNABLE: &[Mode] = &[Mode::Instantiated, Mode::InitializationMode, Mode::StepMode];
+        const INPUT: &[Mode] =
+            &[Mode::Instantiated, Mode::InitializationMode, Mode::EventMode, Mode::ContinuousTimeMode, Mode::StepMode];
+        // every value is checked before any is set
         for (&vr, &v) in vrs.iter().zip(values) {
-            let Some(var) = self.lookup(vr).filter(|x| x.kind == Kind::Float64).cloned() else {
+            let Some(var) = self.lookup(vr).filter(|x| x.kind == Kind::Float64) else {
                 return error(format!("value reference {vr} is not a Float64 variable of this FMU"));
             };
             if !v.is_finite() {
                 return error(format!("`{}` = {v}: expected a finite number", var.name));
             }
-            match (var.causality, var.slot) {
-                (Causality::Parameter, Slot::Param(_)) => {
-                    if self.spec.controller.is_some() {
-                        // the controller's settings are tunable
-                        self.expect(
-                            &format!("setting the tunable parameter `{}`", var.name),
-                            &[Mode::Instantiated, Mode::InitializationMode, Mode::StepMode],
-                        )?;
-                    } else {
-                        self.expect(&format!("setting the fixed parameter `{}`", var.name), &before_init)?;
-                    }
-                    if let Err(want) = var.constraint.check(v) {
-                        return error(format!("`{}` = {v} {}: expected {want}", var.name, var.unit));
-                    }
+            let (what, allowed) = match (var.causality, var.slot) {
+                // the controller's settings are tunable
+                (Causality::Parameter, Slot::Param(_)) if self.spec.controller.is_some() => {
+                    ("the tunable parameter", TUNABLE)
                 }
-                (Causality::Input, _) => self.expect(
-                    &format!("setting the input `{}`", var.name),
-                    &[
-                        Mode::Instantiated,
-                        Mode::InitializationMode,
-                        Mode::EventMode,
-                        Mode::ContinuousTimeMode,
-                        Mode::StepMode,
-                    ],
-                )?,
-                (_, Slot::State(_)) => {
-                    self.expect(&format!("setting the start value of `{}`", var.name), &before_init)?
-                }
+                (Causality::Parameter, Slot::Param(_)) => ("the fixed parameter", BEFORE_INIT),
+                (Causality::Input, _) => ("the input", INPUT),
+                (_, Slot::State(_)) => ("the start value of", BEFORE_INIT),
                 _ => return error(format!("`{}` (value reference {vr}) cannot be set: it is calculated", var.name)),
+            };
+            if !allowed.contains(&self.mode) {
+                return error(format!(
+                    "setting {what} `{}` is not allowed in {:?} (allowed: {allowed:?})",
+                    var.name, self.mode
+                ));
             }
-            changes.push((var.slot, v));
+            if let Slot::Param(_) = var.slot {
+                if let Err(want) = var.constraint.check(v) {
+                    return error(format!("`{}` = {v} {}: expected {want}", var.name, var.unit));
+                }
+            }
         }
-        for (slot, v) in changes {
+        for (&vr, &v) in vrs.iter().zip(values) {
+            let slot = self.lookup(vr).map(|x| x.slot);
             match slot {
-                Slot::Param(i) => {
+                Some(Slot::Param(i)) => {
+                    if self.params[i] == v {
+                        continue;
+                    }
                     self.params[i] = v;
                     if let Some(Machine::Controller(m)) = self.model.take() {
                         let mut state = vec![0.0; m.state_len()];
@@ -670,13 +668,13 @@ impl Instance {
                         self.carry = Some(state);
                     }
                 }
-                Slot::Input(i) => {
+                Some(Slot::Input(i)) => {
                     self.u[i] = v;
                     if self.delay_s(i) > 0.0 {
                         self.delays[i].record(self.time, v);
                     }
                 }
-                Slot::State(i) => self.x[i] = v,
+                Some(Slot::State(i)) => self.x[i] = v,
                 _ => unreachable!("refused above"),
             }
         }
