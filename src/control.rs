@@ -366,6 +366,7 @@ pub fn report(
     truth: &rigtwin_fmu::FmuParams,
     settings: &MpcSettings,
     kind: ScenarioKind,
+    duration_s: Option<f64>,
     allocations: Option<fn() -> u64>,
     mut export: Option<&mut Vec<ExportedQp>>,
 ) -> anyhow::Result<(MpcReport, Comparison)> {
@@ -376,7 +377,16 @@ pub fn report(
     let ss = &prediction.model;
     let sig = RigSignals::of(ss)?;
     let j_load = params.powertrain.effective(params.variant)?.j_m2;
-    let scenario = Scenario::new(kind);
+    let mut scenario = Scenario::new(kind);
+    if let Some(d) = duration_s {
+        if !(d.is_finite() && d > scenario.start_s && d <= 3600.0) {
+            anyhow::bail!(
+                "--duration {d} s: expected more than the scenario's start {} s and at most 3600 s",
+                scenario.start_s
+            );
+        }
+        scenario.duration_s = d;
+    }
     let mut u0_error: f64 = 0.0;
     let mut checked = 0;
     let mut failure: Option<String> = None;
@@ -406,7 +416,7 @@ pub fn report(
     if let Some(f) = failure {
         anyhow::bail!("reference solve of the exact optimum failed: {f}");
     }
-    let step = if kind == ScenarioKind::Step {
+    let step = if kind == ScenarioKind::Step && duration_s.is_none() {
         run.clone()
     } else {
         run_on(&prediction, truth, settings, &Scenario::new(ScenarioKind::Step), j_load, Probes::default())?

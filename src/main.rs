@@ -169,6 +169,10 @@ enum Command {
         /// What the rig is asked to do.
         #[arg(long, value_enum, default_value_t = ScenarioArg::Step)]
         scenario: ScenarioArg,
+        /// Length of the timed run, s (default: 1 s step, 3.5 s sweep; the sweep's chirp
+        /// spans the whole run). The shuffle figures always come from the 1 s step.
+        #[arg(long, value_name = "S")]
+        duration: Option<f64>,
         /// Number of move blocks (1, 2, 4, … steps, the last taking the rest); 0: every step free.
         #[arg(long, default_value_t = 4)]
         blocks: usize,
@@ -183,6 +187,9 @@ enum Command {
         /// its `[effects]`); default: the model of `--params`.
         #[arg(long, value_name = "FILE")]
         plant: Option<PathBuf>,
+        /// Clarabel's KKT factorisation.
+        #[arg(long, value_enum, default_value_t = DirectSolverArg::Qdldl)]
+        direct_solver: DirectSolverArg,
         /// Wall-clock limit of one QP solve, µs; past it the shifted previous plan is applied.
         #[arg(long, default_value_t = 600.0)]
         time_limit_us: f64,
@@ -254,6 +261,12 @@ enum ScenarioArg {
 enum FormulationArg {
     Condensed,
     Sparse,
+}
+
+#[derive(Clone, Copy, clap::ValueEnum)]
+enum DirectSolverArg {
+    Qdldl,
+    Faer,
 }
 
 #[derive(Clone, Copy, clap::ValueEnum)]
@@ -415,6 +428,8 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Mpc {
             horizon,
             scenario,
+            duration,
+            direct_solver,
             blocks,
             formulation,
             params,
@@ -450,6 +465,10 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                 FormulationArg::Sparse => mpc::Formulation::Sparse,
             };
             settings.solver.time_limit_s = time_limit_us * 1e-6;
+            settings.solver.direct_solver = match direct_solver {
+                DirectSolverArg::Qdldl => mpc::DirectSolver::Qdldl,
+                DirectSolverArg::Faer => mpc::DirectSolver::Faer,
+            };
             settings.validate().map_err(|e| anyhow::anyhow!("--horizon/--blocks/--time-limit-us: {e}"))?;
             let kind = match scenario {
                 ScenarioArg::Step => mpc::closed_loop::ScenarioKind::Step,
@@ -463,6 +482,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                 &truth,
                 &settings,
                 kind,
+                duration,
                 Some(mpc::alloc_counter::allocations),
                 export_qp.is_some().then_some(&mut qps),
             )?;

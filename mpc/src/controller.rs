@@ -333,6 +333,9 @@ impl Controller {
             time_limit_s: f64::INFINITY,
             equilibrate: true,
             iterative_refinement: true,
+            // the reference is the interior-point solve, whatever the real-time path took
+            unconstrained_check: false,
+            direct_solver: self.settings.solver.direct_solver,
         };
         let mut solver = QpSolver::new(&self.qp, &tight)?;
         let info = solver.solve(&self.q, &self.b);

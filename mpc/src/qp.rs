@@ -305,6 +305,11 @@ impl ParametricQp {
         ParametricQp { p: csc(&p, true), a: csc(&a, false), cones, n_eq, q0, q_theta, b0, b_theta, plan: gu, theta }
     }
 
+    /// Index of the soft bounds' slack (the last decision variable).
+    pub fn slack(&self) -> usize {
+        self.q0.len() - 1
+    }
+
     /// Number of decision variables.
     pub fn nvars(&self) -> usize {
         self.q0.len()
@@ -361,7 +366,7 @@ pub(crate) fn csc(m: &DMatrix<f64>, upper: bool) -> CscMatrix<f64> {
     CscMatrix::new(m.nrows(), m.ncols(), colptr, rowval, nzval)
 }
 
-fn dense(m: &CscMatrix<f64>) -> DMatrix<f64> {
+pub(crate) fn dense(m: &CscMatrix<f64>) -> DMatrix<f64> {
     let mut d = DMatrix::zeros(m.m, m.n);
     for j in 0..m.n {
         for k in m.colptr[j]..m.colptr[j + 1] {

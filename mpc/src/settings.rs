@@ -60,6 +60,17 @@ pub struct OutputSettings {
     pub soft_max: Option<f64>,
 }
 
+/// Clarabel's sparse LDLᵀ factorisation of the KKT system.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum DirectSolver {
+    /// QDLDL (Clarabel's default).
+    #[default]
+    Qdldl,
+    /// faer's sparse LDLᵀ (Clarabel's `faer-sparse` feature).
+    Faer,
+}
+
 /// The QP solver's (Clarabel's) options that matter for a real-time loop.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct SolverSettings {
@@ -75,6 +86,19 @@ pub struct SolverSettings {
     pub equilibrate: bool,
     /// Iterative refinement of each KKT solve.
     pub iterative_refinement: bool,
+    /// Before the interior-point solve, try the optimum with every inequality inactive (one
+    /// triangular solve with the factor of P kept from the set-up, one check of the rows): when
+    /// no bound and no soft bound is active — most steps of a settled loop — it is the exact
+    /// optimum, and the interior-point method is not run (condensed formulation only).
+    #[serde(default = "yes")]
+    pub unconstrained_check: bool,
+    /// The KKT factorisation.
+    #[serde(default)]
+    pub direct_solver: DirectSolver,
+}
+
+fn yes() -> bool {
+    true
 }
 
 /// Everything that defines the controller.
@@ -139,6 +163,8 @@ impl Default for SolverSettings {
             time_limit_s: 6e-4,
             equilibrate: true,
             iterative_refinement: false,
+            unconstrained_check: true,
+            direct_solver: DirectSolver::Qdldl,
         }
     }
 }

@@ -289,3 +289,35 @@ fn saved_state_replays_the_same_inputs() {
     assert!(!fresh.restore_state(&bad));
     assert!(first.iter().flatten().any(|&u| u > 30.0), "the step was taken");
 }
+
+/// The unconstrained check gives the exact optimum: at every step of a step run where it was
+/// taken (no interior-point iteration), its first input equals the interior-point method's
+/// solved to a 1e-12 gap on the same QP (`exact_first_input`) within 1e-6 Nm — the reference
+/// solver's own accuracy on a cost of order 1e4; and it was taken on most steps.
+#[test]
+fn unconstrained_check_is_the_exact_optimum() {
+    let ss = nominal();
+    let mut s = MpcSettings::powertrain(50);
+    s.solver.time_limit_s = 1.0;
+    let (x0, u0) = steady_spin(&ss, 10.0).unwrap();
+    let mut c = Controller::new(&ss, &s).unwrap();
+    c.reset(&x0, &u0);
+    let mut p = LinearPlant::new(&ss, 1e-3, &x0).unwrap();
+    let (mut fast, mut worst) = (0, 0.0f64);
+    for k in 0..400 {
+        let y = p.outputs().to_vec();
+        let (u, info) = c.step(&y, &step_ref(k));
+        let u = u.to_vec();
+        if info.solve.iterations == 0 && !info.fallback {
+            fast += 1;
+            if k % 10 == 0 {
+                let exact = c.exact_first_input().unwrap();
+                let rt = c.planned_first_input();
+                worst = rt.iter().zip(&exact).map(|(a, b)| (a - b).abs()).fold(worst, f64::max);
+            }
+        }
+        p.advance(&u).unwrap();
+    }
+    assert!(fast > 200, "the check was taken on {fast} of 400 steps");
+    assert!(worst < 1e-6, "first input {worst} Nm from the exact optimum");
+}
