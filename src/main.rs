@@ -187,9 +187,6 @@ enum Command {
         /// its `[effects]`); default: the model of `--params`.
         #[arg(long, value_name = "FILE")]
         plant: Option<PathBuf>,
-        /// Clarabel's KKT factorisation.
-        #[arg(long, value_enum, default_value_t = DirectSolverArg::Qdldl)]
-        direct_solver: DirectSolverArg,
         /// Wall-clock limit of one QP solve, µs; past it the shifted previous plan is applied.
         #[arg(long, default_value_t = 600.0)]
         time_limit_us: f64,
@@ -263,11 +260,6 @@ enum FormulationArg {
     Sparse,
 }
 
-#[derive(Clone, Copy, clap::ValueEnum)]
-enum DirectSolverArg {
-    Qdldl,
-    Faer,
-}
 
 #[derive(Clone, Copy, clap::ValueEnum)]
 enum StructureArg {
@@ -429,7 +421,6 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             horizon,
             scenario,
             duration,
-            direct_solver,
             blocks,
             formulation,
             params,
@@ -465,10 +456,6 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                 FormulationArg::Sparse => mpc::Formulation::Sparse,
             };
             settings.solver.time_limit_s = time_limit_us * 1e-6;
-            settings.solver.direct_solver = match direct_solver {
-                DirectSolverArg::Qdldl => mpc::DirectSolver::Qdldl,
-                DirectSolverArg::Faer => mpc::DirectSolver::Faer,
-            };
             settings.validate().map_err(|e| anyhow::anyhow!("--horizon/--blocks/--time-limit-us: {e}"))?;
             let kind = match scenario {
                 ScenarioArg::Step => mpc::closed_loop::ScenarioKind::Step,

@@ -335,7 +335,6 @@ impl Controller {
             iterative_refinement: true,
             // the reference is the interior-point solve, whatever the real-time path took
             unconstrained_check: false,
-            direct_solver: self.settings.solver.direct_solver,
         };
         let mut solver = QpSolver::new(&self.qp, &tight)?;
         let info = solver.solve(&self.q, &self.b);

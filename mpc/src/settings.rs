@@ -60,17 +60,6 @@ pub struct OutputSettings {
     pub soft_max: Option<f64>,
 }
 
-/// Clarabel's sparse LDLᵀ factorisation of the KKT system.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
-#[serde(rename_all = "snake_case")]
-pub enum DirectSolver {
-    /// QDLDL (Clarabel's default).
-    #[default]
-    Qdldl,
-    /// faer's sparse LDLᵀ (Clarabel's `faer-sparse` feature).
-    Faer,
-}
-
 /// The QP solver's (Clarabel's) options that matter for a real-time loop.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct SolverSettings {
@@ -92,9 +81,6 @@ pub struct SolverSettings {
     /// optimum, and the interior-point method is not run (condensed formulation only).
     #[serde(default = "yes")]
     pub unconstrained_check: bool,
-    /// The KKT factorisation.
-    #[serde(default)]
-    pub direct_solver: DirectSolver,
 }
 
 fn yes() -> bool {
@@ -164,7 +150,6 @@ impl Default for SolverSettings {
             equilibrate: true,
             iterative_refinement: false,
             unconstrained_check: true,
-            direct_solver: DirectSolver::Qdldl,
         }
     }
 }
