@@ -11,7 +11,8 @@ use std::process::Command;
 fn main() {
     let manifest_dir = PathBuf::from(env::var("CARGO_MANIFEST_DIR").expect("cargo sets CARGO_MANIFEST_DIR"));
     let out_dir = PathBuf::from(env::var("OUT_DIR").expect("cargo sets OUT_DIR"));
-    for path in ["fmu/src", "fmu/Cargo.toml", "plant/src", "plant/Cargo.toml", "Cargo.toml", "Cargo.lock"] {
+    let inputs = ["fmu/src", "fmu/Cargo.toml", "plant/src", "plant/Cargo.toml", "mpc/src", "mpc/Cargo.toml"];
+    for path in inputs.iter().chain(&["Cargo.toml", "Cargo.lock"]) {
         println!("cargo:rerun-if-changed={path}");
     }
     let target = env::var("TARGET").expect("cargo sets TARGET");

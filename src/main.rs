@@ -260,7 +260,6 @@ enum FormulationArg {
     Sparse,
 }
 
-
 #[derive(Clone, Copy, clap::ValueEnum)]
 enum StructureArg {
     #[value(name = "KC")]
