@@ -77,33 +77,123 @@ pub fn write_descriptions(p: &FmuParams, dir: &Path) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// The .fmu archive of parameter set `p` for `version`.
+pub fn archive(p: &FmuParams, lib: &[u8], version: Version) -> anyhow::Result<Vec<u8>> {
+    let (p3, p2) = platform_folders()?;
+    let platform = if version == Version::Fmi3 { p3 } else { p2 };
+    let params_json = serde_json::to_vec_pretty(p)?;
+    let mut buf = std::io::Cursor::new(Vec::new());
+    {
+        let mut zip = zip::ZipWriter::new(&mut buf);
+        let opts = zip::write::SimpleFileOptions::default().compression_method(zip::CompressionMethod::Deflated);
+        zip.start_file("modelDescription.xml", opts)?;
+        zip.write_all(describe(p, version).as_bytes())?;
+        zip.start_file(format!("binaries/{platform}/{MODEL_IDENTIFIER}{}", std::env::consts::DLL_SUFFIX), opts)?;
+        zip.write_all(lib)?;
+        zip.start_file(format!("resources/{PARAMS_RESOURCE}"), opts)?;
+        zip.write_all(&params_json)?;
+        zip.finish()?;
+    }
+    Ok(buf.into_inner())
+}
+
 /// Writes `rigtwin-fmi3.fmu` and `rigtwin-fmi2.fmu` into `out` (`rigtwin-mpc-fmi3.fmu` and
 /// `rigtwin-mpc-fmi2.fmu` for the controller); returns their paths.
 pub fn package(p: &FmuParams, lib: &[u8], out: &Path) -> anyhow::Result<[PathBuf; 2]> {
     // the parameters must describe a model before anything is written
     rigtwin_fmu::check(p).map_err(|e| anyhow::anyhow!("the parameter set does not describe a model: {e}"))?;
-    let (p3, p2) = platform_folders()?;
     let dir = crate::files::output_dir(out, "--out")?;
-    let params_json = serde_json::to_vec_pretty(p)?;
-    let mut written = Vec::new();
     let stem = if p.controller.is_some() { "rigtwin-mpc" } else { "rigtwin" };
-    for (version, platform, name) in
-        [(Version::Fmi3, p3, format!("{stem}-fmi3.fmu")), (Version::Fmi2, p2, format!("{stem}-fmi2.fmu"))]
-    {
-        let mut buf = std::io::Cursor::new(Vec::new());
-        {
-            let mut zip = zip::ZipWriter::new(&mut buf);
-            let opts = zip::write::SimpleFileOptions::default().compression_method(zip::CompressionMethod::Deflated);
-            zip.start_file("modelDescription.xml", opts)?;
-            zip.write_all(describe(p, version).as_bytes())?;
-            zip.start_file(format!("binaries/{platform}/{MODEL_IDENTIFIER}{}", std::env::consts::DLL_SUFFIX), opts)?;
-            zip.write_all(lib)?;
-            zip.start_file(format!("resources/{PARAMS_RESOURCE}"), opts)?;
-            zip.write_all(&params_json)?;
-            zip.finish()?;
-        }
-        crate::files::write_new(&dir.join(&name), "--out", buf.get_ref())?;
+    let mut written = Vec::new();
+    for (version, name) in [(Version::Fmi3, format!("{stem}-fmi3.fmu")), (Version::Fmi2, format!("{stem}-fmi2.fmu"))] {
+        let bytes = archive(p, lib, version)?;
+        crate::files::write_new(&dir.join(&name), "--out", &bytes)?;
         written.push(out.join(&name));
     }
     Ok([written.remove(0), written.remove(0)])
+}
+
+/// The closed loop's connections: (plant output, controller input) and (controller output,
+/// plant input) — the one description both `rigtwin-closed-loop.ssp` and the tests' masters use.
+pub const LOOP_CONNECTIONS: [(&str, &str, &str, &str); 6] = [
+    ("plant", "w_m2", "controller", "w_m2"),
+    ("plant", "w_drive", "controller", "w_drive"),
+    ("plant", "w_m3", "controller", "w_m3"),
+    ("controller", "M_m2", "plant", "M_m2"),
+    ("controller", "M_drive", "plant", "M_drive"),
+    ("controller", "M_m3", "plant", "M_m3"),
+];
+
+/// Writes `rigtwin-closed-loop.ssp` into `out`: an SSP 1.0 archive with the FMI 2 FMUs of the
+/// plant `plant` and the controller `controller` (as `resources/plant.fmu` and
+/// `resources/controller.fmu`) and their connections ([`LOOP_CONNECTIONS`]), which OSP libcosim
+/// and other SSP importers load as one system. The references (`w_m2_ref`, `w_m3_ref`,
+/// `M_drive_ref`) stay open inputs of the controller.
+pub fn closed_loop_ssp(plant: &FmuParams, controller: &FmuParams, lib: &[u8], out: &Path) -> anyhow::Result<PathBuf> {
+    rigtwin_fmu::check(plant)
+        .map_err(|e| anyhow::anyhow!("the plant's parameter set does not describe a model: {e}"))?;
+    if plant.drive.is_some() || plant.controller.is_some() || controller.controller.is_none() {
+        anyhow::bail!("the closed loop connects the paper rig's plant FMU with its controller FMU");
+    }
+    let mut ssd = String::from(
+        "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n<ssd:SystemStructureDescription \
+         xmlns:ssc=\"http://ssp-standard.org/SSP1/SystemStructureCommon\" \
+         xmlns:ssd=\"http://ssp-standard.org/SSP1/SystemStructureDescription\" version=\"1.0\" \
+         name=\"rigtwin closed loop\">\n  <ssd:System name=\"rig_with_mpc\">\n    <ssd:Elements>\n",
+    );
+    for (name, kinds) in [
+        (
+            "plant",
+            [
+                ("w_m2", "output"),
+                ("w_drive", "output"),
+                ("w_m3", "output"),
+                ("M_m2", "input"),
+                ("M_drive", "input"),
+                ("M_m3", "input"),
+            ],
+        ),
+        (
+            "controller",
+            [
+                ("w_m2", "input"),
+                ("w_drive", "input"),
+                ("w_m3", "input"),
+                ("M_m2", "output"),
+                ("M_drive", "output"),
+                ("M_m3", "output"),
+            ],
+        ),
+    ] {
+        ssd += &format!(
+            "      <ssd:Component name=\"{name}\" source=\"resources/{name}.fmu\" type=\"application/x-fmu-sharedlibrary\">\n        <ssd:Connectors>\n"
+        );
+        for (c, kind) in kinds {
+            ssd += &format!("          <ssd:Connector name=\"{c}\" kind=\"{kind}\"><ssc:Real/></ssd:Connector>\n");
+        }
+        ssd += "        </ssd:Connectors>\n      </ssd:Component>\n";
+    }
+    ssd += "    </ssd:Elements>\n    <ssd:Connections>\n";
+    for (a, ac, b, bc) in LOOP_CONNECTIONS {
+        ssd += &format!(
+            "      <ssd:Connection startElement=\"{a}\" startConnector=\"{ac}\" endElement=\"{b}\" endConnector=\"{bc}\"/>\n"
+        );
+    }
+    ssd += "    </ssd:Connections>\n  </ssd:System>\n  <ssd:DefaultExperiment startTime=\"0\" stopTime=\"1\"/>\n</ssd:SystemStructureDescription>\n";
+    let mut buf = std::io::Cursor::new(Vec::new());
+    {
+        let mut zip = zip::ZipWriter::new(&mut buf);
+        let opts = zip::write::SimpleFileOptions::default().compression_method(zip::CompressionMethod::Deflated);
+        zip.start_file("SystemStructure.ssd", opts)?;
+        zip.write_all(ssd.as_bytes())?;
+        for (name, p) in [("plant", plant), ("controller", controller)] {
+            zip.start_file(format!("resources/{name}.fmu"), opts)?;
+            zip.write_all(&archive(p, lib, Version::Fmi2)?)?;
+        }
+        zip.finish()?;
+    }
+    let dir = crate::files::output_dir(out, "--out")?;
+    let path = dir.join("rigtwin-closed-loop.ssp");
+    crate::files::write_new(&path, "--out", buf.get_ref())?;
+    Ok(out.join("rigtwin-closed-loop.ssp"))
 }

@@ -158,6 +158,10 @@ enum Command {
         /// The controller's number of move blocks, 0: every step free (with --controller).
         #[arg(long, default_value_t = 4, requires = "controller")]
         blocks: usize,
+        /// With --controller: the plant of rigtwin-closed-loop.ssp (a rig file with its
+        /// [effects]); default: the rig of --params.
+        #[arg(long, value_name = "FILE", requires = "controller")]
+        plant: Option<PathBuf>,
     },
     /// Model-predictive control of the rig (section 1.2): the closed loop with the MPC and
     /// with PI speed control after a drive-torque step or during a sweep; step time,
@@ -398,7 +402,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                 out!("{}", rep.human());
             }
         }
-        Command::Fmu { params, out, descriptions, controller, horizon, blocks } => {
+        Command::Fmu { params, out, descriptions, controller, horizon, blocks, plant } => {
             let mut p = match &params {
                 Some(f) => rigtwin::fmu_package::params_of_file(f)?,
                 None => rigtwin_fmu::FmuParams::default(),
@@ -413,8 +417,24 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                 rigtwin::fmu_package::write_descriptions(&p, d)?;
             }
             let lib = rigtwin::fmu_package::library()?;
+            // the closed loop's plant is checked before anything is written
+            let plant = match (&plant, controller) {
+                (Some(f), _) => Some(rigtwin::fmu_package::params_of_file(f)?),
+                (None, true) => Some(rigtwin_fmu::FmuParams { controller: None, ..p.clone() }),
+                (None, false) => None,
+            };
+            if let Some(pl) = &plant {
+                if pl.drive.is_some() {
+                    anyhow::bail!("--plant: a drive model; the closed loop is the paper rig's (give a rig file)");
+                }
+                rigtwin_fmu::check(pl).map_err(|e| anyhow::anyhow!("--plant: {e}"))?;
+            }
             let [a, b] = rigtwin::fmu_package::package(&p, &lib, &out)?;
             outln!("wrote {} and {} (token {})", a.display(), b.display(), rigtwin_fmu::token(&p));
+            if let Some(pl) = &plant {
+                let ssp = rigtwin::fmu_package::closed_loop_ssp(pl, &p, &lib, &out)?;
+                outln!("wrote {} (the plant's and the controller's FMI 2 FMUs, connected)", ssp.display());
+            }
         }
         Command::Mpc {
             horizon,

@@ -1,6 +1,6 @@
 """Closes the loop of the plant FMU and the controller FMU in fmpy; writes the speeds as JSON.
 
-    closed_loop_fmus.py PLANT_DIR CONTROLLER_DIR START.json STEPS OUT.json
+    closed_loop_fmus.py PLANT_DIR CONTROLLER_DIR START.json STEPS OUT.json [LOOP.ssp]
 
 PLANT_DIR holds rigtwin-fmi3.fmu / rigtwin-fmi2.fmu (`rigtwin fmu --params TRUE`),
 CONTROLLER_DIR rigtwin-mpc-fmi3.fmu / rigtwin-mpc-fmi2.fmu (`rigtwin fmu --controller --params
@@ -10,7 +10,13 @@ co-simulation FMUs by a small master that does what `rigtwin mpc` does in proces
 1 ms communication point: read the plant's speeds, set them and the references (speeds w, drive
 torque 0 then T from step k on) as the controller's inputs, read its torque commands
 (direct feedthrough: the controller steps when they are read), set them as the plant's inputs,
-step both. The connection is the one `tests/closed_loop.ssp` describes.
+step both (Gauss-Seidel: no delay in the loop); the connections are read from LOOP.ssp when it
+is given. With LOOP.ssp (`rigtwin fmu --controller`
+writes rigtwin-closed-loop.ssp: both FMI 2 FMUs and their connections), OSP libcosim loads the
+system from it and runs it with its fixed-step (Jacobi) master: every FMU steps on the others'
+outputs of the point before, so the plant gets the controller's command one sample late; the
+references and the start values are set as above, the drive-torque step by an override
+manipulator.
 """
 import json
 import subprocess
@@ -22,15 +28,30 @@ from fmpy import read_model_description, extract
 from fmpy.validation import validate_fmu
 
 plant_dir, ctrl_dir, start_file, steps, out_file = sys.argv[1:6]
+ssp = sys.argv[6] if len(sys.argv) > 6 else None
 start = json.loads(Path(start_file).read_text())
 steps = int(steps)
 dt = 1e-3
 fmutool = Path(sys.executable).parent / "fmutool"
 report = {"validate": {}, "fmutool": {}}
 
-MEASURED = ["w_m2", "w_drive", "w_m3"]
 REFERENCES = ["w_m2_ref", "w_m3_ref", "M_drive_ref"]
-COMMANDS = ["M_m2", "M_drive", "M_m3"]
+if ssp is not None:
+    # the connections as the SSP describes them, the one description of the loop
+    import xml.etree.ElementTree as ET
+    import zipfile
+    ns = {"ssd": "http://ssp-standard.org/SSP1/SystemStructureDescription"}
+    root = ET.fromstring(zipfile.ZipFile(ssp).read("SystemStructure.ssd"))
+    links = [(c.get("startElement"), c.get("startConnector"), c.get("endElement"), c.get("endConnector"))
+             for c in root.iter("{%s}Connection" % ns["ssd"])]
+else:
+    links = [("plant", n, "controller", n) for n in ["w_m2", "w_drive", "w_m3"]] + \
+            [("controller", n, "plant", n) for n in ["M_m2", "M_drive", "M_m3"]]
+TO_CONTROLLER = [(a, b) for (e, a, _, b) in links if e == "plant"]
+TO_PLANT = [(a, b) for (e, a, _, b) in links if e == "controller"]
+MEASURED = [a for a, _ in TO_CONTROLLER]
+COMMANDS = [a for a, _ in TO_PLANT]
+assert len(MEASURED) == 3 and len(COMMANDS) == 3, links
 
 
 def open_fmu(path, name):
@@ -72,7 +93,7 @@ for version in ("fmi3", "fmi2"):
     cput(settings, [start["controller"][n] for n in settings])
     w = start["speed_radps"]
     speeds = pget(MEASURED)
-    cput(MEASURED + REFERENCES, list(speeds) + [w, w, 0.0])
+    cput([b for _, b in TO_CONTROLLER] + REFERENCES, list(speeds) + [w, w, 0.0])
     plant.exitInitializationMode()
     ctrl.exitInitializationMode()
     rows = []
@@ -80,9 +101,9 @@ for version in ("fmi3", "fmi2"):
     for k in range(steps):
         speeds = pget(MEASURED)
         drive_ref = start["step_nm"] if k >= start["step_at"] else 0.0
-        cput(MEASURED + REFERENCES, list(speeds) + [w, w, drive_ref])
+        cput([b for _, b in TO_CONTROLLER] + REFERENCES, list(speeds) + [w, w, drive_ref])
         torques = cget(COMMANDS)
-        pput(COMMANDS, torques)
+        pput([b for _, b in TO_PLANT], torques)
         rows.append(list(speeds) + list(torques))
         plant.doStep(currentCommunicationPoint=t, communicationStepSize=dt)
         ctrl.doStep(currentCommunicationPoint=t, communicationStepSize=dt)
@@ -91,5 +112,36 @@ for version in ("fmi3", "fmi2"):
     for fmu in (plant, ctrl):
         fmu.terminate()
         fmu.freeInstance()
+
+if ssp is not None:
+    from libcosimpy.CosimExecution import CosimExecution
+    from libcosimpy.CosimManipulator import CosimManipulator
+    from libcosimpy.CosimObserver import CosimObserver
+
+    ex = CosimExecution.from_ssp_file(ssp_path=ssp, step_size=int(round(dt * 1e9)))
+    index = {s.name.decode(): s.index for s in ex.slave_infos()}
+    refs = {i: {v.name.decode(): v.reference for v in ex.slave_variables(i)} for i in index.values()}
+    plant, ctrl = index["plant"], index["controller"]
+    for name, value in start["plant"].items():
+        ex.real_initial_value(plant, refs[plant][name], value)
+    w = start["speed_radps"]
+    for a, b in TO_CONTROLLER:
+        ex.real_initial_value(ctrl, refs[ctrl][b], start["plant"][a])
+    for name, value in [("w_m2_ref", w), ("w_m3_ref", w), ("M_drive_ref", 0.0)] + list(start.get("controller", {}).items()):
+        ex.real_initial_value(ctrl, refs[ctrl][name], value)
+    observer = CosimObserver.create_last_value()
+    ex.add_observer(observer)
+    override = CosimManipulator.create_override()
+    ex.add_manipulator(override)
+    rows = []
+    speeds = [start["plant"][n] for n in MEASURED]
+    for k in range(steps):
+        if k == start["step_at"]:
+            override.slave_real_values(ctrl, [refs[ctrl]["M_drive_ref"]], [start["step_nm"]])
+        ex.step()
+        applied = observer.last_real_values(plant, [refs[plant][n] for n in COMMANDS])
+        rows.append(list(speeds) + list(applied))
+        speeds = observer.last_real_values(plant, [refs[plant][n] for n in MEASURED])
+    report["libcosim"] = rows
 
 Path(out_file).write_text(json.dumps(report))

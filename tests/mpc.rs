@@ -167,25 +167,34 @@ fn controller_fmu_closes_the_loop_in_fmpy() {
         assert!(o.status.success(), "{a:?}: {}", String::from_utf8_lossy(&o.stderr));
     }
 
-    // the in-process loop
+    // the in-process loop: the command of each point applied at once (`delayed` false), or
+    // from the next point on (a Jacobi master's sample of computational delay)
     let params = rigtwin::fmu_package::params_of_file(&rig).unwrap();
     let p = rigtwin::control::prediction(&params).unwrap();
     let mut settings = MpcSettings::powertrain(50);
     settings.solver.time_limit_s = 1.0;
-    let mut c = mpc::Controller::with_input_delays(&p.model, &p.input_delays_s, &settings).unwrap();
     let speed = 10.0;
     let (x0, u0) = mpc::closed_loop::steady_spin(&p.model, speed).unwrap();
-    c.reset(&x0, &u0);
-    let mut plant = rigtwin::control::FmuPlant::new(&params, settings.dt_s, speed, &u0, &p.model.output_names).unwrap();
     let (steps, step_at) = (400, 50);
-    let mut rows = Vec::new();
-    for k in 0..steps {
-        let y = plant.outputs().to_vec();
-        let r = [speed, speed, if k >= step_at { 40.0 } else { 0.0 }];
-        let u = c.step(&y, &r).0.to_vec();
-        rows.push([y[0], y[1], y[2], u[0], u[1], u[2]]);
-        plant.advance(&u).unwrap();
-    }
+    let in_process = |delayed: bool| -> Vec<[f64; 6]> {
+        let mut c = mpc::Controller::with_input_delays(&p.model, &p.input_delays_s, &settings).unwrap();
+        c.reset(&x0, &u0);
+        let mut plant =
+            rigtwin::control::FmuPlant::new(&params, settings.dt_s, speed, &u0, &p.model.output_names).unwrap();
+        let mut rows = Vec::new();
+        let mut previous: Option<Vec<f64>> = None;
+        for k in 0..steps {
+            let y = plant.outputs().to_vec();
+            let r = [speed, speed, if k >= step_at { 40.0 } else { 0.0 }];
+            let u = c.step(&y, &r).0.to_vec();
+            let applied = if delayed { previous.clone().unwrap_or_else(|| u.clone()) } else { u.clone() };
+            rows.push([y[0], y[1], y[2], applied[0], applied[1], applied[2]]);
+            plant.advance(&applied).unwrap();
+            previous = Some(u);
+        }
+        rows
+    };
+    let rows = in_process(false);
 
     let start = serde_json::json!({
         "plant": {"w_m2": speed, "w_drive": speed, "w_m3": speed, "M_m2": u0[0], "M_drive": u0[1], "M_m3": u0[2]},
@@ -201,29 +210,32 @@ fn controller_fmu_closes_the_loop_in_fmpy() {
         .args([&plant_dir, &ctrl_dir, &start_file])
         .arg(steps.to_string())
         .arg(&report)
+        .arg(ctrl_dir.join("rigtwin-closed-loop.ssp"))
         .output()
         .unwrap();
     assert!(out.status.success(), "closed_loop_fmus.py: {}", String::from_utf8_lossy(&out.stderr));
     let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&report).unwrap()).unwrap();
-    for version in ["fmi3", "fmi2"] {
-        let problems = v["validate"][version].as_array().unwrap();
-        assert!(problems.is_empty(), "fmpy validate {version}: {problems:?}");
-        assert_eq!(v["fmutool"][version]["returncode"], 0, "fmutool {version}: {}", v["fmutool"][version]);
-        let got = v[version].as_array().unwrap();
+    let compare = |got: &[serde_json::Value], rows: &[[f64; 6]], what: &str| {
         assert_eq!(got.len(), rows.len());
         let (mut speed_err, mut torque_err): (f64, f64) = (0.0, 0.0);
-        for (g, r) in got.iter().zip(&rows) {
+        for (g, r) in got.iter().zip(rows) {
             let g: Vec<f64> = g.as_array().unwrap().iter().map(|x| x.as_f64().unwrap()).collect();
             for j in 0..3 {
                 speed_err = speed_err.max((g[j] - r[j]).abs());
                 torque_err = torque_err.max((g[3 + j] - r[3 + j]).abs());
             }
         }
-        eprintln!(
-            "{version}: fmpy master vs in-process loop: speeds {speed_err:.2e} rad/s, commands {torque_err:.2e} Nm"
-        );
-        assert!(speed_err < 1e-6, "{version}: speeds differ by {speed_err} rad/s");
-        assert!(torque_err < 1e-4, "{version}: commands differ by {torque_err} Nm");
+        eprintln!("{what} vs in-process loop: speeds {speed_err:.2e} rad/s, commands {torque_err:.2e} Nm");
+        assert!(speed_err < 1e-6, "{what}: speeds differ by {speed_err} rad/s");
+        assert!(torque_err < 1e-4, "{what}: commands differ by {torque_err} Nm");
+    };
+    // OSP libcosim ran rigtwin-closed-loop.ssp: its Jacobi master delays the command one sample
+    compare(v["libcosim"].as_array().unwrap(), &in_process(true), "libcosim (SSP, one sample of delay)");
+    for version in ["fmi3", "fmi2"] {
+        let problems = v["validate"][version].as_array().unwrap();
+        assert!(problems.is_empty(), "fmpy validate {version}: {problems:?}");
+        assert_eq!(v["fmutool"][version]["returncode"], 0, "fmutool {version}: {}", v["fmutool"][version]);
+        compare(v[version].as_array().unwrap(), &rows, &format!("{version}: fmpy master"));
     }
     let last = rows.last().unwrap();
     assert!((last[4] - 40.0).abs() < 1.0, "the drive torque followed its step: {last:?}");

@@ -5,7 +5,10 @@
 //! period. The outputs depend directly on the inputs: the step that makes them runs when they
 //! are read after the inputs of a communication point were set (or at DoStep if they are not
 //! read), so a master that reads the plant, sets the controller's inputs, reads its outputs and
-//! sets the plant's inputs closes the loop without a delay — as `rigtwin mpc` does in process.
+//! sets the plant's inputs (Gauss-Seidel) closes the loop without a delay — as `rigtwin mpc`
+//! does in process; a master that reads every output right after the step and sets every
+//! input before the next (Jacobi, as OSP libcosim) gets the commands of the step before: one
+//! sample of computational delay.
 
 use serde::{Deserialize, Serialize};
 
@@ -189,9 +192,15 @@ impl ControllerMachine {
 
     /// The commands at communication point `t` for the inputs `u` (measured speeds, then the
     /// references): the step is made once per point, and made again from the state before it
-    /// if the inputs have changed since. Allocation-free.
-    pub fn outputs(&mut self, t: f64, u: &[f64]) -> Result<[f64; 3], String> {
+    /// if the inputs have changed since. `fresh`: the importer has set the inputs since the
+    /// last DoStep; if it has not (a Jacobi master reads every output right after the step),
+    /// the commands of the last step are returned — a sample of computational delay, as a
+    /// controller on a real-time target has — and the step is made at DoStep. Allocation-free.
+    pub fn outputs(&mut self, t: f64, u: &[f64], fresh: bool) -> Result<[f64; 3], String> {
         let inputs: [f64; 6] = u.try_into().map_err(|_| format!("{} inputs for 6", u.len()))?;
+        if !fresh && self.computed.is_none() {
+            return Ok(self.out);
+        }
         match self.computed {
             Some((at, given)) if at == t && given == inputs => return Ok(self.out),
             Some((at, _)) if at == t => {
@@ -225,7 +234,7 @@ impl ControllerMachine {
         if (h - self.dt_s).abs() > 1e-9 * self.dt_s {
             return Err(format!("the communication step must be the control period {} s, got {h} s", self.dt_s));
         }
-        self.outputs(t, u)?;
+        self.outputs(t, u, true)?;
         self.computed = None;
         Ok(())
     }

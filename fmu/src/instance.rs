@@ -231,6 +231,8 @@ pub struct Instance {
     /// The controller FMU: its state carried over a change of its tunable parameters (the
     /// controller is rebuilt, its estimates and plan kept).
     carry: Option<Vec<f64>>,
+    /// The controller FMU: inputs were set since the last DoStep.
+    fresh_inputs: bool,
 }
 
 impl Instance {
@@ -272,6 +274,7 @@ impl Instance {
             accepted_time: 0.0,
             model: None,
             carry: None,
+            fresh_inputs: false,
         }
     }
 
@@ -547,6 +550,7 @@ impl Instance {
         }
         self.time = t + h;
         self.forget_history();
+        self.fresh_inputs = false;
         Ok(())
     }
 
@@ -571,7 +575,7 @@ impl Instance {
                     m.reset(speed).or_else(|e| error(format!("the controller cannot start at {speed} rad/s: {e}")))?;
                     m.commands()
                 }
-                Machine::Controller(m) => match m.outputs(t, u) {
+                Machine::Controller(m) => match m.outputs(t, u, self.fresh_inputs) {
                     Ok(c) => c,
                     Err(e) => return Err(self.fail(format!("the controller's step at {t} s: {e}"))),
                 },
@@ -670,6 +674,7 @@ impl Instance {
                 }
                 Some(Slot::Input(i)) => {
                     self.u[i] = v;
+                    self.fresh_inputs = true;
                     if self.delay_s(i) > 0.0 {
                         self.delays[i].record(self.time, v);
                     }
@@ -780,6 +785,7 @@ impl Instance {
             (_, false) => self.carry = Some(s.internal.clone()),
         }
         self.delays = history;
+        self.fresh_inputs = false;
         self.mode = s.mode;
         self.time = s.time;
         self.accepted_time = s.time;
