@@ -1,7 +1,9 @@
 //! One controller step (estimate + target + QP update + Clarabel solve + bookkeeping) in the
 //! closed loop of the drive-torque step scenario, for N = 10, 20, 50, 100 (default settings:
-//! condensed QP, 4 move blocks). Criterion gives the median; the 99th percentile and the
-//! allocations per step are printed after each group from 5000 individually timed steps.
+//! condensed QP, 4 move blocks), and for N = 50 with the effects a diagnosis adds (a 4.3 ms
+//! dead time of the drive torque as input-delay states, a 5 ms actuator lag as a state).
+//! Criterion gives the median; the 99th percentile, the largest step and the allocations per
+//! step are printed after each group from 5000 individually timed steps.
 
 use std::time::{Duration, Instant};
 
@@ -22,15 +24,21 @@ struct Loop {
 }
 
 impl Loop {
-    fn new(horizon: usize) -> Self {
-        let ss = rig_plant(&plant::paper::damped_params(), plant::rig::Variant::V1).unwrap();
+    fn new(horizon: usize, effects: bool) -> Self {
+        let (ss, delays) = if effects {
+            let e = plant::effects::DriveEffects { time_delay_s: 0.0043, actuator_lag_s: 0.005, ..Default::default() };
+            let p = mpc::rig::prediction(&plant::paper::damped_params(), plant::rig::Variant::V1, &e, 1e-3).unwrap();
+            (p.model, p.input_delays_s)
+        } else {
+            (rig_plant(&plant::paper::damped_params(), plant::rig::Variant::V1).unwrap(), Vec::new())
+        };
         let (x0, u0) = steady_spin(&ss, 10.0).unwrap();
         let mut settings = MpcSettings::powertrain(horizon);
         settings.solver.time_limit_s = 1.0; // measure the solve, never cut it short
-        let mut c = Controller::new(&ss, &settings).unwrap();
+        let mut c = Controller::with_input_delays(&ss, &delays, &settings).unwrap();
         c.reset(&x0, &u0);
         let p = LinearPlant::new(&ss, 1e-3, &x0).unwrap();
-        Loop { c, p, y: vec![0.0; 5], u: u0, k: 0, scenario: Scenario::new(ScenarioKind::Step) }
+        Loop { c, p, y: vec![0.0; ss.output_names.len()], u: u0, k: 0, scenario: Scenario::new(ScenarioKind::Step) }
     }
 
     /// One closed-loop sample; returns the controller step's time. The scenario repeats
@@ -51,12 +59,13 @@ impl Loop {
 
 fn bench(c: &mut Criterion) {
     let mut group = c.benchmark_group("controller_step");
-    for horizon in [10, 20, 50, 100] {
-        let mut l = Loop::new(horizon);
-        group.bench_with_input(BenchmarkId::from_parameter(horizon), &horizon, |b, _| {
+    for (horizon, effects) in [(10, false), (20, false), (50, false), (100, false), (50, true)] {
+        let id = if effects { format!("{horizon}_with_delay_and_lag") } else { horizon.to_string() };
+        let mut l = Loop::new(horizon, effects);
+        group.bench_with_input(BenchmarkId::from_parameter(&id), &horizon, |b, _| {
             b.iter_custom(|iters| (0..iters).map(|_| l.tick()).sum())
         });
-        let mut l = Loop::new(horizon);
+        let mut l = Loop::new(horizon, effects);
         let mut times = Vec::with_capacity(5000);
         let before = mpc::alloc_counter::allocations();
         for _ in 0..5000 {
@@ -64,7 +73,10 @@ fn bench(c: &mut Criterion) {
         }
         let allocs = (mpc::alloc_counter::allocations() - before) as f64 / 5000.0;
         let (median, p99) = median_p99(&times);
-        println!("controller_step/{horizon}: median {median:.1} µs, p99 {p99:.1} µs, {allocs:.2} allocations per step");
+        let max = times.iter().copied().fold(0.0, f64::max);
+        println!(
+            "controller_step/{id}: median {median:.1} µs, p99 {p99:.1} µs, max {max:.1} µs, {allocs:.2} allocations per step"
+        );
     }
     group.finish();
 }
