@@ -696,6 +696,9 @@ struct DriveFile {
     inputs: Vec<DriveInputFile>,
     #[serde(default)]
     outputs: Vec<DriveOutputFile>,
+    /// The controller's section, read by `rigtwin mpc` (`control::mpc_section_of_file`).
+    #[allow(dead_code)]
+    mpc: Option<toml::Value>,
 }
 
 #[derive(Deserialize)]

@@ -552,3 +552,286 @@ pub fn plot(
     ];
     lines(target, &format!("rigtwin mpc: {kind:?} scenario, MPC vs PI speed control"), &panels)
 }
+
+/// A drive model as the FMU integrates it (`rigtwin_fmu::drive::DriveDynamics`: exact ZOH
+/// pieces between the dead times' switching instants, RK4 with friction or play), its outputs
+/// in the order of the controller state space's names (speeds, coupling forces).
+pub struct DrivePlant {
+    dynamics: rigtwin_fmu::drive::DriveDynamics,
+    x: nalgebra::DVector<f64>,
+    delays: Vec<plant::effects::DelayLine>,
+    taus: Vec<f64>,
+    t: f64,
+    dt_s: f64,
+    /// Per output: a state index (speed) or a coupling (force).
+    outputs: Vec<Source>,
+    y: Vec<f64>,
+}
+
+impl DrivePlant {
+    /// The plant of `model` at rest, sampled every `dt_s`, reporting `output_names`.
+    pub fn new(model: &plant::DriveModel, dt_s: f64, output_names: &[String]) -> anyhow::Result<Self> {
+        let dynamics = rigtwin_fmu::drive::DriveDynamics::new(model).map_err(|e| anyhow::anyhow!("the plant: {e}"))?;
+        let n = model.line.bodies.len();
+        let states = model.state_names();
+        let forces = model.coupling_force_names();
+        let outputs = output_names
+            .iter()
+            .map(|name| {
+                if let Some(i) = states[n..2 * n].iter().position(|s| s == name) {
+                    Ok(Source::State(n + i))
+                } else if let Some(i) = forces.iter().position(|s| s == name) {
+                    Ok(Source::Torque(i))
+                } else {
+                    anyhow::bail!("the plant has no output `{name}`")
+                }
+            })
+            .collect::<anyhow::Result<Vec<_>>>()?;
+        let nu = model.inputs.len();
+        let x = nalgebra::DVector::from_vec(dynamics.dynamics.initial_state(0.0, &vec![0.0; nu]));
+        let mut delays = vec![plant::effects::DelayLine::default(); nu];
+        for d in delays.iter_mut() {
+            d.record(f64::NEG_INFINITY, 0.0);
+        }
+        let taus = model.input_delays_s();
+        let mut p = DrivePlant { dynamics, x, delays, taus, t: 0.0, dt_s, y: vec![0.0; outputs.len()], outputs };
+        p.read();
+        Ok(p)
+    }
+
+    fn read(&mut self) {
+        for (y, s) in self.y.iter_mut().zip(&self.outputs) {
+            *y = match *s {
+                Source::State(i) => self.x[i],
+                Source::Torque(i) => self.dynamics.coupling_force(self.x.as_slice(), i),
+            };
+        }
+    }
+}
+
+impl Plant for DrivePlant {
+    fn outputs(&self) -> &[f64] {
+        &self.y
+    }
+    fn advance(&mut self, u: &[f64]) -> Result<(), String> {
+        for (j, line) in self.delays.iter_mut().enumerate() {
+            if self.taus[j] > 0.0 {
+                line.record(self.t, u[j]);
+            }
+        }
+        self.dynamics.step(&mut self.x, u, self.t, self.dt_s, &self.delays)?;
+        self.t += self.dt_s;
+        for (j, line) in self.delays.iter_mut().enumerate() {
+            line.forget_before(self.t, self.taus[j]);
+        }
+        self.read();
+        Ok(())
+    }
+}
+
+/// What `rigtwin mpc` prints for a drive model: a step of the tracked speeds' references
+/// from rest.
+#[derive(Debug, Clone, Serialize)]
+pub struct DriveMpcReport {
+    /// Prediction horizon, steps of `dt_s`.
+    pub horizon: usize,
+    /// Sample time, s.
+    pub dt_s: f64,
+    /// The controller's signals: tracked outputs, tracked inputs, penalised forces, measured.
+    pub tracked: Vec<String>,
+    /// Coupling forces whose oscillation is penalised.
+    pub penalised: Vec<String>,
+    /// Measured outputs.
+    pub measured: Vec<String>,
+    /// The input bounds, in input order (N·m or N).
+    pub input_max: Vec<f64>,
+    /// What the prediction leaves out of the model's effects.
+    pub prediction: Vec<String>,
+    /// Height of the reference step of every tracked speed (rad/s or m/s), at 0.05 s.
+    pub step: f64,
+    /// The first tracked speed's response.
+    pub response: StepFigures,
+    /// The first tracked speed at the end: the mean of the run's last 10 %.
+    pub final_value: f64,
+    /// RMS error of the tracked speeds after the step.
+    pub tracking_error_rms: f64,
+    /// Largest |penalised force| during the run.
+    pub peak_force: f64,
+    /// One controller step, µs.
+    pub step_time_us: Timing,
+    /// Steps that used the fallback plan.
+    pub fallbacks: usize,
+    /// Share of samples with an input at a hard bound.
+    pub input_at_bound_share: f64,
+    /// Where the run stopped because the loop diverged.
+    pub stopped: Option<String>,
+}
+
+impl DriveMpcReport {
+    /// Text for the terminal.
+    pub fn human(&self) -> String {
+        let mut s = format!(
+            "MPC on the drive model: N = {} at {} ms; tracked {}, penalised {}, measured {}; |u| <= {:?}\n",
+            self.horizon,
+            self.dt_s * 1e3,
+            self.tracked.join(", "),
+            if self.penalised.is_empty() { "nothing".to_string() } else { self.penalised.join(", ") },
+            self.measured.join(", "),
+            self.input_max
+        );
+        for n in &self.prediction {
+            s += &format!("  prediction: {n}\n");
+        }
+        if let Some(w) = &self.stopped {
+            s += &format!("  loop UNSTABLE: stopped {w}\n");
+        }
+        s += &format!(
+            "  reference step of {} at 0.05 s: final {:.4}, overshoot {:.1} %, settling time {:.3} s (band ±{:.0} %), RMS tracking error {:.4}\n",
+            self.step,
+            self.final_value,
+            self.response.overshoot * 100.0,
+            self.response.settling_time_s,
+            SETTLING_BAND * 100.0,
+            self.tracking_error_rms
+        );
+        s += &format!(
+            "  peak |penalised force| {:.4}; controller step median {:.1} µs, p99 {:.1} µs, max {:.1} µs; {} fallback(s); inputs at a bound {:.1} % of samples\n",
+            self.peak_force,
+            self.step_time_us.median,
+            self.step_time_us.p99,
+            self.step_time_us.max,
+            self.fallbacks,
+            self.input_at_bound_share * 100.0
+        );
+        s
+    }
+}
+
+/// The MPC of a drive model with its `[mpc]` section, in closed loop on `truth` (as the FMU
+/// integrates it) from rest: every tracked speed's reference steps by `step` at 0.05 s (tracked
+/// inputs' references stay 0), for 1 s.
+pub fn drive_report(
+    model: &plant::DriveModel,
+    truth: &plant::DriveModel,
+    section: &mpc::MpcSection,
+    horizon: usize,
+    time_limit_s: f64,
+    step: f64,
+) -> anyhow::Result<DriveMpcReport> {
+    let ss = model.control_state_space()?;
+    let delays = model.input_delays_s();
+    let mut settings = section.drive_settings(&ss.input_names, &ss.output_names, horizon)?;
+    settings.solver.time_limit_s = time_limit_s;
+    let mut prediction = Vec::new();
+    for e in &model.effects {
+        match e {
+            plant::Effect::TimeDelay { .. } => {
+                prediction.push(format!("{} at {}: input-delay states", e.name(), e.element(model)))
+            }
+            plant::Effect::ActuatorLag { .. } => {
+                prediction.push(format!("{} at {}: a state", e.name(), e.element(model)))
+            }
+            _ => prediction.push(format!(
+                "{} at {} is NOT in the prediction: it stays linear (in contact, without friction)",
+                e.name(),
+                e.element(model)
+            )),
+        }
+    }
+    if truth.input_names() != model.input_names() || truth.coupling_force_names() != model.coupling_force_names() {
+        anyhow::bail!("--plant: its bodies and inputs differ from the model's");
+    }
+    let mut controller = mpc::Controller::with_input_delays(&ss, &delays, &settings)?;
+    let names = controller.reference_names();
+    let x0 = nalgebra::DVector::zeros(ss.nstates());
+    let u0 = vec![0.0; ss.input_names.len()];
+    controller.reset(&x0, &u0);
+    let mut plant = DrivePlant::new(truth, settings.dt_s, &ss.output_names)?;
+    let dt = settings.dt_s;
+    let samples = (1.0 / dt).round() as usize;
+    let k_step = (0.05 / dt).round() as usize;
+    let tracked: Vec<usize> = names.iter().filter_map(|n| ss.output_names.iter().position(|o| o == n)).collect();
+    let penalised: Vec<String> = settings
+        .outputs
+        .iter()
+        .filter(|o| !o.tracked && !o.name.starts_with(['w', 'v']))
+        .map(|o| o.name.clone())
+        .collect();
+    let penalised_idx: Vec<usize> =
+        penalised.iter().filter_map(|n| ss.output_names.iter().position(|o| o == n)).collect();
+    let (mut trace, mut times) = (Vec::with_capacity(samples), Vec::with_capacity(samples));
+    let mut inputs = Vec::with_capacity(samples);
+    let mut stopped = None;
+    let mut r = vec![0.0; names.len()];
+    for k in 0..samples {
+        let y = plant.outputs().to_vec();
+        for (i, n) in names.iter().enumerate() {
+            r[i] = if k >= k_step && ss.output_names.contains(n) { step } else { 0.0 };
+        }
+        let (u, info) = controller.step(&y, &r);
+        let u = u.to_vec();
+        times.push(info.elapsed_s * 1e6);
+        trace.push(y);
+        inputs.push(u.clone());
+        if let Err(e) = plant.advance(&u) {
+            stopped = Some(format!("at {:.4} s: {e}", k as f64 * dt));
+            break;
+        }
+        if let Some(v) = plant.outputs().iter().find(|v| !(v.abs() < mpc::closed_loop::DIVERGED)) {
+            stopped = Some(format!("at {:.4} s: an output is {v} (the loop diverged)", k as f64 * dt));
+            break;
+        }
+    }
+    let response = match (tracked.first(), &stopped) {
+        (Some(&j), None) => step_figures(&trace.iter().map(|y| y[j]).collect::<Vec<_>>(), k_step, dt, SETTLING_BAND),
+        _ => StepFigures { overshoot: f64::NAN, settling_time_s: f64::NAN },
+    };
+    let final_value = match tracked.first() {
+        Some(&j) if stopped.is_none() => {
+            let tail = &trace[trace.len() - trace.len() / 10..];
+            tail.iter().map(|y| y[j]).sum::<f64>() / tail.len() as f64
+        }
+        _ => f64::NAN,
+    };
+    let after = &trace[k_step.min(trace.len())..];
+    let tracking_error_rms = if tracked.is_empty() || after.is_empty() {
+        f64::NAN
+    } else {
+        (after.iter().map(|y| tracked.iter().map(|&j| (y[j] - step).powi(2)).sum::<f64>()).sum::<f64>()
+            / (after.len() * tracked.len()) as f64)
+            .sqrt()
+    };
+    let peak_force = trace.iter().flat_map(|y| penalised_idx.iter().map(move |&j| y[j].abs())).fold(0.0, f64::max);
+    let (median, p99) = median_p99(&times);
+    let bounds: Vec<f64> = settings.inputs.iter().map(|u| u.max_nm).collect();
+    let at_bound = inputs.iter().filter(|u| u.iter().zip(&bounds).any(|(v, b)| v.abs() >= b * (1.0 - 1e-9))).count();
+    Ok(DriveMpcReport {
+        horizon,
+        dt_s: dt,
+        tracked: names,
+        penalised,
+        measured: settings.outputs.iter().filter(|o| o.noise_std.is_some()).map(|o| o.name.clone()).collect(),
+        input_max: bounds,
+        prediction,
+        step,
+        response,
+        final_value,
+        tracking_error_rms,
+        peak_force,
+        step_time_us: Timing { median, p99, max: times.iter().copied().fold(0.0, f64::max) },
+        fallbacks: controller.fallbacks(),
+        input_at_bound_share: at_bound as f64 / inputs.len().max(1) as f64,
+        stopped,
+    })
+}
+
+/// The `[mpc]` section of a model file (empty when it has none); an unknown key or a wrong type
+/// is named with the file.
+pub fn mpc_section_of_file(file: &std::path::Path) -> anyhow::Result<mpc::MpcSection> {
+    let text = crate::files::read_text(file).map_err(|e| anyhow::anyhow!("{}: {}", file.display(), e.message))?;
+    let table: toml::Table = toml::from_str(&text).map_err(|e| anyhow::anyhow!("{}: {e}", file.display()))?;
+    match table.get("mpc") {
+        None => Ok(mpc::MpcSection::default()),
+        Some(v) => v.clone().try_into().map_err(|e| anyhow::anyhow!("{}: [mpc]: {e}", file.display())),
+    }
+}

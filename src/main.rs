@@ -449,26 +449,53 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             plot,
             export_qp,
         } => {
-            let rig_of = |f: &PathBuf, flag: &str| -> anyhow::Result<rigtwin_fmu::FmuParams> {
-                let p = rigtwin::fmu_package::params_of_file(f)?;
-                if p.drive.is_some() {
-                    anyhow::bail!(
-                        "{flag} {}: a drive model: the MPC runs on the paper rig's powertrain only (give a rig file); \
-                         the MPC of a drive model is not built yet",
-                        f.display()
-                    );
-                }
-                Ok(p)
-            };
             let p = match &params {
-                Some(f) => rig_of(f, "--params")?,
+                Some(f) => rigtwin::fmu_package::params_of_file(f)?,
                 None => rigtwin_fmu::FmuParams::default(),
             };
+            let section = match &params {
+                Some(f) => rigtwin::control::mpc_section_of_file(f)?,
+                None => mpc::MpcSection::default(),
+            };
+            if let Some(model) = &p.drive {
+                // a drive model: its [mpc] section, a reference step from rest
+                let truth = match &plant {
+                    Some(f) => rigtwin::fmu_package::params_of_file(f)?.drive.ok_or_else(|| {
+                        anyhow::anyhow!("--plant {}: a rig file; --params is a drive model", f.display())
+                    })?,
+                    None => model.clone(),
+                };
+                let step = match model.line.domain {
+                    plant::Domain::Rotational => 10.0,
+                    plant::Domain::Translational => 0.1,
+                };
+                let rep = rigtwin::control::drive_report(model, &truth, &section, horizon, time_limit_us * 1e-6, step)
+                    .map_err(|e| {
+                        anyhow::anyhow!("{}: {e:#}", params.as_ref().map_or(String::new(), |f| f.display().to_string()))
+                    })?;
+                if json {
+                    print_json(&serde_json::to_value(&rep)?)?;
+                } else {
+                    out!("{}", rep.human());
+                }
+                return Ok(());
+            }
             let truth = match &plant {
-                Some(f) => rig_of(f, "--plant")?,
+                Some(f) => {
+                    let t = rigtwin::fmu_package::params_of_file(f)?;
+                    if t.drive.is_some() {
+                        anyhow::bail!(
+                            "--plant {}: a drive model; --params is the paper rig (give a rig file)",
+                            f.display()
+                        );
+                    }
+                    t
+                }
                 None => p.clone(),
             };
-            let mut settings = mpc::MpcSettings::powertrain(horizon);
+            let mut settings = section.rig_settings(horizon).map_err(|e| {
+                anyhow::anyhow!("{}: {e}", params.as_ref().map_or(String::new(), |f| f.display().to_string()))
+            })?;
             settings.move_blocks = if blocks == 0 { Vec::new() } else { mpc::exponential_blocks(horizon, blocks) };
             settings.formulation = match formulation {
                 FormulationArg::Condensed => mpc::Formulation::Condensed,

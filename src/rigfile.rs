@@ -97,6 +97,9 @@ struct RigFile {
     bearing: Option<plant::BearingModel>,
     #[serde(default)]
     effects: plant::effects::DriveEffects,
+    /// The controller's section, read by `rigtwin mpc` (`control::mpc_section_of_file`).
+    #[allow(dead_code)]
+    mpc: Option<toml::Value>,
 }
 
 #[derive(Deserialize)]

@@ -31,4 +31,6 @@ pub mod solver;
 
 pub use controller::{Controller, StepInfo};
 pub use error::{MpcError, Result};
-pub use settings::{exponential_blocks, Formulation, InputSettings, MpcSettings, OutputSettings, SolverSettings};
+pub use settings::{
+    exponential_blocks, Formulation, InputSettings, MpcSection, MpcSettings, OutputSettings, SolverSettings,
+};

@@ -121,6 +121,196 @@ pub struct MpcSettings {
     pub solver: SolverSettings,
 }
 
+/// A model file's `[mpc]` section: what the controller tracks and penalises and the inputs'
+/// bounds. Every key is optional; [`MpcSection::rig_settings`] and
+/// [`MpcSection::drive_settings`] give the defaults.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MpcSection {
+    /// Outputs with a reference (speeds). Drive: default the last body's speed. The rig's are
+    /// fixed (w_m2, w_m3).
+    pub tracked: Option<Vec<String>>,
+    /// Inputs that follow a reference. Drive: default none. The rig's is fixed (M_drive).
+    pub tracked_inputs: Option<Vec<String>>,
+    /// Coupling forces (torques) whose oscillation is penalised. Drive: default every
+    /// coupling. The rig's are fixed (both side shafts).
+    pub penalised: Option<Vec<String>>,
+    /// Measured outputs. Drive: default every body's speed. The rig's are fixed (the three speeds).
+    pub measured: Option<Vec<String>>,
+    /// |u| bound of each input, in the model's input order, N·m or N. Rig: default 300, 200,
+    /// 300 N·m; drive: required (the actuators' limits).
+    pub input_max: Option<Vec<f64>>,
+    /// Rate bound of each input, N·m/s or N/s. Rig: default 1e5, 4e4, 1e5; drive: default
+    /// input_max per 10 ms.
+    pub input_rate_max: Option<Vec<f64>>,
+    /// Weight on a tracked speed's error, per (rad/s)² or (m/s)². Default 100.
+    pub speed_weight: Option<f64>,
+    /// Weight on a penalised force's oscillation, per (N·m)² or N². Rig: default 1; drive:
+    /// (30 / U)² with U the largest input bound (a force of U costs as much as a 3 rad/s speed
+    /// error at the default speed weight; (300 / U)² — the rig's ratio — held a geared drive's
+    /// step back to a creep: its couplings must carry several times U while it accelerates).
+    pub force_weight: Option<f64>,
+    /// Soft bound on |penalised force|, N·m or N. Rig: default 60; drive: none.
+    pub force_soft_max: Option<f64>,
+}
+
+impl MpcSection {
+    fn lengths(&self, m: usize) -> Result<()> {
+        for (key, v) in [("input_max", &self.input_max), ("input_rate_max", &self.input_rate_max)] {
+            if let Some(v) = v {
+                if v.len() != m {
+                    return Err(setting(
+                        format!("[mpc] {key}"),
+                        format!("{} values for the model's {m} inputs", v.len()),
+                    ));
+                }
+                if let Some(x) = v.iter().find(|x| !(x.is_finite() && **x > 0.0)) {
+                    return Err(setting(format!("[mpc] {key}"), format!("{x}: expected positive, finite values")));
+                }
+            }
+        }
+        for (key, v) in [
+            ("speed_weight", self.speed_weight),
+            ("force_weight", self.force_weight),
+            ("force_soft_max", self.force_soft_max),
+        ] {
+            if let Some(x) = v.filter(|x| !(x.is_finite() && *x > 0.0)) {
+                return Err(setting(format!("[mpc] {key}"), format!("{x}: expected a positive, finite value")));
+            }
+        }
+        Ok(())
+    }
+
+    /// The paper rig's settings ([`MpcSettings::powertrain`]) with the section's weights and
+    /// bounds (inputs M_m2, M_drive, M_m3). Its tracked, penalised and measured signals are
+    /// fixed: naming them is an error.
+    pub fn rig_settings(&self, horizon: usize) -> Result<MpcSettings> {
+        for (key, given) in [
+            ("tracked", self.tracked.is_some()),
+            ("tracked_inputs", self.tracked_inputs.is_some()),
+            ("penalised", self.penalised.is_some()),
+            ("measured", self.measured.is_some()),
+        ] {
+            if given {
+                return Err(setting(
+                    format!("[mpc] {key}"),
+                    "the paper rig's signals are fixed (tracked w_m2, w_m3 and M_drive; penalised both side shafts; measured the three speeds): give only weights and bounds",
+                ));
+            }
+        }
+        self.lengths(3)?;
+        let mut s = MpcSettings::powertrain(horizon);
+        for (j, u) in s.inputs.iter_mut().enumerate() {
+            if let Some(v) = &self.input_max {
+                u.min_nm = -v[j];
+                u.max_nm = v[j];
+            }
+            if let Some(v) = &self.input_rate_max {
+                u.max_rate_nm_per_s = v[j];
+            }
+        }
+        for y in s.outputs.iter_mut() {
+            if y.tracked {
+                y.weight = self.speed_weight.unwrap_or(y.weight);
+            }
+            if y.name.starts_with("T_") {
+                y.weight = self.force_weight.unwrap_or(y.weight);
+                if let Some(b) = self.force_soft_max {
+                    y.soft_min = Some(-b);
+                    y.soft_max = Some(b);
+                }
+            }
+        }
+        s.validate()?;
+        Ok(s)
+    }
+
+    /// Settings for a drive model whose controller state space has `inputs` and `outputs`
+    /// (speeds `w_*`/`v_*`, forces): the section's signals (defaults above) and bounds, the
+    /// weights scaled to the largest input bound U as the rig's are to its 300 N·m (input
+    /// 0.09/U², move 9/U², a tracked input 1600/U²), an input disturbance on every input that
+    /// does not follow a reference (std U/300), speeds measured with 0.01 noise.
+    pub fn drive_settings(&self, inputs: &[String], outputs: &[String], horizon: usize) -> Result<MpcSettings> {
+        let m = inputs.len();
+        self.lengths(m)?;
+        let max = self.input_max.clone().ok_or_else(|| {
+            setting(
+                "[mpc] input_max",
+                format!("required for a drive model: the bounds of its inputs {}", inputs.join(", ")),
+            )
+        })?;
+        let rate = self.input_rate_max.clone().unwrap_or_else(|| max.iter().map(|v| v / 0.01).collect());
+        let big = max.iter().copied().fold(0.0, f64::max);
+        let is_speed = |n: &String| n.starts_with("w_") || n.starts_with("v_");
+        let speeds: Vec<String> = outputs.iter().filter(|n| is_speed(n)).cloned().collect();
+        let forces: Vec<String> = outputs.iter().filter(|n| !is_speed(n)).cloned().collect();
+        let tracked = self.tracked.clone().unwrap_or_else(|| speeds.last().cloned().into_iter().collect());
+        let tracked_inputs = self.tracked_inputs.clone().unwrap_or_default();
+        let penalised = self.penalised.clone().unwrap_or(forces);
+        let measured = self.measured.clone().unwrap_or(speeds);
+        let known = |key: &str, list: &[String], names: &[String]| -> Result<()> {
+            match list.iter().find(|n| !names.contains(n)) {
+                Some(n) => Err(setting(
+                    format!("[mpc] {key}"),
+                    format!("no signal `{n}` (the model has {})", names.join(", ")),
+                )),
+                None => Ok(()),
+            }
+        };
+        known("tracked", &tracked, outputs)?;
+        known("penalised", &penalised, outputs)?;
+        known("measured", &measured, outputs)?;
+        known("tracked_inputs", &tracked_inputs, inputs)?;
+        let speed_weight = self.speed_weight.unwrap_or(100.0);
+        let force_weight = self.force_weight.unwrap_or((30.0 / big).powi(2));
+        let mut names: Vec<&String> = tracked.iter().chain(&penalised).chain(&measured).collect();
+        names.sort();
+        names.dedup();
+        let outputs = names
+            .into_iter()
+            .map(|n| {
+                let force = penalised.contains(n);
+                OutputSettings {
+                    name: n.clone(),
+                    noise_std: measured.contains(n).then_some(0.01),
+                    tracked: tracked.contains(n),
+                    weight: if tracked.contains(n) {
+                        speed_weight
+                    } else if force {
+                        force_weight
+                    } else {
+                        1.0
+                    },
+                    soft_min: if force { self.force_soft_max.map(|b| -b) } else { None },
+                    soft_max: if force { self.force_soft_max } else { None },
+                }
+            })
+            .collect();
+        let inputs = inputs
+            .iter()
+            .enumerate()
+            .map(|(j, name)| {
+                let follows = tracked_inputs.contains(name);
+                let u2 = max[j] * max[j];
+                InputSettings {
+                    name: name.clone(),
+                    min_nm: -max[j],
+                    max_nm: max[j],
+                    max_rate_nm_per_s: rate[j],
+                    weight_per_nm2: if follows { 1600.0 / u2 } else { 0.09 / u2 },
+                    rate_weight_per_nm2: 9.0 / u2,
+                    tracked: follows,
+                    disturbance_std_nm: if follows { 0.0 } else { max[j] / 300.0 },
+                }
+            })
+            .collect();
+        let base = MpcSettings::powertrain(horizon);
+        let s = MpcSettings { input_scale_nm: big / 3.0, inputs, outputs, ..base };
+        s.validate()?;
+        Ok(s)
+    }
+}
+
 /// Move blocks 1, 2, 4, … doubling, at most `count` of them, the last one taking the rest of
 /// `horizon`: fine near the present where the first input is decided, coarse far out.
 pub fn exponential_blocks(horizon: usize, count: usize) -> Vec<usize> {
@@ -329,5 +519,43 @@ mod tests {
                 assert!(b.len() <= c);
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod section_tests {
+    use super::*;
+
+    #[test]
+    fn an_empty_section_is_the_rig_default() {
+        assert_eq!(MpcSection::default().rig_settings(50).unwrap(), MpcSettings::powertrain(50));
+        let s =
+            MpcSection { input_max: Some(vec![250.0, 150.0, 250.0]), speed_weight: Some(50.0), ..Default::default() };
+        let r = s.rig_settings(50).unwrap();
+        assert_eq!((r.inputs[1].min_nm, r.inputs[1].max_nm), (-150.0, 150.0));
+        assert_eq!(r.outputs.iter().filter(|o| o.tracked).map(|o| o.weight).collect::<Vec<_>>(), [50.0, 50.0]);
+        let e = MpcSection { tracked: Some(vec!["w_drive".into()]), ..Default::default() }.rig_settings(50);
+        assert!(e.unwrap_err().to_string().contains("[mpc] tracked"));
+        let e = MpcSection { input_max: Some(vec![1.0]), ..Default::default() }.rig_settings(50);
+        assert!(e.unwrap_err().to_string().contains("1 values for the model's 3 inputs"));
+    }
+
+    #[test]
+    fn a_drive_section_names_what_is_wrong() {
+        let inputs = vec!["M_motor".to_string()];
+        let outputs: Vec<String> = ["w_motor", "w_load", "T_coupling_1"].map(String::from).into();
+        let e = MpcSection::default().drive_settings(&inputs, &outputs, 50).unwrap_err().to_string();
+        assert!(e.contains("input_max") && e.contains("M_motor"), "{e}");
+        let s = MpcSection { input_max: Some(vec![5.0]), ..Default::default() };
+        let d = s.drive_settings(&inputs, &outputs, 50).unwrap();
+        // defaults: the last speed tracked, every coupling penalised, every speed measured
+        let tracked: Vec<&str> = d.outputs.iter().filter(|o| o.tracked).map(|o| o.name.as_str()).collect();
+        assert_eq!(tracked, ["w_load"]);
+        assert!(d.outputs.iter().any(|o| o.name == "T_coupling_1" && o.noise_std.is_none()));
+        assert_eq!(d.outputs.iter().filter(|o| o.noise_std.is_some()).count(), 2);
+        assert_eq!(d.inputs[0].max_rate_nm_per_s, 500.0);
+        let bad = MpcSection { tracked: Some(vec!["w_nowhere".into()]), ..s.clone() };
+        let e = bad.drive_settings(&inputs, &outputs, 50).unwrap_err().to_string();
+        assert!(e.contains("w_nowhere") && e.contains("w_motor, w_load"), "{e}");
     }
 }

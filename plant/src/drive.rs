@@ -395,6 +395,51 @@ impl DriveModel {
         Ok(p.linear())
     }
 
+    /// The linearisation as a controller sees it (in contact, friction left out, dead times
+    /// left out — [`DriveModel::input_delays_s`]): inputs [`DriveModel::input_names`], outputs
+    /// every body's speed (`w_<body>`/`v_<body>`, the speed states' names) and every coupling's
+    /// force ([`DriveModel::coupling_force_names`]: c·(q_i/r − q_{i+1}) + d·(q̇_i/r − q̇_{i+1})).
+    pub fn control_state_space(&self) -> Result<crate::statespace::StateSpace> {
+        let (a, b) = self.linearisation()?;
+        let n = self.line.bodies.len();
+        let ns = a.nrows();
+        let names = self.state_names();
+        let nc = self.line.couplings.len();
+        let mut c = DMatrix::zeros(n + nc, ns);
+        for i in 0..n {
+            c[(i, n + i)] = 1.0;
+        }
+        for (i, k) in self.line.couplings.iter().enumerate() {
+            let inv_r = 1.0 / k.ratio;
+            c[(n + i, i)] = k.stiffness * inv_r;
+            c[(n + i, i + 1)] = -k.stiffness;
+            c[(n + i, n + i)] = k.damping * inv_r;
+            c[(n + i, n + i + 1)] = -k.damping;
+        }
+        let mut output_names: Vec<String> = names[n..2 * n].to_vec();
+        output_names.extend(self.coupling_force_names());
+        Ok(crate::statespace::StateSpace {
+            d: DMatrix::zeros(n + nc, b.ncols()),
+            a,
+            b,
+            c,
+            state_names: names,
+            input_names: self.input_names(),
+            output_names,
+        })
+    }
+
+    /// Dead time of each input, s (0: none).
+    pub fn input_delays_s(&self) -> Vec<f64> {
+        let mut d = vec![0.0; self.inputs.len()];
+        for e in &self.effects {
+            if let Effect::TimeDelay { input, delay_s } = *e {
+                d[input] = delay_s;
+            }
+        }
+        d
+    }
+
     /// Fastest rate of the linearisation, max |λ(A)| (1/s): what sets an explicit integrator's
     /// step.
     pub fn fastest_linear_rate(&self) -> Result<f64> {
@@ -788,6 +833,33 @@ mod tests {
                 Coupling { stiffness: 20000.0, damping: 0.5, ratio: 4.0 },
             ],
         }
+    }
+
+    /// The controller's state space equals the mechanical model's (`Line::state_space`, built
+    /// from J, C, D matrices), speeds and coupling forces; a dead time is reported beside it.
+    #[test]
+    fn control_state_space_is_the_mechanical_one() {
+        let line = gear_line();
+        let model = DriveModel {
+            line: line.clone(),
+            inputs: vec![0],
+            effects: vec![Effect::TimeDelay { input: 0, delay_s: 0.003 }],
+        };
+        let ss = model.control_state_space().unwrap();
+        let outputs = [
+            (Quantity::Speed, 0),
+            (Quantity::Speed, 1),
+            (Quantity::Speed, 2),
+            (Quantity::CouplingForce, 0),
+            (Quantity::CouplingForce, 1),
+        ];
+        let reference = line.state_space(&[0], &outputs).unwrap();
+        for (m, r) in [(&ss.a, &reference.a), (&ss.b, &reference.b), (&ss.c, &reference.c)] {
+            assert!((m - r).abs().max() <= 1e-12 * r.abs().max(), "{m} vs {r}");
+        }
+        assert_eq!(ss.output_names, ["w_motor", "w_hub", "w_load", "T_coupling_1", "T_coupling_2"]);
+        assert_eq!(ss.input_names, ["M_motor"]);
+        assert_eq!(model.input_delays_s(), [0.003]);
     }
 
     /// Without effects the exact ZOH equals the mechanical model's own state space
