@@ -777,7 +777,7 @@ pub fn drive_report(
             stopped = Some(format!("at {:.4} s: {e}", k as f64 * dt));
             break;
         }
-        if let Some(v) = plant.outputs().iter().find(|v| !(v.abs() < mpc::closed_loop::DIVERGED)) {
+        if let Some(v) = plant.outputs().iter().find(|v| v.is_nan() || v.abs() >= mpc::closed_loop::DIVERGED) {
             stopped = Some(format!("at {:.4} s: an output is {v} (the loop diverged)", k as f64 * dt));
             break;
         }
