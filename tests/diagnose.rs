@@ -429,19 +429,7 @@ fn write_bundle(dir: &std::path::Path, s: &Sweep, rig: &RigParams) -> std::path:
         );
     }
     std::fs::write(dir.join("sweep.csv"), csv).unwrap();
-    let toml = format!(
-        "kind = \"torsional_sweep\"\ndata = \"sweep.csv\"\nvariant = \"V1\"\n\n[model]\nj_m2 = {}\nj_drive = {}\n\
-         j_m3 = {}\nc_short = {}\nc_long = {}\nc_delta = {}\nd_short = {}\nd_long = {}\nload_drag = {}\n",
-        rig.j_m2,
-        rig.j_drive,
-        rig.j_m3,
-        rig.c_short,
-        rig.c_long(),
-        rig.c_delta,
-        rig.d_short,
-        rig.d_long,
-        rig.load_drag
-    );
+    let toml = format!("kind = \"torsional_sweep\"\ndata = \"sweep.csv\"\nvariant = \"V1\"\n\n{}", model_section(rig));
     let path = dir.join("sweep.toml");
     std::fs::write(&path, toml).unwrap();
     path
@@ -600,13 +588,11 @@ fn backlash_about_a_set_point_returns_with_finite_numbers() {
     }
 }
 
-/// A rig file (the format `--write-model` writes) with `rig`'s parameters and `truth`'s effects.
-fn rig_file(path: &std::path::Path, rig: &RigParams, truth: &Truth) {
-    let (k, f) = truth.compliance.unwrap_or((0.0, 0.5));
-    let text = format!(
-        "name = \"truth\"\nvariant = \"V1\"\n\n[model]\nj_m2 = {}\nj_drive = {}\nj_m3 = {}\nc_short = {}\nc_long = {}\n\
-         c_delta = {}\nd_short = {}\nd_long = {}\nload_drag = {}\n\n[effects]\ntime_delay_s = {}\nactuator_lag_s = {}\n\
-         backlash_rad = {}\ncompliance_stiffness_nm_per_rad = {k}\ncompliance_motor_fraction = {f}\n",
+/// The `[model]` section of `rig`, as bundles and rig files write it.
+fn model_section(rig: &RigParams) -> String {
+    format!(
+        "[model]\nj_m2 = {}\nj_drive = {}\nj_m3 = {}\nc_short = {}\nc_long = {}\nc_delta = {}\nd_short = {}\n\
+         d_long = {}\nload_drag = {}\n",
         rig.j_m2,
         rig.j_drive,
         rig.j_m3,
@@ -615,7 +601,17 @@ fn rig_file(path: &std::path::Path, rig: &RigParams, truth: &Truth) {
         rig.c_delta,
         rig.d_short,
         rig.d_long,
-        rig.load_drag,
+        rig.load_drag
+    )
+}
+
+/// A rig file (the format `--write-model` writes) with `rig`'s parameters and `truth`'s effects.
+fn rig_file(path: &std::path::Path, rig: &RigParams, truth: &Truth) {
+    let (k, f) = truth.compliance.unwrap_or((0.0, 0.5));
+    let text = format!(
+        "name = \"truth\"\nvariant = \"V1\"\n\n{}\n[effects]\ntime_delay_s = {}\nactuator_lag_s = {}\n\
+         backlash_rad = {}\ncompliance_stiffness_nm_per_rad = {k}\ncompliance_motor_fraction = {f}\n",
+        model_section(rig),
         truth.delay_s,
         truth.lag_s,
         truth.backlash_rad
