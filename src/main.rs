@@ -173,8 +173,8 @@ enum Command {
         /// What the rig is asked to do.
         #[arg(long, value_enum, default_value_t = ScenarioArg::Step)]
         scenario: ScenarioArg,
-        /// Length of the timed run, s (default: 1 s step, 3.5 s sweep; the sweep's chirp
-        /// spans the whole run). The shuffle figures always come from the 1 s step.
+        /// Length of the timed run, s, at most 120 (default: 1 s step, 3.5 s sweep; the sweep's
+        /// chirp spans the whole run). The shuffle figures always come from the 1 s step.
         #[arg(long, value_name = "S")]
         duration: Option<f64>,
         /// Number of move blocks (1, 2, 4, … steps, the last taking the rest); 0: every step free.
