@@ -372,17 +372,7 @@ impl Table {
         let domain = m.line.domain;
         let mut v = vec![time_row()];
         let mut push = |name: String, causality, slot, unit, description: String, constraint| {
-            let vr = v.len() as u32;
-            v.push(Variable {
-                vr,
-                name: name.into(),
-                kind: Kind::Float64,
-                causality,
-                slot,
-                unit,
-                description: description.into(),
-                constraint,
-            });
+            float_row(&mut v, name.into(), causality, slot, unit, description.into(), constraint)
         };
         for (i, p) in m.parameter_list().into_iter().enumerate() {
             let constraint = if p.zero_allowed { Constraint::NonNegative } else { Constraint::Positive };
@@ -440,17 +430,7 @@ impl Table {
         use crate::controller::{INPUTS, OUTPUTS, PARAMETERS};
         let mut v = vec![time_row()];
         let mut push = |name: &'static str, causality, slot, unit, description: &'static str, constraint| {
-            let vr = v.len() as u32;
-            v.push(Variable {
-                vr,
-                name: name.into(),
-                kind: Kind::Float64,
-                causality,
-                slot,
-                unit,
-                description: description.into(),
-                constraint,
-            });
+            float_row(&mut v, name.into(), causality, slot, unit, description.into(), constraint)
         };
         for (i, &(name, unit, description, constraint)) in PARAMETERS.iter().enumerate() {
             push(name, Causality::Parameter, Slot::Param(i), unit, description, constraint);
@@ -488,6 +468,20 @@ impl Table {
     pub fn nu(&self) -> usize {
         self.variables.iter().filter(|v| v.causality == Causality::Input).count()
     }
+}
+
+/// Appends a Float64 row at the next value reference.
+fn float_row(
+    v: &mut Vec<Variable>,
+    name: Cow<'static, str>,
+    causality: Causality,
+    slot: Slot,
+    unit: &'static str,
+    description: Cow<'static, str>,
+    constraint: Constraint,
+) {
+    let vr = v.len() as u32;
+    v.push(Variable { vr, name, kind: Kind::Float64, causality, slot, unit, description, constraint });
 }
 
 fn time_row() -> Variable {
