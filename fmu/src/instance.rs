@@ -248,11 +248,7 @@ impl Instance {
             None => {
                 (0..nu).map(|j| (j == DRIVE_INPUT && p.effects.time_delay_s > 0.0).then_some(FIRST_EFFECT)).collect()
             }
-            Some(m) => {
-                let list = m.parameter_list();
-                let names = m.input_names();
-                (0..nu).map(|j| list.iter().position(|q| q.name == format!("{}.delay", names[j]))).collect()
-            }
+            Some(m) => (0..nu).map(|j| m.delay_parameter(j)).collect(),
         };
         Instance {
             name: name.to_string(),

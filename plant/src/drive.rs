@@ -429,6 +429,21 @@ impl DriveModel {
         })
     }
 
+    /// Position in [`DriveModel::parameter_list`] of input `input`'s dead time, if it has one:
+    /// after the bodies' (2 each) and the couplings' (3 each) parameters, the effects' in order.
+    pub fn delay_parameter(&self, input: usize) -> Option<usize> {
+        let mut at = 2 * self.line.bodies.len() + 3 * self.line.couplings.len();
+        for e in &self.effects {
+            if let Effect::TimeDelay { input: j, .. } = *e {
+                if j == input {
+                    return Some(at);
+                }
+            }
+            at += e.parameters(self).len();
+        }
+        None
+    }
+
     /// Dead time of each input, s (0: none).
     pub fn input_delays_s(&self) -> Vec<f64> {
         let mut d = vec![0.0; self.inputs.len()];
@@ -860,6 +875,25 @@ mod tests {
         assert_eq!(ss.output_names, ["w_motor", "w_hub", "w_load", "T_coupling_1", "T_coupling_2"]);
         assert_eq!(ss.input_names, ["M_motor"]);
         assert_eq!(model.input_delays_s(), [0.003]);
+    }
+
+    /// The dead time's position in the parameter list, behind friction (two parameters) and a
+    /// lag, is the parameter of that name and value.
+    #[test]
+    fn delay_parameter_points_at_the_dead_time() {
+        let model = DriveModel {
+            line: gear_line(),
+            inputs: vec![0, 2],
+            effects: vec![
+                Effect::CoulombFriction { body: 2, friction: 0.2, smoothing_speed: 0.05 },
+                Effect::ActuatorLag { input: 0, time_constant_s: 0.004 },
+                Effect::TimeDelay { input: 1, delay_s: 0.007 },
+            ],
+        };
+        let list = model.parameter_list();
+        let i = model.delay_parameter(1).unwrap();
+        assert_eq!((list[i].name.as_str(), list[i].value), ("M_load.delay", 0.007));
+        assert_eq!(model.delay_parameter(0), None);
     }
 
     /// Without effects the exact ZOH equals the mechanical model's own state space
