@@ -432,20 +432,8 @@ pub fn report(
             step_figures(&t.output(sig.short_shaft), k_step, settings.dt_s, SETTLING_BAND)
         }
     };
-    // share of steps with an input at a hard bound
-    let bounds: Vec<(usize, f64, f64)> = settings
-        .inputs
-        .iter()
-        .filter_map(|u| ss.input_names.iter().position(|n| n == &u.name).map(|j| (j, u.min_nm, u.max_nm)))
-        .collect();
-    let at_bounds = |t: &mpc::closed_loop::Trace| {
-        let hit = t
-            .inputs
-            .iter()
-            .filter(|u| bounds.iter().any(|&(j, lo, hi)| u[j] <= lo + 1e-9 * lo.abs() || u[j] >= hi - 1e-9 * hi.abs()))
-            .count();
-        hit as f64 / t.inputs.len().max(1) as f64
-    };
+    let at_bounds =
+        |t: &mpc::closed_loop::Trace| mpc::closed_loop::share_at_bounds(&t.inputs, settings, &ss.input_names);
     let speed_rms = |t: &mpc::closed_loop::Trace| {
         if t.stopped.is_some() {
             return f64::NAN;
@@ -776,12 +764,8 @@ pub fn drive_report(
         times.push(info.elapsed_s * 1e6);
         trace.push(y);
         inputs.push(u.clone());
-        if let Err(e) = plant.advance(&u) {
+        if let Err(e) = mpc::closed_loop::advance(&mut plant, &u) {
             stopped = Some(format!("at {:.4} s: {e}", k as f64 * dt));
-            break;
-        }
-        if let Some(v) = plant.outputs().iter().find(|v| v.is_nan() || v.abs() >= mpc::closed_loop::DIVERGED) {
-            stopped = Some(format!("at {:.4} s: an output is {v} (the loop diverged)", k as f64 * dt));
             break;
         }
     }
@@ -806,15 +790,14 @@ pub fn drive_report(
     };
     let peak_force = trace.iter().flat_map(|y| penalised_idx.iter().map(move |&j| y[j].abs())).fold(0.0, f64::max);
     let (median, p99) = median_p99(&times);
-    let bounds: Vec<f64> = settings.inputs.iter().map(|u| u.max_nm).collect();
-    let at_bound = inputs.iter().filter(|u| u.iter().zip(&bounds).any(|(v, b)| v.abs() >= b * (1.0 - 1e-9))).count();
+    let input_at_bound_share = mpc::closed_loop::share_at_bounds(&inputs, &settings, &ss.input_names);
     Ok(DriveMpcReport {
         horizon,
         dt_s: dt,
         tracked: names,
         penalised,
         measured: settings.outputs.iter().filter(|o| o.noise_std.is_some()).map(|o| o.name.clone()).collect(),
-        input_max: bounds,
+        input_max: settings.inputs.iter().map(|u| u.max_nm).collect(),
         prediction,
         step,
         response,
@@ -823,7 +806,7 @@ pub fn drive_report(
         peak_force,
         step_time_us: Timing { median, p99, max: times.iter().copied().fold(0.0, f64::max) },
         fallbacks: controller.fallbacks(),
-        input_at_bound_share: at_bound as f64 / inputs.len().max(1) as f64,
+        input_at_bound_share,
         stopped,
     })
 }

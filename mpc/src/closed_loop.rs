@@ -128,7 +128,7 @@ impl Control for PiBaseline {
 }
 
 /// Advances `plant` and checks that its outputs stay finite and within ±[`DIVERGED`].
-fn advance(plant: &mut dyn Plant, u: &[f64]) -> std::result::Result<(), String> {
+pub fn advance(plant: &mut dyn Plant, u: &[f64]) -> std::result::Result<(), String> {
     plant.advance(u)?;
     match plant.outputs().iter().position(|y| y.is_nan() || y.abs() >= DIVERGED) {
         Some(i) => Err(format!("output {i} is {} (the loop diverged)", plant.outputs()[i])),
@@ -468,6 +468,21 @@ pub fn compare(
         fallbacks: controller.fallbacks(),
         qp_size: (controller.qp().nvars(), controller.qp().nrows()),
     })
+}
+
+/// Share of the samples `inputs` (plant input order, names `input_names`) with an input at a
+/// hard bound of `settings` (within 1e-9 of it, relative).
+pub fn share_at_bounds(inputs: &[Vec<f64>], settings: &crate::settings::MpcSettings, input_names: &[String]) -> f64 {
+    let bounds: Vec<(usize, f64, f64)> = settings
+        .inputs
+        .iter()
+        .filter_map(|u| input_names.iter().position(|n| n == &u.name).map(|j| (j, u.min_nm, u.max_nm)))
+        .collect();
+    let hit = inputs
+        .iter()
+        .filter(|u| bounds.iter().any(|&(j, lo, hi)| u[j] <= lo + 1e-9 * lo.abs() || u[j] >= hi - 1e-9 * hi.abs()))
+        .count();
+    hit as f64 / inputs.len().max(1) as f64
 }
 
 /// Median and 99th percentile of `values`.
