@@ -353,6 +353,11 @@ pub fn effects_in_words(p: &rigtwin_fmu::FmuParams) -> String {
     if e.compliance_stiffness_nm_per_rad > 0.0 {
         v.push(format!("drive_compliance {:.1} Nm/rad", e.compliance_stiffness_nm_per_rad));
     }
+    for (k, name) in ["m2", "drive", "m3"].iter().enumerate() {
+        if e.coulomb_friction_nm[k] > 0.0 {
+            v.push(format!("coulomb_friction at {name} {:.3} Nm", e.coulomb_friction_nm[k]));
+        }
+    }
     if v.is_empty() {
         "none".into()
     } else {

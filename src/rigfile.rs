@@ -48,6 +48,8 @@
 //! backlash_rad = 0.0             # total play of each side shaft
 //! compliance_stiffness_nm_per_rad = 0.0   # motor-cage compliance inside the drive (0: rigid)
 //! compliance_motor_fraction = 0.5         # share of j_drive on the motor side
+//! coulomb_friction_nm = [0.0, 0.0, 0.0]   # Coulomb friction of M2, the drive, M3
+//! friction_smoothing_radps = 0.05         # T = T_c w/sqrt(w^2 + v_s^2)
 //!
 //! [bending]                      # optional (section 2.5): the shaft line carrying the spring
 //! bearing_a_m = 0.0              # as a beam on two bearings; beyond them it overhangs

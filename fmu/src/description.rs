@@ -77,6 +77,9 @@ fn rig_description(p: &FmuParams) -> (String, bool) {
         (e.actuator_lag_s > 0.0, "actuator lag"),
         (e.backlash_rad > 0.0, "side-shaft backlash"),
         (e.compliance_stiffness_nm_per_rad > 0.0, "drive compliance"),
+        (e.coulomb_friction_nm[0] > 0.0, "Coulomb friction at M2"),
+        (e.coulomb_friction_nm[1] > 0.0, "Coulomb friction at the drive"),
+        (e.coulomb_friction_nm[2] > 0.0, "Coulomb friction at M3"),
     ]
     .into_iter()
     .filter_map(|(on, name)| on.then_some(name))
@@ -85,7 +88,7 @@ fn rig_description(p: &FmuParams) -> (String, bool) {
         desc += "; linear, exact zero-order-hold co-simulation step";
     } else {
         let _ = write!(desc, "; with {}", on.join(", "));
-        desc += if e.backlash_rad > 0.0 {
+        desc += if e.is_nonlinear() {
             "; co-simulation step by RK4 of at most 0.125 ms"
         } else {
             "; exact zero-order-hold co-simulation step"
@@ -144,6 +147,9 @@ fn controller_description(p: &FmuParams, c: &crate::controller::ControllerSpec) 
     }
     if e.backlash_rad > 0.0 {
         d += "; the side-shaft backlash is not in the prediction (linear in contact)";
+    }
+    if e.coulomb_friction_nm.iter().any(|&f| f > 0.0) {
+        d += "; the machines' Coulomb friction is not in the prediction (the input disturbances absorb it)";
     }
     d
 }

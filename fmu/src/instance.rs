@@ -10,7 +10,7 @@ use crate::controller::ControllerMachine;
 use crate::drive::DriveDynamics;
 use crate::model::{Model, DRIVE_INPUT};
 use crate::params::FmuParams;
-use crate::variables::{parameter_set, parameter_values, variant_number, Causality, Kind, Slot, Table, FIRST_EFFECT};
+use crate::variables::{parameter_set, parameter_values, rig_parameter, variant_number, Causality, Kind, Slot, Table};
 use plant::effects::DelayLine;
 
 /// A Jacobian borrowed from the rig's model or evaluated for a drive model.
@@ -245,9 +245,13 @@ impl Instance {
         let delay_param = match &p.drive {
             // the controller's inputs act at once (the dead time is in its prediction)
             _ if p.controller.is_some() => vec![None; nu],
-            None => {
-                (0..nu).map(|j| (j == DRIVE_INPUT && p.effects.time_delay_s > 0.0).then_some(FIRST_EFFECT)).collect()
-            }
+            None => (0..nu)
+                .map(|j| {
+                    (j == DRIVE_INPUT && p.effects.time_delay_s > 0.0)
+                        .then(|| rig_parameter("drive.time_delay"))
+                        .flatten()
+                })
+                .collect(),
             Some(m) => (0..nu).map(|j| m.delay_parameter(j)).collect(),
         };
         Instance {
@@ -813,7 +817,7 @@ impl Instance {
         let (a, b, torque): (Matrix<'_>, Matrix<'_>, Matrix<'_>) = match self.model.as_ref().expect("built above") {
             Machine::Rig(m) => {
                 let (a, b, t) = m.jacobians(self.x.as_slice());
-                (Cow::Borrowed(a), Cow::Borrowed(b), Cow::Borrowed(t))
+                (a, Cow::Borrowed(b), Cow::Borrowed(t))
             }
             Machine::Drive(m) => {
                 let (a, b, t) = m.jacobians(self.x.as_slice(), &self.acting);

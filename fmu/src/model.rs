@@ -173,8 +173,9 @@ impl Model {
         self.powertrain.effects.time_delay_s
     }
 
-    fn backlash(&self) -> bool {
-        self.powertrain.effects.backlash_rad > 0.0
+    /// Backlash or friction: the right-hand side is nonlinear, integrated by RK4.
+    fn nonlinear(&self) -> bool {
+        self.powertrain.effects.is_nonlinear()
     }
 
     /// The state vector z of the powertrain state `x` (absolute angles, the order of
@@ -199,7 +200,7 @@ impl Model {
         let mut u_eff = [0.0; NU];
         u_eff.copy_from_slice(u);
         u_eff[DRIVE_INPUT] = drive;
-        if self.backlash() {
+        if self.nonlinear() {
             let mut xs = std::mem::take(&mut self.xs);
             xs.gemv(1.0, &self.t_inv, &DVector::from_column_slice(z), 0.0);
             let mut dx = DVector::zeros(z.len());
@@ -213,7 +214,7 @@ impl Model {
 
     /// The side-shaft torques [T_short, T_long] in state `z`.
     pub fn torques(&self, z: &[f64]) -> [f64; 2] {
-        if self.backlash() {
+        if self.nonlinear() {
             self.powertrain.shaft_torques(&self.powertrain_part(z))
         } else {
             let t = &self.torque * DVector::from_column_slice(z);
@@ -242,14 +243,27 @@ impl Model {
     }
 
     /// The Jacobians (∂ż/∂z, ∂ż/∂u, ∂T/∂z) at state `z`: the linear model, or with backlash the
-    /// one of the contact state `z` is in. With a dead time, ż does not depend on the present
-    /// drive torque (its column of ∂ż/∂u is then to be taken as zero by the caller).
-    pub fn jacobians(&self, z: &[f64]) -> (&DMatrix<f64>, &DMatrix<f64>, &DMatrix<f64>) {
-        if self.backlash() && !self.powertrain.in_contact(&self.powertrain_part(z)) {
-            (&self.a_open, &self.b, &self.torque_open)
-        } else {
-            (&self.a, &self.b, &self.torque)
+    /// one of the contact state `z` is in, with friction its slope at the present speeds. With a
+    /// dead time, ż does not depend on the present drive torque (its column of ∂ż/∂u is then to
+    /// be taken as zero by the caller).
+    pub fn jacobians(&self, z: &[f64]) -> (std::borrow::Cow<'_, DMatrix<f64>>, &DMatrix<f64>, &DMatrix<f64>) {
+        use std::borrow::Cow;
+        if !self.nonlinear() {
+            return (Cow::Borrowed(&self.a), &self.b, &self.torque);
         }
+        let x = self.powertrain_part(z);
+        let (a, torque) =
+            if self.powertrain.in_contact(&x) { (&self.a, &self.torque) } else { (&self.a_open, &self.torque_open) };
+        let slopes = self.powertrain.friction_slopes(&x);
+        if slopes.is_empty() {
+            return (Cow::Borrowed(a), &self.b, torque);
+        }
+        // the speeds are states of z as of x: the slope sits on the diagonal
+        let mut a = a.clone();
+        for (i, slope) in slopes {
+            a[(self.map[i], self.map[i])] += slope;
+        }
+        (Cow::Owned(a), &self.b, torque)
     }
 
     /// One step of state `z` of length `h` from time `t` with `u` held (the drive torque delayed
@@ -267,9 +281,9 @@ impl Model {
         h: f64,
         delay: &DelayLine,
     ) -> Result<(), String> {
-        let sub_steps = if self.backlash() { h / BACKLASH_STEP_S } else { h / self.max_piece_s };
+        let sub_steps = if self.nonlinear() { h / BACKLASH_STEP_S } else { h / self.max_piece_s };
         if sub_steps.is_nan() || sub_steps > MAX_PIECES as f64 {
-            let longest = MAX_PIECES as f64 * if self.backlash() { BACKLASH_STEP_S } else { self.max_piece_s };
+            let longest = MAX_PIECES as f64 * if self.nonlinear() { BACKLASH_STEP_S } else { self.max_piece_s };
             return Err(format!(
                 "a step of {h} s is longer than this model integrates exactly (at most {longest:.4e} s)"
             ));
@@ -286,13 +300,13 @@ impl Model {
         let mut x = std::mem::take(&mut self.xs);
         let mut out = std::mem::take(&mut self.next);
         out.copy_from(z);
-        if self.backlash() {
+        if self.nonlinear() {
             x.gemv(1.0, &self.t_inv, z, 0.0);
         }
         let mut result = Ok(());
         for &(len, drive) in &pieces {
             u_eff[DRIVE_INPUT] = drive;
-            if self.backlash() {
+            if self.nonlinear() {
                 let n = (len / BACKLASH_STEP_S - 1e-9).ceil().max(1.0) as usize;
                 for _ in 0..n {
                     self.rk4(&mut x, &u_eff, len / n as f64);
@@ -316,7 +330,7 @@ impl Model {
                 }
             }
         }
-        if self.backlash() {
+        if self.nonlinear() {
             out.gemv(1.0, &self.t, &x, 0.0);
         }
         if result.is_ok() {
@@ -413,7 +427,7 @@ fn affine(a: &DMatrix<f64>, b: &DMatrix<f64>, x: &[f64], u: &[f64], out: &mut [f
 /// with backlash.
 fn rhs(m: &mut Model, x: &[f64], u: &[f64; NU], out: &mut [f64]) {
     affine(&m.a_x, &m.b_x, x, u, out);
-    if m.backlash() {
+    if m.nonlinear() {
         for (k, &i) in m.map.iter().enumerate() {
             m.pt_x[k] = x[i];
         }

@@ -104,56 +104,156 @@ pub struct Variable {
     pub constraint: Constraint,
 }
 
-/// Float parameters: (name, unit, description, constraint), in [`Slot::Param`] order: the
-/// powertrain and the bearing, then the drive-path effects (`plant::effects::DriveEffects`),
-/// which appear in the table only when the parameter set has them on (they change the model's
-/// structure, so an FMU without them cannot switch them on, nor one with them off).
-pub const PARAMETERS: [(&str, &str, &str, Constraint); NPARAMS] = [
-    ("j_m2", "kg.m2", "inertia of load machine M2 with adapters (left, short side shaft)", Constraint::Positive),
-    ("j_drive", "kg.m2", "drive unit inertia reduced to the output (differential cage)", Constraint::Positive),
-    ("j_m3", "kg.m2", "inertia of load machine M3 with adapters (right, long side shaft)", Constraint::Positive),
-    ("c_short", "N.m/rad", "stiffness of the short side shaft", Constraint::Positive),
-    ("c_long", "N.m/rad", "stiffness of the long side shaft", Constraint::Positive),
-    ("c_delta", "N.m/rad", "stiffness of the additional spring (variants V2-V4)", Constraint::NonNegative),
-    ("j_m2_delta", "kg.m2", "M2-side inertia with the additional spring mounted", Constraint::Positive),
-    ("j_m3_delta", "kg.m2", "M3-side inertia with the additional spring mounted", Constraint::Positive),
-    ("d_short", "N.m.s/rad", "damping of the short side shaft", Constraint::NonNegative),
-    ("d_long", "N.m.s/rad", "damping of the long side shaft", Constraint::NonNegative),
-    ("load_drag", "N.m.s/rad", "speed-proportional drag of each load machine", Constraint::NonNegative),
-    ("bearing.K_xx", "N/m", "bearing stiffness xx", Constraint::Finite),
-    ("bearing.K_xy", "N/m", "bearing stiffness xy", Constraint::Finite),
-    ("bearing.K_yx", "N/m", "bearing stiffness yx", Constraint::Finite),
-    ("bearing.K_yy", "N/m", "bearing stiffness yy", Constraint::Finite),
-    ("bearing.C_xx", "N.s/m", "bearing damping xx", Constraint::Finite),
-    ("bearing.C_xy", "N.s/m", "bearing damping xy", Constraint::Finite),
-    ("bearing.C_yx", "N.s/m", "bearing damping yx", Constraint::Finite),
-    ("bearing.C_yy", "N.s/m", "bearing damping yy", Constraint::Finite),
-    ("bearing.M_xx", "kg", "bearing added mass xx", Constraint::Finite),
-    ("bearing.M_xy", "kg", "bearing added mass xy", Constraint::Finite),
-    ("bearing.M_yx", "kg", "bearing added mass yx", Constraint::Finite),
-    ("bearing.M_yy", "kg", "bearing added mass yy", Constraint::Finite),
-    ("bearing.support.k_x", "N/m", "support stiffness x", Constraint::NonNegative),
-    ("bearing.support.k_y", "N/m", "support stiffness y", Constraint::NonNegative),
-    ("bearing.support.c_x", "N.s/m", "support damping x", Constraint::NonNegative),
-    ("bearing.support.c_y", "N.s/m", "support damping y", Constraint::NonNegative),
-    ("bearing.support.m_x", "kg", "support effective mass x", Constraint::Positive),
-    ("bearing.support.m_y", "kg", "support effective mass y", Constraint::Positive),
-    ("drive.time_delay", "s", "dead time of the drive torque", Constraint::Positive),
-    ("drive.actuator_lag", "s", "time constant of a first-order lag of the drive torque", Constraint::Positive),
-    ("drive.backlash", "rad", "total play of each side shaft (output side)", Constraint::Positive),
-    ("drive.compliance_stiffness", "N.m/rad", "stiffness between the drive's motor and its cage", Constraint::Positive),
-    (
-        "drive.compliance_motor_fraction",
-        "1",
-        "share of j_drive on the motor side of the compliance",
-        Constraint::Fraction,
-    ),
+/// One float parameter of the rig's FMU: its name, unit, description and accepted values,
+/// whether the parameter set has it (the effects' parameters appear only when their effect is
+/// on: they change the model's structure, so an FMU without them cannot switch them on, nor one
+/// with them off), and how it is read from and written to a parameter set. One row per
+/// parameter: the table, the start values and [`parameter_set`] all come from this list.
+#[derive(Clone, Copy)]
+pub struct RigParameter {
+    /// Name (structured naming convention).
+    pub name: &'static str,
+    /// Unit.
+    pub unit: &'static str,
+    /// Description.
+    pub description: &'static str,
+    /// Accepted values.
+    pub constraint: Constraint,
+    /// Whether a parameter set with these effects has it (`None`: always).
+    pub present: Option<fn(&plant::effects::DriveEffects) -> bool>,
+    /// Its value in a parameter set.
+    pub get: fn(&FmuParams) -> f64,
+    /// Sets it in a parameter set.
+    pub set: fn(&mut FmuParams, f64),
+}
+
+impl std::fmt::Debug for RigParameter {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name)
+    }
+}
+
+macro_rules! rig_param {
+    ($name:literal, $unit:literal, $desc:literal, $c:ident, |$p:ident| $field:expr) => {
+        RigParameter {
+            name: $name,
+            unit: $unit,
+            description: $desc,
+            constraint: Constraint::$c,
+            present: None,
+            get: |$p: &FmuParams| $field,
+            set: |$p: &mut FmuParams, v: f64| $field = v,
+        }
+    };
+    ($name:literal, $unit:literal, $desc:literal, $c:ident, if |$e:ident| $on:expr, |$p:ident| $field:expr) => {
+        RigParameter {
+            name: $name,
+            unit: $unit,
+            description: $desc,
+            constraint: Constraint::$c,
+            present: Some(|$e: &plant::effects::DriveEffects| $on),
+            get: |$p: &FmuParams| $field,
+            set: |$p: &mut FmuParams, v: f64| $field = v,
+        }
+    };
+}
+
+/// The rig's float parameters in [`Slot::Param`] order: the powertrain and the bearing, then the
+/// drive-path effects (`plant::effects::DriveEffects`). New rows go at the end: the value
+/// references of the existing ones stay.
+pub const PARAMETERS: &[RigParameter] = &[
+    rig_param!("j_m2", "kg.m2", "inertia of load machine M2 with adapters (left, short side shaft)", Positive, |p| p
+        .powertrain
+        .j_m2),
+    rig_param!("j_drive", "kg.m2", "drive unit inertia reduced to the output (differential cage)", Positive, |p| p
+        .powertrain
+        .j_drive),
+    rig_param!("j_m3", "kg.m2", "inertia of load machine M3 with adapters (right, long side shaft)", Positive, |p| p
+        .powertrain
+        .j_m3),
+    rig_param!("c_short", "N.m/rad", "stiffness of the short side shaft", Positive, |p| p.powertrain.c_short),
+    RigParameter {
+        name: "c_long",
+        unit: "N.m/rad",
+        description: "stiffness of the long side shaft",
+        constraint: Constraint::Positive,
+        present: None,
+        get: |p| p.powertrain.c_long(),
+        // after c_short (the rows are applied in order): the ratio follows both
+        set: |p, v| {
+            p.powertrain.c_long = Some(v);
+            p.powertrain.c_long_ratio = v / p.powertrain.c_short;
+        },
+    },
+    rig_param!("c_delta", "N.m/rad", "stiffness of the additional spring (variants V2-V4)", NonNegative, |p| p
+        .powertrain
+        .c_delta),
+    RigParameter {
+        name: "j_m2_delta",
+        unit: "kg.m2",
+        description: "M2-side inertia with the additional spring mounted",
+        constraint: Constraint::Positive,
+        present: None,
+        get: |p| p.powertrain.j_m2_delta.unwrap_or(p.powertrain.j_m2),
+        set: |p, v| p.powertrain.j_m2_delta = Some(v),
+    },
+    RigParameter {
+        name: "j_m3_delta",
+        unit: "kg.m2",
+        description: "M3-side inertia with the additional spring mounted",
+        constraint: Constraint::Positive,
+        present: None,
+        get: |p| p.powertrain.j_m3_delta.unwrap_or(p.powertrain.j_m3),
+        set: |p, v| p.powertrain.j_m3_delta = Some(v),
+    },
+    rig_param!("d_short", "N.m.s/rad", "damping of the short side shaft", NonNegative, |p| p.powertrain.d_short),
+    rig_param!("d_long", "N.m.s/rad", "damping of the long side shaft", NonNegative, |p| p.powertrain.d_long),
+    rig_param!("load_drag", "N.m.s/rad", "speed-proportional drag of each load machine", NonNegative, |p| p
+        .powertrain
+        .load_drag),
+    rig_param!("bearing.K_xx", "N/m", "bearing stiffness xx", Finite, |p| p.bearing.element.k_n_per_m[0][0]),
+    rig_param!("bearing.K_xy", "N/m", "bearing stiffness xy", Finite, |p| p.bearing.element.k_n_per_m[0][1]),
+    rig_param!("bearing.K_yx", "N/m", "bearing stiffness yx", Finite, |p| p.bearing.element.k_n_per_m[1][0]),
+    rig_param!("bearing.K_yy", "N/m", "bearing stiffness yy", Finite, |p| p.bearing.element.k_n_per_m[1][1]),
+    rig_param!("bearing.C_xx", "N.s/m", "bearing damping xx", Finite, |p| p.bearing.element.c_ns_per_m[0][0]),
+    rig_param!("bearing.C_xy", "N.s/m", "bearing damping xy", Finite, |p| p.bearing.element.c_ns_per_m[0][1]),
+    rig_param!("bearing.C_yx", "N.s/m", "bearing damping yx", Finite, |p| p.bearing.element.c_ns_per_m[1][0]),
+    rig_param!("bearing.C_yy", "N.s/m", "bearing damping yy", Finite, |p| p.bearing.element.c_ns_per_m[1][1]),
+    rig_param!("bearing.M_xx", "kg", "bearing added mass xx", Finite, |p| p.bearing.element.m_kg[0][0]),
+    rig_param!("bearing.M_xy", "kg", "bearing added mass xy", Finite, |p| p.bearing.element.m_kg[0][1]),
+    rig_param!("bearing.M_yx", "kg", "bearing added mass yx", Finite, |p| p.bearing.element.m_kg[1][0]),
+    rig_param!("bearing.M_yy", "kg", "bearing added mass yy", Finite, |p| p.bearing.element.m_kg[1][1]),
+    rig_param!("bearing.support.k_x", "N/m", "support stiffness x", NonNegative, |p| p.bearing.support.k_x),
+    rig_param!("bearing.support.k_y", "N/m", "support stiffness y", NonNegative, |p| p.bearing.support.k_y),
+    rig_param!("bearing.support.c_x", "N.s/m", "support damping x", NonNegative, |p| p.bearing.support.c_x),
+    rig_param!("bearing.support.c_y", "N.s/m", "support damping y", NonNegative, |p| p.bearing.support.c_y),
+    rig_param!("bearing.support.m_x", "kg", "support effective mass x", Positive, |p| p.bearing.support.m_x),
+    rig_param!("bearing.support.m_y", "kg", "support effective mass y", Positive, |p| p.bearing.support.m_y),
+    rig_param!("drive.time_delay", "s", "dead time of the drive torque", Positive,
+        if |e| e.time_delay_s > 0.0, |p| p.effects.time_delay_s),
+    rig_param!("drive.actuator_lag", "s", "time constant of a first-order lag of the drive torque", Positive,
+        if |e| e.actuator_lag_s > 0.0, |p| p.effects.actuator_lag_s),
+    rig_param!("drive.backlash", "rad", "total play of each side shaft (output side)", Positive,
+        if |e| e.backlash_rad > 0.0, |p| p.effects.backlash_rad),
+    rig_param!("drive.compliance_stiffness", "N.m/rad", "stiffness between the drive's motor and its cage", Positive,
+        if |e| e.compliance_stiffness_nm_per_rad > 0.0, |p| p.effects.compliance_stiffness_nm_per_rad),
+    rig_param!("drive.compliance_motor_fraction", "1", "share of j_drive on the motor side of the compliance", Fraction,
+        if |e| e.compliance_stiffness_nm_per_rad > 0.0, |p| p.effects.compliance_motor_fraction),
+    rig_param!("m2.coulomb_friction", "N.m", "Coulomb friction of load machine M2", Positive,
+        if |e| e.coulomb_friction_nm[0] > 0.0, |p| p.effects.coulomb_friction_nm[0]),
+    rig_param!("drive.coulomb_friction", "N.m", "Coulomb friction of the drive (its motor when compliant)", Positive,
+        if |e| e.coulomb_friction_nm[1] > 0.0, |p| p.effects.coulomb_friction_nm[1]),
+    rig_param!("m3.coulomb_friction", "N.m", "Coulomb friction of load machine M3", Positive,
+        if |e| e.coulomb_friction_nm[2] > 0.0, |p| p.effects.coulomb_friction_nm[2]),
+    rig_param!("friction_smoothing_speed", "rad/s",
+        "smoothing speed v_s of the Coulomb friction, T = T_c w / sqrt(w^2 + v_s^2)", Positive,
+        if |e| e.coulomb_friction_nm.iter().any(|&f| f > 0.0), |p| p.effects.friction_smoothing_radps),
 ];
 
-/// Number of float parameters, the effects included.
-pub const NPARAMS: usize = 34;
-/// Index of the first effect parameter in [`PARAMETERS`].
-pub const FIRST_EFFECT: usize = 29;
+/// Index in [`PARAMETERS`] of the parameter `name`.
+pub fn rig_parameter(name: &str) -> Option<usize> {
+    PARAMETERS.iter().position(|p| p.name == name)
+}
 
 /// Continuous states: (name, unit, description, nominal). Their magnitudes stay bounded, so that
 /// an importer's tolerances mean something (model exchange): the side shafts enter through their
@@ -275,8 +375,8 @@ impl Table {
         }
         let e = &p.effects;
         let compliant = e.compliance_stiffness_nm_per_rad > 0.0;
-        let effect_on = [e.time_delay_s > 0.0, e.actuator_lag_s > 0.0, e.backlash_rad > 0.0, compliant, compliant];
-        let params: Vec<usize> = (0..NPARAMS).filter(|&i| i < FIRST_EFFECT || effect_on[i - FIRST_EFFECT]).collect();
+        let params: Vec<usize> =
+            (0..PARAMETERS.len()).filter(|&i| PARAMETERS[i].present.is_none_or(|on| on(e))).collect();
         let mut states: Vec<usize> = (0..10).collect();
         states.extend(powertrain_states(e).into_iter().filter(|&s| s >= 10));
         let mut v = vec![time_row()];
@@ -284,7 +384,7 @@ impl Table {
             |v: &mut Vec<Variable>, name: &'static str, kind, causality, slot, unit, description: &'static str| {
                 let vr = v.len() as u32;
                 let constraint = match slot {
-                    Slot::Param(i) => PARAMETERS[i].3,
+                    Slot::Param(i) => PARAMETERS[i].constraint,
                     _ => Constraint::Finite,
                 };
                 v.push(Variable {
@@ -300,9 +400,9 @@ impl Table {
             };
         let float = Kind::Float64;
         // the always-present variables first, at fixed value references
-        for &i in params.iter().filter(|&&i| i < FIRST_EFFECT) {
-            let (name, unit, description, _) = PARAMETERS[i];
-            push(&mut v, name, float, Causality::Parameter, Slot::Param(i), unit, description);
+        for &i in params.iter().filter(|&&i| PARAMETERS[i].present.is_none()) {
+            let r = &PARAMETERS[i];
+            push(&mut v, r.name, float, Causality::Parameter, Slot::Param(i), r.unit, r.description);
         }
         push(
             &mut v,
@@ -345,9 +445,9 @@ impl Table {
         state_row(&mut v, 1);
         derivative_rows(&mut v, &states, &[1]);
         // then the effects'
-        for &i in params.iter().filter(|&&i| i >= FIRST_EFFECT) {
-            let (name, unit, description, _) = PARAMETERS[i];
-            push(&mut v, name, float, Causality::Parameter, Slot::Param(i), unit, description);
+        for &i in params.iter().filter(|&&i| PARAMETERS[i].present.is_some()) {
+            let r = &PARAMETERS[i];
+            push(&mut v, r.name, float, Causality::Parameter, Slot::Param(i), r.unit, r.description);
         }
         if compliant {
             angle_row(&mut v, 1);
@@ -557,50 +657,7 @@ pub fn parameter_values(p: &FmuParams) -> Vec<f64> {
     if let Some(m) = &p.drive {
         return m.parameter_list().iter().map(|q| q.value).collect();
     }
-    rig_parameter_values(p).to_vec()
-}
-
-fn rig_parameter_values(p: &FmuParams) -> [f64; NPARAMS] {
-    let w = &p.powertrain;
-    let b = &p.bearing;
-    let (k, c, m) = (b.element.k_n_per_m, b.element.c_ns_per_m, b.element.m_kg);
-    let s = b.support;
-    [
-        w.j_m2,
-        w.j_drive,
-        w.j_m3,
-        w.c_short,
-        w.c_long(),
-        w.c_delta,
-        w.j_m2_delta.unwrap_or(w.j_m2),
-        w.j_m3_delta.unwrap_or(w.j_m3),
-        w.d_short,
-        w.d_long,
-        w.load_drag,
-        k[0][0],
-        k[0][1],
-        k[1][0],
-        k[1][1],
-        c[0][0],
-        c[0][1],
-        c[1][0],
-        c[1][1],
-        m[0][0],
-        m[0][1],
-        m[1][0],
-        m[1][1],
-        s.k_x,
-        s.k_y,
-        s.c_x,
-        s.c_y,
-        s.m_x,
-        s.m_y,
-        p.effects.time_delay_s,
-        p.effects.actuator_lag_s,
-        p.effects.backlash_rad,
-        p.effects.compliance_stiffness_nm_per_rad,
-        p.effects.compliance_motor_fraction,
-    ]
+    PARAMETERS.iter().map(|r| (r.get)(p)).collect()
 }
 
 /// The parameter set of float parameters `v` and variant 1..=4, of the structure of `like`
@@ -614,9 +671,10 @@ pub fn parameter_set(like: &FmuParams, v: &[f64], variant: i32) -> Result<FmuPar
         let drive = m.with_parameter_values(v).map_err(|e| e.to_string())?;
         return Ok(FmuParams { drive: Some(drive), ..like.clone() });
     }
-    let v: &[f64; NPARAMS] =
-        v.try_into().map_err(|_| format!("{} parameter values for the rig's {NPARAMS}", v.len()))?;
-    use plant::{BearingModel, Coefficients, RigParams, Support, Variant};
+    if v.len() != PARAMETERS.len() {
+        return Err(format!("{} parameter values for the rig's {}", v.len(), PARAMETERS.len()));
+    }
+    use plant::Variant;
     let variant = match variant {
         1 => Variant::V1,
         2 => Variant::V2,
@@ -624,41 +682,12 @@ pub fn parameter_set(like: &FmuParams, v: &[f64], variant: i32) -> Result<FmuPar
         4 => Variant::V4,
         other => return Err(format!("`variant` = {other}: expected 1, 2, 3 or 4")),
     };
-    Ok(FmuParams {
-        powertrain: RigParams {
-            j_m2: v[0],
-            j_drive: v[1],
-            j_m3: v[2],
-            c_short: v[3],
-            c_long: Some(v[4]),
-            c_long_ratio: v[4] / v[3],
-            c_delta: v[5],
-            j_m2_delta: Some(v[6]),
-            j_m3_delta: Some(v[7]),
-            d_short: v[8],
-            d_long: v[9],
-            load_drag: v[10],
-        },
-        variant,
-        bearing: BearingModel {
-            element: Coefficients {
-                k_n_per_m: [[v[11], v[12]], [v[13], v[14]]],
-                c_ns_per_m: [[v[15], v[16]], [v[17], v[18]]],
-                m_kg: [[v[19], v[20]], [v[21], v[22]]],
-            },
-            support: Support { k_x: v[23], k_y: v[24], c_x: v[25], c_y: v[26], m_x: v[27], m_y: v[28] },
-            table: None,
-        },
-        effects: plant::effects::DriveEffects {
-            time_delay_s: v[29],
-            actuator_lag_s: v[30],
-            backlash_rad: v[31],
-            compliance_stiffness_nm_per_rad: v[32],
-            compliance_motor_fraction: v[33],
-        },
-        drive: None,
-        controller: None,
-    })
+    let mut p = FmuParams { variant, drive: None, controller: None, ..like.clone() };
+    p.bearing.table = None;
+    for (r, &value) in PARAMETERS.iter().zip(v) {
+        (r.set)(&mut p, value);
+    }
+    Ok(p)
 }
 
 /// 1..=4 for V1..V4.
@@ -726,6 +755,28 @@ mod tests {
         assert_eq!(t.derivative_state[10], None);
         assert_eq!(t.derivative_state[12], None);
         assert_eq!(t.derivative_state[0], Some(3));
+    }
+
+    /// Friction brings its three frictions' rows that are on and the smoothing speed, after
+    /// every other row; each row reads and writes its own field.
+    #[test]
+    fn friction_rows_come_last_and_round_trip() {
+        let mut p = FmuParams::default();
+        let base = Table::new(&p);
+        p.effects.coulomb_friction_nm = [0.8, 0.0, 1.1];
+        p.effects.friction_smoothing_radps = 0.02;
+        let t = Table::new(&p);
+        assert_eq!(&t.variables[..base.variables.len()], &base.variables[..]);
+        let names: Vec<&str> = t.variables[base.variables.len()..].iter().map(|v| v.name.as_ref()).collect();
+        assert_eq!(names, ["m2.coulomb_friction", "m3.coulomb_friction", "friction_smoothing_speed"]);
+        let mut values = parameter_values(&p);
+        values[rig_parameter("m3.coulomb_friction").unwrap()] = 2.5;
+        values[rig_parameter("j_drive").unwrap()] = 0.6;
+        let back = parameter_set(&p, &values, 1).unwrap();
+        assert_eq!(back.effects.coulomb_friction_nm, [0.8, 0.0, 2.5]);
+        assert_eq!(back.effects.friction_smoothing_radps, 0.02);
+        assert_eq!(back.powertrain.j_drive, 0.6);
+        assert_eq!(parameter_values(&back), values);
     }
 
     #[test]

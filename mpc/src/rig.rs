@@ -61,5 +61,13 @@ pub fn prediction(rig: &RigParams, variant: Variant, effects: &DriveEffects, dt_
             e.backlash_rad * 1e3
         ));
     }
+    for (k, name) in ["M2", "the drive", "M3"].iter().enumerate() {
+        if e.coulomb_friction_nm[k] > 0.0 {
+            notes.push(format!(
+                "Coulomb friction {:.3} Nm at {name} is NOT in the prediction: the filter's input disturbance absorbs it",
+                e.coulomb_friction_nm[k]
+            ));
+        }
+    }
     Ok(Prediction { model: pt.control_state_space(), input_delays_s: pt.delay_s().to_vec(), notes })
 }
