@@ -19,6 +19,13 @@ pub struct DiagnosisReport {
     pub at: Option<String>,
     /// Its fitted parameters (SI; the declared ones re-fitted beside them).
     pub parameters: BTreeMap<String, f64>,
+    /// Every effect found, in the order found (`torsional_sweep`: forward selection; the first
+    /// is `effect`/`parameters`).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub effects: Vec<ident::diagnose::torsional::FoundEffect>,
+    /// The selection's path: declared (re-fitted) → +A → +A+B, with the error and score of each.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub path: Vec<ident::diagnose::torsional::PathStep>,
     /// Error of the declared model.
     pub error_before: f64,
     /// Error of the extended model.
@@ -177,7 +184,33 @@ fn torsional(file: &Path, progress: &(dyn Fn(&str) + Sync)) -> anyhow::Result<Di
     let b = load_torsional(file)?;
     let d = ident::diagnose::torsional::diagnose(&b.sweep, &b.model, b.variant, progress)
         .map_err(|e| anyhow::anyhow!("{}: {e}", file.display()))?;
-    let notes = fit_notes(&d.effect, "the declared parameters", d.structured_residual, d.error_after);
+    let mut notes = fit_notes(&d.effect, "the declared parameters", d.structured_residual, d.error_after);
+    if d.effects.len() > 1 {
+        let names: Vec<String> = d
+            .path
+            .iter()
+            .map(|p| {
+                let m = if p.effects.is_empty() { "declared".to_string() } else { p.effects.join(" + ") };
+                format!("{m} ({:.4})", p.error)
+            })
+            .collect();
+        notes.push(format!("{} effects found: {}", d.effects.len(), names.join(" → ")));
+    }
+    for c in d.candidates.iter().filter(|c| c.implausible) {
+        let at = c.at.as_ref().map(|a| format!(" at {a}")).unwrap_or_default();
+        notes.push(format!(
+            "{}{at} not chosen: it re-fits j_drive or c_short beyond a factor {} of the declared values (error {:.4})",
+            c.effect,
+            ident::diagnose::torsional::PLAUSIBLE_REFIT_FACTOR,
+            c.error_after
+        ));
+    }
+    if d.model.effects.coulomb_friction_nm.iter().any(|&f| f > 0.0) {
+        notes.push(format!(
+            "Coulomb friction is smoothed as T_c·w/√(w² + v_s²) with v_s = {:.3e} rad/s (1 % of the load machines' RMS speed, or wider where the friction would be faster than the 0.125 ms integration step resolves)",
+            d.model.effects.friction_smoothing_radps
+        ));
+    }
     let model_toml = rig_toml(&d.model.rig, d.model.variant, &d.model.effects, None)?;
     let dt = b.sweep.dt_s;
     let t = &d.traces;
@@ -213,13 +246,18 @@ fn torsional(file: &Path, progress: &(dyn Fn(&str) + Sync)) -> anyhow::Result<Di
     Ok(Diagnosis {
         report: DiagnosisReport {
             effect: d.effect,
-            at: None,
+            at: d.at,
             parameters: d.parameters,
+            effects: d.effects,
+            path: d.path,
             error_before: d.error_before,
             error_after: d.error_after,
             candidates: d.candidates,
             kind: "torsional_sweep".into(),
-            error_definition: "‖y_meas − y_model‖/‖y_meas‖ over both load-machine speeds, below 0.5 Hz removed".into(),
+            error_definition: format!(
+                "‖y_meas − y_model‖/‖y_meas‖ over both load-machine speeds, below {:.3} Hz removed",
+                d.high_pass_hz
+            ),
             structured_residual: d.structured_residual,
             evidence: serde_json::to_value(&d.evidence)?,
             notes,
@@ -337,6 +375,8 @@ fn bearing(file: &Path, _progress: &(dyn Fn(&str) + Sync)) -> anyhow::Result<Dia
             effect: d.effect,
             at: None,
             parameters: d.parameters,
+            effects: vec![],
+            path: vec![],
             error_before: d.error_before,
             error_after: d.error_after,
             candidates: d.candidates,
@@ -469,6 +509,8 @@ fn drive(file: &Path, progress: &(dyn Fn(&str) + Sync)) -> anyhow::Result<Diagno
             effect: d.effect.clone(),
             at: d.at.clone(),
             parameters: d.parameters.clone(),
+            effects: vec![],
+            path: vec![],
             error_before: d.error_before,
             error_after: d.error_after,
             candidates: d.candidates.clone(),

@@ -329,25 +329,46 @@ impl Powertrain {
         if self.effects.is_nonlinear() {
             return Ok(self.simulate_rk4(&u, dt_s, x0));
         }
+        let n = self.dofs();
+        let (mut w2, mut w3) = (Vec::with_capacity(u.len()), Vec::with_capacity(u.len()));
+        self.run_linear(&u, dt_s, x0, |x| {
+            w2.push(x[n]);
+            w3.push(x[n + 2]);
+        })?;
+        Ok((w2, w3))
+    }
+
+    /// The short side shaft's torque (the long one's differs only by its damping share) under
+    /// the drive torque `torque` of the linear part (backlash closed, friction left out), as
+    /// [`Powertrain::simulate`] starts it: where it changes sign the play can show.
+    pub fn simulate_shaft_torque(&self, torque: &[f64], dt_s: f64, speed0: f64) -> Result<Vec<f64>> {
+        let u = delayed(torque, dt_s, self.effects.time_delay_s);
+        let x0 = self.steady_state(u.first().copied().unwrap_or(0.0), speed0);
+        let (_, _, c) = self.linear(true);
+        let mut t = Vec::with_capacity(u.len());
+        self.run_linear(&u, dt_s, x0, |x| t.push(c.row(0).iter().zip(x).map(|(a, b)| a * b).sum()))?;
+        Ok(t)
+    }
+
+    /// The linear part stepped exactly (ZOH) under the drive torque `u`; `out` sees each
+    /// sample's state.
+    fn run_linear(&self, u: &[f64], dt_s: f64, x0: Vec<f64>, mut out: impl FnMut(&[f64])) -> Result<()> {
         let ss = self.state_space();
         let d = ss.c2d(dt_s)?;
         let ns = self.nstates();
-        let n = self.dofs();
         let ad: Vec<f64> = (0..ns * ns).map(|k| d.ad[(k / ns, k % ns)]).collect();
         let bd: Vec<f64> = (0..ns).map(|i| d.bd[(i, 0)]).collect();
-        let (mut w2, mut w3) = (Vec::with_capacity(u.len()), Vec::with_capacity(u.len()));
         let mut x = x0;
         let mut next = vec![0.0; ns];
-        for &uk in &u {
-            w2.push(x[n]);
-            w3.push(x[n + 2]);
+        for &uk in u {
+            out(&x);
             for i in 0..ns {
                 let row = &ad[i * ns..(i + 1) * ns];
                 next[i] = row.iter().zip(&x).map(|(a, b)| a * b).sum::<f64>() + bd[i] * uk;
             }
             std::mem::swap(&mut x, &mut next);
         }
-        Ok((w2, w3))
+        Ok(())
     }
 
     /// Equilibrium under a constant torque: speeds equal (`speed0`; the drag then needs a

@@ -280,6 +280,7 @@ pub fn diagnose(
                 // residuals of the lines are independent (periodic averaging): n_eff = n
                 score: bic(e * e, n, n as f64, *k),
                 fitted_parameters: *k,
+                implausible: false,
             }
         })
         .collect();

@@ -500,6 +500,7 @@ pub fn diagnose(rec: DriveRecord, progress: &(dyn Fn(&str) + Sync)) -> Result<Dr
                 error_after: cost.sqrt(),
                 score: bic(cost * norm2, nres, n_eff, fitted),
                 fitted_parameters: fitted,
+                implausible: false,
             },
             m,
             rho,

@@ -28,6 +28,10 @@ pub struct CandidateScore {
     pub score: f64,
     /// Number of fitted parameters.
     pub fitted_parameters: usize,
+    /// Its re-fitted declared parameters moved beyond what is plausible (it imitates a missing
+    /// effect by distorting the declared mechanics): not chosen.
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    pub implausible: bool,
 }
 
 /// Bayesian information criterion of a residual of `n` values whose effective count is

@@ -1,5 +1,8 @@
-//! Diagnosis of a torsional sweep: the declared rig simulated with the recorded drive torque,
-//! its speed residual, and the drive-path effects of `plant::effects` fitted one by one.
+//! Diagnosis of a torsional record (a sweep, a multisine, steps, PRBS, a closed-loop record):
+//! the declared rig simulated with the recorded drive torque, its speed residual, and the
+//! effects of `plant::effects` added by forward selection — several at once where the data
+//! lacks several — each kept effect checked by leaving it out. Offsets and drift are removed
+//! below a corner set by the record's length, not by its excitation.
 
 use std::collections::BTreeMap;
 
@@ -13,10 +16,8 @@ use crate::signal::{filtfilt_high_pass, filtfilt_high_pass_in_place, rfft};
 use crate::sweep::Sweep;
 
 /// The torsional vocabulary.
-pub const EFFECTS: [&str; 6] = ["none", "shaft_damping", "time_delay", "actuator_lag", "backlash", "drive_compliance"];
-
-/// Offsets and drift are removed below this frequency (the sweeps start at 1 Hz).
-pub const HIGH_PASS_HZ: f64 = 0.5;
+pub const EFFECTS: [&str; 7] =
+    ["none", "shaft_damping", "time_delay", "actuator_lag", "backlash", "drive_compliance", "coulomb_friction"];
 
 /// What the residual shows before any candidate is fitted.
 #[derive(Debug, Clone, Serialize)]
@@ -46,13 +47,19 @@ pub struct TorsionalModel {
     pub effects: DriveEffects,
 }
 
-/// The diagnosis of one sweep.
+/// The diagnosis of one record.
 #[derive(Debug, Clone, Serialize)]
 pub struct TorsionalDiagnosis {
-    /// The chosen effect.
+    /// The first effect found (`none` if none).
     pub effect: String,
-    /// Its parameters.
+    /// The machine it acts at, if at one.
+    pub at: Option<String>,
+    /// Its parameters and the re-fitted j_drive and c_short.
     pub parameters: BTreeMap<String, f64>,
+    /// Every effect found, in the order found, with its parameters in the final model.
+    pub effects: Vec<FoundEffect>,
+    /// The forward selection's path: declared (re-fitted) → +A → +A+B (→ an effect left out).
+    pub path: Vec<PathStep>,
     /// Normalised error of the declared model (1 = no better than predicting nothing).
     pub error_before: f64,
     /// Normalised error of the extended model.
@@ -63,6 +70,8 @@ pub struct TorsionalDiagnosis {
     pub evidence: Evidence,
     /// The best model still leaves a structured (non-white) residual.
     pub structured_residual: bool,
+    /// Corner of the high-pass that removes offsets and drift, Hz.
+    pub high_pass_hz: f64,
     /// The extended model.
     pub model: TorsionalModel,
     /// Time, measured speeds and model speeds before and after (high-passed), for plots.
@@ -90,18 +99,27 @@ struct Problem<'a> {
     speed0: f64,
     measured: [Vec<f64>; 2],
     norm: f64,
+    high_pass_hz: f64,
+    /// Amplitude of the drive torque's variation (√2 × its high-passed RMS), Nm: the scale of
+    /// the friction's starts and bound.
+    torque_amplitude: f64,
+    /// Friction smoothing speed: [`FRICTION_SMOOTHING_FRACTION`] of the load machines' RMS
+    /// speed, rad/s.
+    smoothing: f64,
 }
 
 impl Problem<'_> {
     fn simulate(&self, model: &TorsionalModel) -> Option<[Vec<f64>; 2]> {
         // Keep the search where the models are meaningful (and the matrix exponential cheap):
         // effects up to a second, a radian of play, a compliance mode below a tenth of the
-        // sampling rate; declared parameters within a factor 100.
+        // sampling rate, frictions up to 100 times the torque's variation; declared
+        // parameters within a factor 100.
         let e = &model.effects;
         let ratio = |a: f64, b: f64| (a / b).max(b / a);
         if e.time_delay_s > 1.0
             || e.actuator_lag_s > 1.0
             || e.backlash_rad > 1.0
+            || e.coulomb_friction_nm.iter().any(|&f| f > 100.0 * self.torque_amplitude)
             || ratio(model.rig.j_drive, self.declared.j_drive) > 100.0
             || ratio(model.rig.c_short, self.declared.c_short) > 100.0
         {
@@ -117,8 +135,8 @@ impl Problem<'_> {
         if !a.iter().chain(&b).all(|v| v.is_finite()) {
             return None;
         }
-        filtfilt_high_pass_in_place(&mut a, self.sweep.dt_s, HIGH_PASS_HZ);
-        filtfilt_high_pass_in_place(&mut b, self.sweep.dt_s, HIGH_PASS_HZ);
+        filtfilt_high_pass_in_place(&mut a, self.sweep.dt_s, self.high_pass_hz);
+        filtfilt_high_pass_in_place(&mut b, self.sweep.dt_s, self.high_pass_hz);
         Some([a, b])
     }
 
@@ -143,106 +161,195 @@ impl Problem<'_> {
             .map(|(m, y)| (m - y) / self.norm)
             .collect()
     }
+
+    /// The model of parameter vector `x` for `effects`: x[0], x[1] ln of j_drive and c_short
+    /// relative to the declared values (c_long keeps its declared ratio to c_short), then each
+    /// effect's own parameters in turn.
+    fn build(&self, effects: &[Candidate], x: &[f64]) -> TorsionalModel {
+        let (j, c) = (self.declared.j_drive * x[0].exp(), self.declared.c_short * x[1].exp());
+        let mut rig = RigParams {
+            j_drive: j,
+            c_short: c,
+            c_long: self.declared.c_long.map(|l| l * x[1].exp()),
+            ..self.declared.clone()
+        };
+        let mut e = DriveEffects::default();
+        let mut at = 2;
+        for &cand in effects {
+            let own = &x[at..at + cand.own_len()];
+            at += cand.own_len();
+            cand.apply(&mut rig, &mut e, own, self.variant);
+        }
+        // the friction's smoothing: a fraction of the machines' speeds, or wider where its
+        // slope T_c/(v_s J) would be faster than the integration step resolves
+        if let Ok(eff) = rig.effective(self.variant) {
+            let j = [eff.j_m2, eff.j_drive, eff.j_m3];
+            let widest = (0..3).map(|k| e.coulomb_friction_nm[k] / (j[k] * MAX_FRICTION_RATE)).fold(0.0, f64::max);
+            e.friction_smoothing_radps = self.smoothing.max(widest);
+        }
+        TorsionalModel { rig, variant: self.variant, effects: e }
+    }
 }
 
-/// Candidate parameterisation: x (log space) ↔ model.
-struct Candidate {
-    name: &'static str,
-    /// Starting values of the effect's own parameters (log space) to try.
-    starts: Vec<Vec<f64>>,
-    build: fn(&Problem, &[f64]) -> TorsionalModel,
-    report: fn(&TorsionalModel) -> BTreeMap<String, f64>,
+/// A machine of the rig.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Machine {
+    /// Load machine M2 (short side shaft).
+    M2,
+    /// The drive (its motor when the drive is compliant).
+    Drive,
+    /// Load machine M3 (long side shaft).
+    M3,
 }
 
-fn with_declared(p: &Problem, x: &[f64]) -> RigParams {
-    // x[0], x[1]: ln of j_drive and c_short relative to the declared values; c_long keeps
-    // its declared ratio to c_short.
-    let (j, c) = (p.declared.j_drive * x[0].exp(), p.declared.c_short * x[1].exp());
-    RigParams { j_drive: j, c_short: c, c_long: p.declared.c_long.map(|l| l * x[1].exp()), ..p.declared.clone() }
+impl Machine {
+    /// All three, in [`DriveEffects::coulomb_friction_nm`] order.
+    pub const ALL: [Machine; 3] = [Machine::M2, Machine::Drive, Machine::M3];
+
+    /// Its index in [`DriveEffects::coulomb_friction_nm`].
+    pub fn index(self) -> usize {
+        self as usize
+    }
+
+    /// Its name in reports.
+    pub fn name(self) -> &'static str {
+        ["M2", "drive", "M3"][self.index()]
+    }
 }
 
-fn model(p: &Problem, rig: RigParams, effects: DriveEffects) -> TorsionalModel {
-    TorsionalModel { rig, variant: p.variant, effects }
+/// What a candidate adds to the declared model (the declared j_drive and c_short are re-fitted
+/// beside it, and beside every effect found before it).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Candidate {
+    /// The side shafts' damping (as a damping ratio of the shuffle).
+    ShaftDamping,
+    /// A dead time of the drive torque.
+    TimeDelay,
+    /// A first-order lag of the drive torque.
+    ActuatorLag,
+    /// Play in the side shafts.
+    Backlash,
+    /// A compliance inside the drive (motor and cage).
+    DriveCompliance,
+    /// Coulomb friction at a machine.
+    CoulombFriction(Machine),
 }
 
-fn declared_keys(m: &TorsionalModel) -> BTreeMap<String, f64> {
-    let mut b = BTreeMap::new();
-    b.insert("j_drive".to_string(), m.rig.j_drive);
-    b.insert("c_short".to_string(), m.rig.c_short);
-    b
-}
+impl Candidate {
+    /// Every candidate.
+    pub const ALL: [Candidate; 8] = [
+        Candidate::ShaftDamping,
+        Candidate::TimeDelay,
+        Candidate::ActuatorLag,
+        Candidate::Backlash,
+        Candidate::DriveCompliance,
+        Candidate::CoulombFriction(Machine::M2),
+        Candidate::CoulombFriction(Machine::Drive),
+        Candidate::CoulombFriction(Machine::M3),
+    ];
 
-fn candidates(p: &Problem, shuffle_hz: f64) -> Vec<Candidate> {
-    let ln = |v: f64| v.ln();
-    vec![
-        Candidate {
-            name: "none",
-            starts: vec![vec![]],
-            build: |p, x| model(p, with_declared(p, x), DriveEffects::default()),
-            report: declared_keys,
-        },
-        Candidate {
-            name: "shaft_damping",
-            starts: [0.005, 0.02, 0.05, 0.15].iter().map(|&z| vec![ln(z)]).collect(),
-            build: |p, x| {
-                let rig = with_declared(p, x);
-                let rig = rig.with_shaft_damping_ratio(x[2].exp(), p.variant).unwrap_or(rig);
-                model(p, rig, DriveEffects::default())
-            },
-            report: |m| {
-                let mut b = declared_keys(m);
-                let e = m.rig.effective(m.variant).ok();
-                let z = e.map(|e| {
+    /// The vocabulary name.
+    pub fn name(self) -> &'static str {
+        match self {
+            Candidate::ShaftDamping => "shaft_damping",
+            Candidate::TimeDelay => "time_delay",
+            Candidate::ActuatorLag => "actuator_lag",
+            Candidate::Backlash => "backlash",
+            Candidate::DriveCompliance => "drive_compliance",
+            Candidate::CoulombFriction(_) => "coulomb_friction",
+        }
+    }
+
+    /// Where it acts, for effects at a machine.
+    pub fn at(self) -> Option<String> {
+        match self {
+            Candidate::CoulombFriction(m) => Some(m.name().to_string()),
+            _ => None,
+        }
+    }
+
+    /// Number of its own parameters.
+    fn own_len(self) -> usize {
+        match self {
+            Candidate::DriveCompliance => 2,
+            _ => 1,
+        }
+    }
+
+    /// Adds it to a model: `own` its parameters (log space; the compliance's motor share as a
+    /// logit).
+    fn apply(self, rig: &mut RigParams, e: &mut DriveEffects, own: &[f64], variant: Variant) {
+        let v = own[0].exp();
+        match self {
+            Candidate::ShaftDamping => {
+                if let Ok(r) = rig.with_shaft_damping_ratio(v, variant) {
+                    *rig = r;
+                }
+            }
+            Candidate::TimeDelay => e.time_delay_s = v,
+            Candidate::ActuatorLag => e.actuator_lag_s = v,
+            Candidate::Backlash => e.backlash_rad = v,
+            Candidate::DriveCompliance => {
+                e.compliance_stiffness_nm_per_rad = v;
+                e.compliance_motor_fraction = 1.0 / (1.0 + (-own[1]).exp());
+            }
+            Candidate::CoulombFriction(m) => e.coulomb_friction_nm[m.index()] = v,
+        }
+    }
+
+    /// Its parameters in a fitted model, SI, keys with units.
+    fn report(self, m: &TorsionalModel) -> BTreeMap<String, f64> {
+        let mut b = BTreeMap::new();
+        match self {
+            Candidate::ShaftDamping => {
+                let z = m.rig.effective(m.variant).ok().map(|e| {
                     let cs = e.c_left * e.c_right / (e.c_left + e.c_right);
                     let w = (cs * (1.0 / e.j_m2 + 4.0 / e.j_drive + 1.0 / e.j_m3)).sqrt();
                     0.5 * w * e.d_left / e.c_left
                 });
                 b.insert("damping_ratio".into(), z.unwrap_or(f64::NAN));
-                b
-            },
-        },
-        Candidate {
-            name: "time_delay",
-            starts: [0.001, 0.003, 0.01, 0.03].iter().map(|&t| vec![ln(t)]).collect(),
-            build: |p, x| {
-                model(p, with_declared(p, x), DriveEffects { time_delay_s: x[2].exp(), ..Default::default() })
-            },
-            report: |m| {
-                let mut b = declared_keys(m);
+            }
+            Candidate::TimeDelay => {
                 b.insert("delay_s".into(), m.effects.time_delay_s);
-                b
-            },
-        },
-        Candidate {
-            name: "actuator_lag",
-            starts: [0.001, 0.003, 0.01, 0.03].iter().map(|&t| vec![ln(t)]).collect(),
-            build: |p, x| {
-                model(p, with_declared(p, x), DriveEffects { actuator_lag_s: x[2].exp(), ..Default::default() })
-            },
-            report: |m| {
-                let mut b = declared_keys(m);
+            }
+            Candidate::ActuatorLag => {
                 b.insert("time_constant_s".into(), m.effects.actuator_lag_s);
-                b
-            },
-        },
-        Candidate {
-            name: "backlash",
-            // The fit in the play is rough (contact comes and goes): a dense start grid.
-            starts: (0..16).map(|i| vec![ln(1e-4 * 1.5f64.powi(i))]).collect(),
-            build: |p, x| {
-                model(p, with_declared(p, x), DriveEffects { backlash_rad: x[2].exp(), ..Default::default() })
-            },
-            report: |m| {
-                let mut b = declared_keys(m);
+            }
+            Candidate::Backlash => {
                 b.insert("backlash_rad".into(), m.effects.backlash_rad);
-                b
-            },
-        },
-        Candidate {
-            name: "drive_compliance",
-            // Stiffness placing the uncoupled motor-cage mode at 1.2 to 8 times the shuffle,
-            // motor shares 0.3, 0.5, 0.7: the fit's valleys are narrow in frequency.
-            starts: (0..12)
+            }
+            Candidate::DriveCompliance => {
+                b.insert("stiffness_Nm_per_rad".into(), m.effects.compliance_stiffness_nm_per_rad);
+                let f = Powertrain::new(&m.rig, m.variant, &m.effects).map(|p| p.frequencies_hz()).unwrap_or_default();
+                b.insert("frequency_hz".into(), f.last().copied().unwrap_or(f64::NAN));
+                b.insert("motor_fraction".into(), m.effects.compliance_motor_fraction);
+            }
+            Candidate::CoulombFriction(machine) => {
+                b.insert("friction_Nm".into(), m.effects.coulomb_friction_nm[machine.index()]);
+                b.insert("smoothing_speed_radps".into(), m.effects.friction_smoothing_radps);
+            }
+        }
+        b
+    }
+
+    /// Starting values of its own parameters (log space) for a grid search: a profile for the
+    /// play, a grid over the compliance's frequency and share, a few decades otherwise.
+    fn starts(self, p: &Problem, shuffle_hz: f64) -> Vec<Vec<f64>> {
+        let ln = f64::ln;
+        match self {
+            Candidate::ShaftDamping => [0.005, 0.02, 0.05, 0.15].iter().map(|&z| vec![ln(z)]).collect(),
+            Candidate::TimeDelay | Candidate::ActuatorLag => {
+                [0.001, 0.003, 0.01, 0.03].iter().map(|&t| vec![ln(t)]).collect()
+            }
+            // the error over the play is rough (contact comes and goes) with narrow basins: a
+            // profile on a grid of BACKLASH_GRID_RATIO steps over four and a half decades
+            Candidate::Backlash => {
+                let steps = (BACKLASH_MAX_RAD / BACKLASH_MIN_RAD).ln() / BACKLASH_GRID_RATIO.ln();
+                (0..=steps.ceil() as i32).map(|i| vec![ln(BACKLASH_MIN_RAD * BACKLASH_GRID_RATIO.powi(i))]).collect()
+            }
+            // stiffness placing the uncoupled motor-cage mode at 1.2 to 8 times the shuffle,
+            // motor shares 0.3, 0.5, 0.7: the fit's valleys are narrow in frequency
+            Candidate::DriveCompliance => (0..12)
                 .flat_map(|i| {
                     let r = 1.2 * (8.0f64 / 1.2).powf(i as f64 / 11.0);
                     [0.3f64, 0.5, 0.7].map(move |f| (r, f))
@@ -253,32 +360,104 @@ fn candidates(p: &Problem, shuffle_hz: f64) -> Vec<Candidate> {
                     vec![ln(k), (f / (1.0 - f)).ln()]
                 })
                 .collect(),
-            build: |p, x| {
-                let f = 1.0 / (1.0 + (-x[3]).exp());
-                model(
-                    p,
-                    with_declared(p, x),
-                    DriveEffects {
-                        compliance_stiffness_nm_per_rad: x[2].exp(),
-                        compliance_motor_fraction: f,
-                        ..Default::default()
-                    },
-                )
-            },
-            report: |m| {
-                let mut b = declared_keys(m);
-                b.insert("stiffness_Nm_per_rad".into(), m.effects.compliance_stiffness_nm_per_rad);
-                let f = Powertrain::new(&m.rig, m.variant, &m.effects).map(|p| p.frequencies_hz()).unwrap_or_default();
-                b.insert("frequency_hz".into(), f.last().copied().unwrap_or(f64::NAN));
-                b.insert("motor_fraction".into(), m.effects.compliance_motor_fraction);
-                b
-            },
-        },
-    ]
+            Candidate::CoulombFriction(_) => {
+                [0.02, 0.05, 0.1, 0.2, 0.5].iter().map(|&f| vec![ln(f * p.torque_amplitude)]).collect()
+            }
+        }
+    }
 }
 
-/// Diagnoses `sweep` against the declared `rig` in `variant`. `progress` is told each
-/// candidate's name as it finishes.
+/// Offsets and drift are removed below max(`HIGH_PASS_PERIODS` / record length,
+/// `HIGH_PASS_MIN_HZ`): a few periods of the record's length, whatever the excitation.
+pub const HIGH_PASS_PERIODS: f64 = 3.0;
+/// Lowest high-pass corner, Hz.
+pub const HIGH_PASS_MIN_HZ: f64 = 0.05;
+
+/// The high-pass corner for a record of `n` samples of `dt_s`, Hz.
+pub fn high_pass_hz(n: usize, dt_s: f64) -> f64 {
+    (HIGH_PASS_PERIODS / (n as f64 * dt_s)).max(HIGH_PASS_MIN_HZ)
+}
+
+/// Smallest play of the backlash profile, rad.
+pub const BACKLASH_MIN_RAD: f64 = 2e-5;
+/// Largest play of the backlash profile, rad.
+pub const BACKLASH_MAX_RAD: f64 = 0.05;
+/// Ratio of neighbouring plays of the profile (10 % apart: a basin of the error over the play
+/// is wider than that wherever contact switching shows in the data).
+pub const BACKLASH_GRID_RATIO: f64 = 1.1;
+/// The profile's best points (in distinct basins) refined by the full fit.
+pub const BACKLASH_REFINED: usize = 2;
+
+/// Friction smoothing speed as a fraction of the load machines' RMS speed (measured).
+pub const FRICTION_SMOOTHING_FRACTION: f64 = 0.01;
+/// Fastest rate the friction's slope T_c/(v_s J) may have, 1/s: half of what the RK4 step of
+/// `plant::effects::BACKLASH_STEP_S` resolves to 1e-4 per step.
+pub const MAX_FRICTION_RATE: f64 = 0.5 / plant::effects::BACKLASH_STEP_S;
+
+/// A re-fitted j_drive or c_short more than this factor from its declared value is
+/// implausible: such a candidate imitates a missing effect by distorting the declared
+/// mechanics and is not chosen (reported with `implausible`).
+pub const PLAUSIBLE_REFIT_FACTOR: f64 = 1.3;
+
+/// Most effects the forward selection adds.
+pub const MAX_EFFECTS: usize = 3;
+
+/// Levenberg–Marquardt iterations of a fit.
+pub const LM_ITERATIONS: usize = 12;
+
+/// A found effect.
+#[derive(Debug, Clone, Serialize)]
+pub struct FoundEffect {
+    /// Its name.
+    pub effect: String,
+    /// The machine it acts at, if at one.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub at: Option<String>,
+    /// Its parameters in the final model.
+    pub parameters: BTreeMap<String, f64>,
+}
+
+/// One step of the forward selection.
+#[derive(Debug, Clone, Serialize)]
+pub struct PathStep {
+    /// The effects of the model at this step, in the order found.
+    pub effects: Vec<String>,
+    /// Its normalised error.
+    pub error: f64,
+    /// Its score (BIC).
+    pub score: f64,
+}
+
+/// A fitted model: its effects, parameter vector, cost and score.
+#[derive(Debug, Clone)]
+struct Fit {
+    effects: Vec<Candidate>,
+    x: Vec<f64>,
+    cost: f64,
+    score: f64,
+}
+
+impl Fit {
+    fn error(&self) -> f64 {
+        self.cost.sqrt()
+    }
+
+    /// Whether the re-fitted j_drive and c_short stay within [`PLAUSIBLE_REFIT_FACTOR`].
+    fn plausible(&self) -> bool {
+        self.x[..2].iter().all(|v| v.abs() <= PLAUSIBLE_REFIT_FACTOR.ln())
+    }
+
+    /// Whether this fit beats `other` clearly: a lower score and 10 % less error.
+    fn beats(&self, other: &Fit) -> bool {
+        self.score < other.score && self.error() < 0.9 * other.error()
+    }
+}
+
+/// Diagnoses `sweep` against the declared `rig` in `variant` by forward selection: every
+/// candidate is fitted beside the effects found so far (all parameters re-fitted), the one that
+/// improves the information criterion most (and the error by 10 %) is added, until none does;
+/// then each kept effect is checked by leaving it out. `progress` is told each candidate's
+/// name as it finishes.
 pub fn diagnose(
     sweep: &Sweep,
     rig: &RigParams,
@@ -290,16 +469,36 @@ pub fn diagnose(
         return Err(IdentError::Data(format!("a sweep of {n} samples is too short to diagnose (need 1000)")));
     }
     let dt = sweep.dt_s;
+    let high_pass = high_pass_hz(n, dt);
     let measured = [
-        filtfilt_high_pass(&sweep.speed_m2_radps, dt, HIGH_PASS_HZ),
-        filtfilt_high_pass(&sweep.speed_m3_radps, dt, HIGH_PASS_HZ),
+        filtfilt_high_pass(&sweep.speed_m2_radps, dt, high_pass),
+        filtfilt_high_pass(&sweep.speed_m3_radps, dt, high_pass),
     ];
     let norm = measured.iter().flatten().map(|v| v * v).sum::<f64>().sqrt();
     if norm.is_nan() || norm <= 0.0 {
         return Err(IdentError::Data("the load-machine speeds do not oscillate: nothing to compare".into()));
     }
+    let torque_hp = filtfilt_high_pass(&sweep.torque_nm, dt, high_pass);
+    let torque_amplitude = (2.0 * torque_hp.iter().map(|v| v * v).sum::<f64>() / n as f64).sqrt();
+    if !(torque_amplitude > 0.0) {
+        return Err(IdentError::Data("the drive torque does not vary: nothing excites the rig".into()));
+    }
+    drop(torque_hp);
+    let rms = |v: &[f64]| (v.iter().map(|x| x * x).sum::<f64>() / v.len() as f64).sqrt();
+    let smoothing =
+        (FRICTION_SMOOTHING_FRACTION * 0.5 * (rms(&sweep.speed_m2_radps) + rms(&sweep.speed_m3_radps))).max(1e-6);
     let speed0 = 0.5 * (sweep.speed_m2_radps[0] + sweep.speed_m3_radps[0]);
-    let problem = Problem { sweep, declared: rig.clone(), variant, speed0, measured, norm };
+    let problem = Problem {
+        sweep,
+        declared: rig.clone(),
+        variant,
+        speed0,
+        measured,
+        norm,
+        high_pass_hz: high_pass,
+        torque_amplitude,
+        smoothing,
+    };
     let declared = TorsionalModel { rig: rig.clone(), variant, effects: DriveEffects::default() };
     let sim0 = problem
         .simulate(&declared)
@@ -307,121 +506,264 @@ pub fn diagnose(
     let r0 = problem.residual_of(&sim0);
     let error_before = r0.iter().map(|v| v * v).sum::<f64>().sqrt();
     let evidence = evidence(&problem, &r0);
-    let shuffle_hz = Powertrain::new(rig, variant, &DriveEffects::default())
-        .map(|p| p.frequencies_hz().last().copied().unwrap_or(10.0))
-        .unwrap_or(10.0);
-
-    let cands = candidates(&problem, shuffle_hz);
-    let fit_one = |i: usize| -> (usize, Vec<f64>, f64) {
-        let c = &cands[i];
-        let problem = &problem;
-        // Play only shows when the shaft torque changes sign: with a drive torque that never
-        // does, backlash cannot be seen and is not fitted.
-        let t = &problem.sweep.torque_nm;
-        let crosses = t.iter().any(|&v| v > 0.0) && t.iter().any(|&v| v < 0.0);
-        if c.name == "backlash" && !crosses {
-            progress(c.name);
-            return (i, Vec::new(), f64::NAN);
-        }
-        let f = |x: &[f64]| problem.residual(&(c.build)(problem, x));
-        // Grid over the effect's own parameters with the declared ones, then LM on all.
-        let cost_at = |s: &Vec<f64>| {
-            let mut x = vec![0.0, 0.0];
-            x.extend(s);
-            let cost = f(&x).map(|r| r.iter().map(|v| v * v).sum::<f64>());
-            (x, cost.unwrap_or(f64::INFINITY))
-        };
-        let best = c.starts.iter().map(cost_at).filter(|g| g.1.is_finite()).min_by(|p, q| p.1.total_cmp(&q.1));
-        let (x, cost) = match best {
-            Some((x0, _)) => lm::minimise(&f, &x0, 12),
-            None => (vec![], f64::INFINITY),
-        };
-        progress(c.name);
-        (i, x, cost)
-    };
-    let fits: Vec<(usize, Vec<f64>, f64)> = super::on_two_workers(cands.len(), &fit_one);
-
-    let nres = 2 * n;
-    let mut scored = Vec::new();
-    let mut models = Vec::new();
-    let mut skipped = Vec::new();
-    for (i, x, cost) in fits {
-        if cost.is_nan() {
-            skipped.push(cands[i].name.to_string());
-            continue;
-        }
-        if !cost.is_finite() {
-            continue;
-        }
-        let c = &cands[i];
-        let m = (c.build)(&problem, &x);
-        // One simulation per fitted candidate: its residual's whiteness (the best one's
-        // traces are simulated once more below, so no candidate keeps a record-long trace).
-        let rho = problem.simulate(&m).map_or(0.0, |s| lag1_autocorrelation(&problem.residual_of(&s)));
-        scored.push(CandidateScore {
-            at: None,
-            effect: c.name.to_string(),
-            parameters: (c.report)(&m),
-            error_after: cost.sqrt(),
-            score: 0.0,
-            fitted_parameters: x.len(),
-        });
-        models.push((m, rho, cost));
-    }
+    let declared_powertrain = Powertrain::new(rig, variant, &DriveEffects::default())
+        .map_err(|e| IdentError::Data(format!("the declared model: {e}")))?;
+    let shuffle_hz = declared_powertrain.frequencies_hz().last().copied().unwrap_or(10.0);
     // One effective count for all (the declared model's residual), so the scores compare.
+    let nres = 2 * n;
     let n_eff = effective_count(nres, evidence.residual_lag1.max(lag1_autocorrelation(&r0)));
-    for (s, (_, _, cost)) in scored.iter_mut().zip(&models) {
-        s.score = bic(*cost * problem.norm * problem.norm, nres, n_eff, s.fitted_parameters);
+    drop(r0);
+    let score = |cost: f64, k: usize| bic(cost * norm * norm, nres, n_eff, k);
+
+    // What the data can show. Play only shows where a side shaft's torque changes sign — at
+    // resonance that happens well away from zero drive torque — so the declared model's shaft
+    // torque decides (with the measured torque's variation as margin for its error); friction
+    // shows only where a machine's speed reverses.
+    let shaft = declared_powertrain
+        .simulate_shaft_torque(&sweep.torque_nm, dt, speed0)
+        .map_err(|e| IdentError::Data(format!("the declared model: {e}")))?;
+    let crosses = |v: &[f64]| v.iter().any(|&x| x > 0.0) && v.iter().any(|&x| x < 0.0);
+    let backlash_excitable = crosses(&shaft);
+    drop(shaft);
+    let mean_speed: Vec<f64> =
+        sweep.speed_m2_radps.iter().zip(&sweep.speed_m3_radps).map(|(a, b)| 0.5 * (a + b)).collect();
+    let reverses = [crosses(&sweep.speed_m2_radps), crosses(&mean_speed), crosses(&sweep.speed_m3_radps)];
+    drop(mean_speed);
+    let excitable = |c: Candidate| match c {
+        Candidate::Backlash => backlash_excitable,
+        Candidate::CoulombFriction(m) => reverses[m.index()],
+        _ => true,
+    };
+
+    let fit_with = |effects: Vec<Candidate>, x0: Vec<f64>| -> Fit {
+        let f = |x: &[f64]| problem.residual(&problem.build(&effects, x));
+        let (x, cost) = lm::minimise(&f, &x0, LM_ITERATIONS);
+        let k = x.len();
+        Fit { effects, x, cost, score: score(cost, k) }
+    };
+    // `base` plus candidate `c`: its starts on a grid (the others at base's values), the best
+    // (for the play: the best of distinct basins of its profile) refined by a fit of all.
+    let extend = |base: &Fit, c: Candidate| -> Fit {
+        let mut effects = base.effects.clone();
+        effects.push(c);
+        let f = |x: &[f64]| problem.residual(&problem.build(&effects, x));
+        let grid: Vec<(Vec<f64>, f64)> = c
+            .starts(&problem, shuffle_hz)
+            .into_iter()
+            .map(|s| {
+                // beside the effects found so far at their fitted values; the first effect
+                // from the declared j_drive and c_short (the re-fitted `none` may have bent
+                // them to imitate the very effect)
+                let mut x = if base.effects.is_empty() { vec![0.0, 0.0] } else { base.x.clone() };
+                x.extend(s);
+                let cost = f(&x).map_or(f64::INFINITY, |r| r.iter().map(|v| v * v).sum::<f64>());
+                (x, cost)
+            })
+            .collect();
+        let mut best: Vec<usize> = if c == Candidate::Backlash {
+            // local minima of the profile, best first
+            let mut minima: Vec<usize> = (0..grid.len())
+                .filter(|&i| {
+                    grid[i].1.is_finite()
+                        && (i == 0 || grid[i - 1].1 >= grid[i].1)
+                        && (i + 1 == grid.len() || grid[i + 1].1 >= grid[i].1)
+                })
+                .collect();
+            minima.sort_by(|&a, &b| grid[a].1.total_cmp(&grid[b].1));
+            minima.truncate(BACKLASH_REFINED);
+            minima
+        } else {
+            (0..grid.len())
+                .filter(|&i| grid[i].1.is_finite())
+                .min_by(|&a, &b| grid[a].1.total_cmp(&grid[b].1))
+                .into_iter()
+                .collect()
+        };
+        best.dedup();
+        let fits = best.into_iter().map(|i| fit_with(effects.clone(), grid[i].0.clone()));
+        fits.min_by(|a, b| a.cost.total_cmp(&b.cost)).unwrap_or(Fit {
+            effects,
+            x: Vec::new(),
+            cost: f64::INFINITY,
+            score: f64::INFINITY,
+        })
+    };
+
+    // the declared model re-fitted: `none`
+    let none = fit_with(Vec::new(), vec![0.0, 0.0]);
+    if !none.cost.is_finite() {
+        return Err(IdentError::Data("re-fitting the declared model failed".into()));
     }
-    let none = scored
-        .iter()
-        .position(|s| s.effect == "none")
-        .ok_or_else(|| IdentError::Data("re-fitting the declared model failed".into()))?;
-    let mut best = none;
-    for (i, s) in scored.iter().enumerate() {
-        // An effect must beat the re-fitted declared model clearly: 10 % less error and a
-        // lower score.
-        if s.score < scored[best].score && s.error_after < 0.9 * scored[none].error_after {
-            best = i;
+    progress("none");
+    let mut current = none.clone();
+    let mut path = vec![PathStep { effects: vec![], error: none.error(), score: none.score }];
+    let mut first_round: Vec<Fit> = Vec::new();
+    let mut skipped: Vec<Candidate> = Vec::new();
+    for round in 0..MAX_EFFECTS {
+        let todo: Vec<Candidate> = Candidate::ALL
+            .into_iter()
+            .filter(|c| !current.effects.contains(c))
+            .filter(|&c| {
+                let ok = excitable(c);
+                if !ok && round == 0 {
+                    skipped.push(c);
+                }
+                ok
+            })
+            .collect();
+        if todo.is_empty() {
+            break;
+        }
+        let base = &current;
+        let fits = super::on_two_workers(todo.len(), &|i| {
+            let fit = extend(base, todo[i]);
+            if round == 0 {
+                progress(todo[i].name());
+            }
+            fit
+        });
+        let best = fits
+            .iter()
+            .filter(|f| f.cost.is_finite() && f.plausible())
+            .min_by(|a, b| a.score.total_cmp(&b.score))
+            .cloned();
+        if round == 0 {
+            first_round = fits;
+        }
+        match best {
+            Some(b) if b.beats(&current) => {
+                current = b;
+                path.push(PathStep {
+                    effects: current.effects.iter().map(|c| label(*c)).collect(),
+                    error: current.error(),
+                    score: current.score,
+                });
+            }
+            _ => break,
         }
     }
-    let (model, rho, _) = models.swap_remove(best);
-    let structured_residual = rho.abs() > 0.5 && scored[best].error_after > 0.02;
+    // each kept effect checked by leaving it out: one that the others do not need clearly
+    // (the full model does not beat the model without it) goes, the least needed first
+    while current.effects.len() >= 2 {
+        let without: Vec<Fit> = (0..current.effects.len())
+            .map(|i| {
+                let mut effects = current.effects.clone();
+                effects.remove(i);
+                let mut x = current.x[..2].to_vec();
+                let mut at = 2;
+                for (k, c) in current.effects.iter().enumerate() {
+                    if k != i {
+                        x.extend_from_slice(&current.x[at..at + c.own_len()]);
+                    }
+                    at += c.own_len();
+                }
+                fit_with(effects, x)
+            })
+            .collect();
+        let weakest = without
+            .into_iter()
+            .filter(|w| w.cost.is_finite() && w.plausible() && !current.beats(w))
+            .min_by(|a, b| a.score.total_cmp(&b.score));
+        match weakest {
+            Some(w) => {
+                current = w;
+                path.push(PathStep {
+                    effects: current.effects.iter().map(|c| label(*c)).collect(),
+                    error: current.error(),
+                    score: current.score,
+                });
+            }
+            None => break,
+        }
+    }
+
+    // the first round's table: every candidate beside the declared parameters
+    let entry = |f: &Fit| -> CandidateScore {
+        let m = problem.build(&f.effects, &f.x);
+        let mut parameters = declared_keys(&m);
+        if let Some(c) = f.effects.last() {
+            parameters.extend(c.report(&m));
+        }
+        CandidateScore {
+            effect: f.effects.last().map_or("none", |c| c.name()).to_string(),
+            at: f.effects.last().and_then(|c| c.at()),
+            parameters,
+            error_after: f.error(),
+            score: f.score,
+            fitted_parameters: f.x.len(),
+            implausible: !f.plausible(),
+        }
+    };
+    let mut candidates: Vec<CandidateScore> =
+        std::iter::once(&none).chain(first_round.iter().filter(|f| f.cost.is_finite())).map(entry).collect();
+    // A candidate the data cannot show scores as the re-fitted declared model with one more
+    // parameter (its own, at zero).
+    for c in skipped {
+        let mut parameters = declared_keys(&problem.build(&[], &none.x));
+        for k in c.report(&problem.build(&[], &none.x)).keys() {
+            parameters.insert(k.clone(), 0.0);
+        }
+        candidates.push(CandidateScore {
+            effect: c.name().into(),
+            at: c.at(),
+            parameters,
+            error_after: none.error(),
+            score: none.score + n_eff.max(2.0).ln(),
+            fitted_parameters: none.x.len() + 1,
+            implausible: false,
+        });
+    }
+    candidates.sort_by(|a, b| a.score.total_cmp(&b.score));
+
+    let model = problem.build(&current.effects, &current.x);
+    let effects: Vec<FoundEffect> = current
+        .effects
+        .iter()
+        .map(|c| FoundEffect { effect: c.name().into(), at: c.at(), parameters: c.report(&model) })
+        .collect();
+    let mut parameters = declared_keys(&model);
+    if let Some(first) = effects.first() {
+        parameters.extend(first.parameters.clone());
+    }
     let after = problem.simulate(&model).unwrap_or_else(|| [vec![0.0; n], vec![0.0; n]]);
+    let rho = lag1_autocorrelation(&problem.residual_of(&after));
+    let structured_residual = rho.abs() > 0.5 && current.error() > 0.02;
     let traces = Traces {
         time_s: (0..n).map(|k| k as f64 * dt).collect(),
         measured: problem.measured.clone(),
         before: sim0,
         after,
     };
-    let mut candidates = scored.clone();
-    // A candidate the data cannot show scores as the re-fitted declared model with one more
-    // parameter (its own, at zero).
-    for name in skipped {
-        let none = &scored[none];
-        let mut parameters = none.parameters.clone();
-        parameters.insert("backlash_rad".into(), 0.0);
-        candidates.push(CandidateScore {
-            at: None,
-            effect: name,
-            parameters,
-            error_after: none.error_after,
-            score: none.score + n_eff.max(2.0).ln(),
-            fitted_parameters: none.fitted_parameters + 1,
-        });
-    }
-    candidates.sort_by(|a, b| a.score.total_cmp(&b.score));
     Ok(TorsionalDiagnosis {
-        effect: scored[best].effect.clone(),
-        parameters: scored[best].parameters.clone(),
+        effect: effects.first().map_or_else(|| "none".to_string(), |e| e.effect.clone()),
+        at: effects.first().and_then(|e| e.at.clone()),
+        parameters,
+        effects,
+        path,
         error_before,
-        error_after: scored[best].error_after,
+        error_after: current.error(),
         candidates,
         evidence,
         structured_residual,
+        high_pass_hz: high_pass,
         model,
         traces,
     })
+}
+
+/// A found effect as the path names it ("backlash", "coulomb_friction at M2").
+fn label(c: Candidate) -> String {
+    match c.at() {
+        Some(a) => format!("{} at {a}", c.name()),
+        None => c.name().to_string(),
+    }
+}
+
+fn declared_keys(m: &TorsionalModel) -> BTreeMap<String, f64> {
+    let mut b = BTreeMap::new();
+    b.insert("j_drive".to_string(), m.rig.j_drive);
+    b.insert("c_short".to_string(), m.rig.c_short);
+    b
 }
 
 fn evidence(p: &Problem, r: &[f64]) -> Evidence {
@@ -431,14 +773,14 @@ fn evidence(p: &Problem, r: &[f64]) -> Evidence {
     let rs = rfft(&res);
     let ms = rfft(&p.measured[0].iter().map(|v| v / p.norm).collect::<Vec<_>>());
     let df = 1.0 / (n as f64 * dt);
-    // from 1 Hz up (the high-pass's band), inside the spectrum
-    let lo = ((1.0 / df) as usize).min(rs.len() - 1);
+    // from twice the high-pass corner up (its pass band), inside the spectrum
+    let lo = ((2.0 * p.high_pass_hz / df) as usize).max(1).min(rs.len() - 1);
     let (k, _) =
         rs.iter().enumerate().skip(lo).fold((lo, 0.0), |b, (k, c)| if c.norm() > b.1 { (k, c.norm()) } else { b });
     let residual_peak_ratio = rs[k].norm() / ms[k].norm().max(1e-300);
     // Cross-correlation of the high-passed torque with the residual, lags within ±0.1 s (and
     // within the record), by FFT
-    let u = filtfilt_high_pass(&p.sweep.torque_nm, dt, HIGH_PASS_HZ);
+    let u = filtfilt_high_pass(&p.sweep.torque_nm, dt, p.high_pass_hz);
     let max_lag = (0.1 / dt).min(n as f64) as usize;
     let best = crate::signal::cross_correlation(&u, &res, max_lag).into_iter().fold((0isize, 0.0f64), |b, (lag, c)| {
         if c.abs() > b.1.abs() {
