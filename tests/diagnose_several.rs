@@ -175,14 +175,13 @@ fn within(v: f64, truth: f64, rel: f64, what: &str) {
     assert!((v - truth).abs() <= rel * truth.abs(), "{what} = {v}, truth {truth}");
 }
 
-/// The error at least halved at each step of the path that adds an effect.
+/// The error at least halved at each step of the path declared → +A → +A+B: the declared
+/// model's error (not re-fitted) to the first effect's, then from effect to effect.
 fn halved_each_step(d: &TorsionalDiagnosis) {
     assert!(d.error_after < 0.5 * d.error_before, "error {} → {}", d.error_before, d.error_after);
     let mut prev = d.error_before;
-    for p in &d.path {
-        if !p.effects.is_empty() {
-            assert!(p.error < 0.5 * prev, "path step {:?}: {} after {}", p.effects, p.error, prev);
-        }
+    for p in d.path.iter().filter(|p| !p.effects.is_empty()) {
+        assert!(p.error < 0.5 * prev, "path step {:?}: {} after {}", p.effects, p.error, prev);
         prev = p.error;
     }
 }
@@ -219,13 +218,25 @@ fn coulomb_friction_at_both_load_machines_about_zero_torque() {
     let truth = Truth { friction_nm: [1.5, 0.0, 1.0], set_point_nm: 0.0, ..Default::default() };
     let d = run(&record(&declared(), truth, 13), &declared());
     print_params(&d);
-    assert_eq!(found(&d), ["coulomb_friction at M2", "coulomb_friction at M3"]);
-    within(param(&d, "coulomb_friction", Some("M2"), "friction_Nm"), 1.5, 0.2, "friction at M2");
-    within(param(&d, "coulomb_friction", Some("M3"), "friction_Nm"), 1.0, 0.2, "friction at M3");
+    // one step: friction at the two load machines, each its own value
+    assert_eq!(found(&d), ["coulomb_friction at M2 and M3"]);
+    within(param(&d, "coulomb_friction", Some("M2 and M3"), "friction_M2_Nm"), 1.5, 0.2, "friction at M2");
+    within(param(&d, "coulomb_friction", Some("M2 and M3"), "friction_M3_Nm"), 1.0, 0.2, "friction at M3");
     // and the declared mechanics stay where they were (within 5 %: the side gears' inertia
     // is in the truth's j_drive)
     within(d.parameters["j_drive"], declared().j_drive, 0.05, "j_drive");
     within(d.parameters["c_short"], declared().c_short, 0.05, "c_short");
+    halved_each_step(&d);
+}
+
+#[test]
+fn coulomb_friction_at_the_drive_and_a_dead_time_about_zero_torque() {
+    let truth = Truth { friction_nm: [0.0, 2.0, 0.0], delay_s: 0.006, set_point_nm: 0.0, ..Default::default() };
+    let d = run(&record(&declared(), truth, 17), &declared());
+    print_params(&d);
+    assert_eq!(found(&d), ["coulomb_friction at drive", "time_delay"]);
+    within(param(&d, "coulomb_friction", Some("drive"), "friction_Nm"), 2.0, 0.2, "friction at the drive");
+    within(param(&d, "time_delay", None, "delay_s"), 0.006, 0.2, "delay_s");
     halved_each_step(&d);
 }
 

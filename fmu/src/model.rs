@@ -7,13 +7,14 @@
 //! is linear, x' = A x + B u, and the co-simulation step is exact for inputs held over the step:
 //! x⁺ = Ad x + Bd u with (Ad, Bd) from the matrix exponential, cached per step length. A dead
 //! time splits the step where the delayed drive torque changes, each piece exact; backlash is
-//! integrated by RK4 with steps of at most `plant::effects::BACKLASH_STEP_S`.
+//! integrated by RK4 with steps of at most `Powertrain::rk4_step_s` (backlash:
+//! `plant::effects::BACKLASH_STEP_S`), the diagnosis's integrator.
 
 use nalgebra::{DMatrix, DVector};
 
 use crate::params::FmuParams;
 use crate::variables::{powertrain_states, Table};
-use plant::effects::{DelayLine, Powertrain, BACKLASH_STEP_S};
+use plant::effects::{DelayLine, Powertrain};
 
 /// Number of inputs: M_m2, M_drive, M_m3, bearing F_x, F_y.
 pub const NU: usize = 5;
@@ -47,6 +48,8 @@ pub struct Model {
     next: DVector<f64>,
     /// Longest exact piece, s: ‖[A B]‖₁ · piece = `plant::statespace::ZOH_MAX_NORM` / 2^10.
     max_piece_s: f64,
+    /// Longest RK4 step of the nonlinear model (`Powertrain::rk4_step_s`), s.
+    rk4_step_s: f64,
     powertrain: Powertrain,
     /// State-vector index of each powertrain state.
     map: Vec<usize>,
@@ -132,8 +135,13 @@ impl Model {
         let npt = map.len();
         let (a, b) = (similar(&a_x), &t * &b_x);
         let max_piece_s = longest_exact_piece(&a, &b)?;
+        // the powertrain's RK4 step (the diagnosis's), shorter only where the bearing block is
+        // faster than it resolves (h·|λ|max ≤ 0.5)
+        let bearing_rate = br.a.complex_eigenvalues().iter().map(|l| l.norm()).fold(0.0, f64::max);
+        let rk4_step_s = powertrain.rk4_step_s().min(plant::drive::RK4_STEP_TIMES_RATE / bearing_rate.max(1e-300));
         Ok(Model {
             max_piece_s,
+            rk4_step_s,
             next: DVector::zeros(nx),
             a,
             b,
@@ -281,9 +289,10 @@ impl Model {
         h: f64,
         delay: &DelayLine,
     ) -> Result<(), String> {
-        let sub_steps = if self.nonlinear() { h / BACKLASH_STEP_S } else { h / self.max_piece_s };
+        let rk4_step = self.rk4_step_s;
+        let sub_steps = if self.nonlinear() { h / rk4_step } else { h / self.max_piece_s };
         if sub_steps.is_nan() || sub_steps > MAX_PIECES as f64 {
-            let longest = MAX_PIECES as f64 * if self.nonlinear() { BACKLASH_STEP_S } else { self.max_piece_s };
+            let longest = MAX_PIECES as f64 * if self.nonlinear() { rk4_step } else { self.max_piece_s };
             return Err(format!(
                 "a step of {h} s is longer than this model integrates exactly (at most {longest:.4e} s)"
             ));
@@ -307,7 +316,7 @@ impl Model {
         for &(len, drive) in &pieces {
             u_eff[DRIVE_INPUT] = drive;
             if self.nonlinear() {
-                let n = (len / BACKLASH_STEP_S - 1e-9).ceil().max(1.0) as usize;
+                let n = (len / rk4_step - 1e-9).ceil().max(1.0) as usize;
                 for _ in 0..n {
                     self.rk4(&mut x, &u_eff, len / n as f64);
                 }

@@ -476,6 +476,22 @@ impl Powertrain {
         }
     }
 
+    /// Longest RK4 step of the nonlinear model, s, in the diagnosis and in the FMU alike: with
+    /// backlash [`BACKLASH_STEP_S`] (contact switching makes the response sensitive to the step);
+    /// with friction alone h·rate ≤ 0.5 of the fastest of the linear part and the friction's
+    /// slopes T_c/(v_s J) (as `plant::drive` steps), at most [`BACKLASH_STEP_S`] × 8.
+    pub fn rk4_step_s(&self) -> f64 {
+        if self.effects.backlash_rad > 0.0 {
+            return BACKLASH_STEP_S;
+        }
+        let mut rate = self.linear(true).0.complex_eigenvalues().iter().map(|l| l.norm()).fold(0.0, f64::max);
+        for (k, &tc) in self.effects.coulomb_friction_nm.iter().enumerate() {
+            let i = [0, self.input_dof, 2][k];
+            rate = rate.max(tc / (self.effects.friction_smoothing_radps * self.inertia[i]));
+        }
+        (crate::drive::RK4_STEP_TIMES_RATE / rate).clamp(1e-9, 8.0 * BACKLASH_STEP_S)
+    }
+
     /// The friction's contribution to ∂ẇ_i/∂w_i at state `x`: (speed's state index, slope)
     /// for each machine with friction, −T_c v_s²/((w² + v_s²)^{3/2} J_i).
     pub fn friction_slopes(&self, x: &[f64]) -> Vec<(usize, f64)> {
@@ -518,7 +534,7 @@ impl Powertrain {
     fn simulate_rk4(&self, u: &[f64], dt_s: f64, mut x: Vec<f64>) -> (Vec<f64>, Vec<f64>) {
         let n = self.dofs();
         let ns = x.len();
-        let sub = (dt_s / BACKLASH_STEP_S - 1e-9).ceil().max(1.0) as usize;
+        let sub = (dt_s / self.rk4_step_s() - 1e-9).ceil().max(1.0) as usize;
         let h = dt_s / sub as f64;
         let mut work: [Vec<f64>; 5] = std::array::from_fn(|_| vec![0.0; ns]);
         let (mut w2, mut w3) = (Vec::with_capacity(u.len()), Vec::with_capacity(u.len()));

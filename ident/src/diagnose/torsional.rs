@@ -191,7 +191,8 @@ impl Problem<'_> {
     }
 }
 
-/// A machine of the rig.
+/// Where friction acts: one machine of the rig, or both load machines (a rig's load machines
+/// are alike: one step of the selection with a friction each).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Machine {
     /// Load machine M2 (short side shaft).
@@ -200,22 +201,34 @@ pub enum Machine {
     Drive,
     /// Load machine M3 (long side shaft).
     M3,
+    /// Both load machines, each its own friction.
+    Loads,
 }
 
 impl Machine {
-    /// All three, in [`DriveEffects::coulomb_friction_nm`] order.
-    pub const ALL: [Machine; 3] = [Machine::M2, Machine::Drive, Machine::M3];
-
-    /// Its index in [`DriveEffects::coulomb_friction_nm`].
-    pub fn index(self) -> usize {
-        self as usize
+    /// The indices in [`DriveEffects::coulomb_friction_nm`] it sets.
+    pub fn indices(self) -> &'static [usize] {
+        match self {
+            Machine::M2 => &[0],
+            Machine::Drive => &[1],
+            Machine::M3 => &[2],
+            Machine::Loads => &[0, 2],
+        }
     }
 
     /// Its name in reports.
     pub fn name(self) -> &'static str {
-        ["M2", "drive", "M3"][self.index()]
+        match self {
+            Machine::M2 => "M2",
+            Machine::Drive => "drive",
+            Machine::M3 => "M3",
+            Machine::Loads => "M2 and M3",
+        }
     }
 }
+
+/// Name of friction index `k` in reports.
+const MACHINE_NAMES: [&str; 3] = ["M2", "drive", "M3"];
 
 /// What a candidate adds to the declared model (the declared j_drive and c_short are re-fitted
 /// beside it, and beside every effect found before it).
@@ -237,7 +250,7 @@ pub enum Candidate {
 
 impl Candidate {
     /// Every candidate.
-    pub const ALL: [Candidate; 8] = [
+    pub const ALL: [Candidate; 9] = [
         Candidate::ShaftDamping,
         Candidate::TimeDelay,
         Candidate::ActuatorLag,
@@ -246,6 +259,7 @@ impl Candidate {
         Candidate::CoulombFriction(Machine::M2),
         Candidate::CoulombFriction(Machine::Drive),
         Candidate::CoulombFriction(Machine::M3),
+        Candidate::CoulombFriction(Machine::Loads),
     ];
 
     /// The vocabulary name.
@@ -272,7 +286,18 @@ impl Candidate {
     fn own_len(self) -> usize {
         match self {
             Candidate::DriveCompliance => 2,
+            Candidate::CoulombFriction(m) => m.indices().len(),
             _ => 1,
+        }
+    }
+
+    /// Whether it sets what `other` sets (friction at a machine twice).
+    fn overlaps(self, other: Candidate) -> bool {
+        match (self, other) {
+            (Candidate::CoulombFriction(a), Candidate::CoulombFriction(b)) => {
+                a.indices().iter().any(|i| b.indices().contains(i))
+            }
+            _ => self == other,
         }
     }
 
@@ -293,7 +318,11 @@ impl Candidate {
                 e.compliance_stiffness_nm_per_rad = v;
                 e.compliance_motor_fraction = 1.0 / (1.0 + (-own[1]).exp());
             }
-            Candidate::CoulombFriction(m) => e.coulomb_friction_nm[m.index()] = v,
+            Candidate::CoulombFriction(m) => {
+                for (&k, p) in m.indices().iter().zip(own) {
+                    e.coulomb_friction_nm[k] = p.exp();
+                }
+            }
         }
     }
 
@@ -325,7 +354,13 @@ impl Candidate {
                 b.insert("motor_fraction".into(), m.effects.compliance_motor_fraction);
             }
             Candidate::CoulombFriction(machine) => {
-                b.insert("friction_Nm".into(), m.effects.coulomb_friction_nm[machine.index()]);
+                if let [k] = machine.indices() {
+                    b.insert("friction_Nm".into(), m.effects.coulomb_friction_nm[*k]);
+                } else {
+                    for &k in machine.indices() {
+                        b.insert(format!("friction_{}_Nm", MACHINE_NAMES[k]), m.effects.coulomb_friction_nm[k]);
+                    }
+                }
                 b.insert("smoothing_speed_radps".into(), m.effects.friction_smoothing_radps);
             }
         }
@@ -360,9 +395,11 @@ impl Candidate {
                     vec![ln(k), (f / (1.0 - f)).ln()]
                 })
                 .collect(),
-            Candidate::CoulombFriction(_) => {
-                [0.02, 0.05, 0.1, 0.2, 0.5].iter().map(|&f| vec![ln(f * p.torque_amplitude)]).collect()
-            }
+            // the same share of the torque's variation at each machine it acts at
+            Candidate::CoulombFriction(m) => [0.02, 0.05, 0.1, 0.2, 0.5]
+                .iter()
+                .map(|&f| vec![ln(f * p.torque_amplitude); m.indices().len()])
+                .collect(),
         }
     }
 }
@@ -390,9 +427,9 @@ pub const BACKLASH_REFINED: usize = 2;
 
 /// Friction smoothing speed as a fraction of the load machines' RMS speed (measured).
 pub const FRICTION_SMOOTHING_FRACTION: f64 = 0.01;
-/// Fastest rate the friction's slope T_c/(v_s J) may have, 1/s: half of what the RK4 step of
-/// `plant::effects::BACKLASH_STEP_S` resolves to 1e-4 per step.
-pub const MAX_FRICTION_RATE: f64 = 0.5 / plant::effects::BACKLASH_STEP_S;
+/// Fastest rate the friction's slope T_c/(v_s J) may have, 1/s: what RK4 steps of 0.25 ms
+/// (`Powertrain::rk4_step_s`: h·rate ≤ 0.5) resolve, four per millisecond.
+pub const MAX_FRICTION_RATE: f64 = 0.5 / (2.0 * plant::effects::BACKLASH_STEP_S);
 
 /// A re-fitted j_drive or c_short more than this factor from its declared value is
 /// implausible: such a candidate imitates a missing effect by distorting the declared
@@ -531,7 +568,7 @@ pub fn diagnose(
     drop(mean_speed);
     let excitable = |c: Candidate| match c {
         Candidate::Backlash => backlash_excitable,
-        Candidate::CoulombFriction(m) => reverses[m.index()],
+        Candidate::CoulombFriction(m) => m.indices().iter().all(|&k| reverses[k]),
         _ => true,
     };
 
@@ -547,26 +584,37 @@ pub fn diagnose(
         let mut effects = base.effects.clone();
         effects.push(c);
         let f = |x: &[f64]| problem.residual(&problem.build(&effects, x));
-        let grid: Vec<(Vec<f64>, f64)> = c
-            .starts(&problem, shuffle_hz)
-            .into_iter()
-            .map(|s| {
-                // beside the effects found so far at their fitted values; the first effect
-                // from the declared j_drive and c_short (the re-fitted `none` may have bent
-                // them to imitate the very effect)
-                let mut x = if base.effects.is_empty() { vec![0.0, 0.0] } else { base.x.clone() };
-                x.extend(s);
+        // beside the effects found so far at their fitted values; the first effect from the
+        // declared j_drive and c_short (the re-fitted `none` may have bent them to imitate the
+        // very effect); the play's profile beside an effect also from the declared j_drive and
+        // c_short (the effects found may have bent them to imitate the play)
+        let mut bases: Vec<Vec<f64>> = Vec::new();
+        if base.effects.is_empty() || c == Candidate::Backlash {
+            let mut x = base.x.clone();
+            x[..2].fill(0.0);
+            bases.push(x);
+        }
+        if !base.effects.is_empty() {
+            bases.push(base.x.clone());
+        }
+        let starts = c.starts(&problem, shuffle_hz);
+        let grid: Vec<(Vec<f64>, f64)> = bases
+            .iter()
+            .flat_map(|b| starts.iter().map(move |s| [b.as_slice(), s].concat()))
+            .map(|x| {
                 let cost = f(&x).map_or(f64::INFINITY, |r| r.iter().map(|v| v * v).sum::<f64>());
                 (x, cost)
             })
             .collect();
         let mut best: Vec<usize> = if c == Candidate::Backlash {
-            // local minima of the profile, best first
+            // local minima of each profile, best first
+            let len = starts.len();
             let mut minima: Vec<usize> = (0..grid.len())
                 .filter(|&i| {
+                    let k = i % len;
                     grid[i].1.is_finite()
-                        && (i == 0 || grid[i - 1].1 >= grid[i].1)
-                        && (i + 1 == grid.len() || grid[i + 1].1 >= grid[i].1)
+                        && (k == 0 || grid[i - 1].1 >= grid[i].1)
+                        && (k + 1 == len || grid[i + 1].1 >= grid[i].1)
                 })
                 .collect();
             minima.sort_by(|&a, &b| grid[a].1.total_cmp(&grid[b].1));
@@ -602,7 +650,7 @@ pub fn diagnose(
     for round in 0..MAX_EFFECTS {
         let todo: Vec<Candidate> = Candidate::ALL
             .into_iter()
-            .filter(|c| !current.effects.contains(c))
+            .filter(|c| !current.effects.iter().any(|f| f.overlaps(*c)))
             .filter(|&c| {
                 let ok = excitable(c);
                 if !ok && round == 0 {
@@ -632,7 +680,20 @@ pub fn diagnose(
         }
         match best {
             Some(b) if b.beats(&current) => {
-                current = b;
+                // polish the accepted model: its fit continued, and one restarted from the
+                // declared j_drive and c_short (those of the model before may have been bent
+                // to imitate the effect just found); the better kept
+                let mut restart = b.x.clone();
+                restart[..2].fill(0.0);
+                let polished = super::on_two_workers(2, &|i| {
+                    fit_with(b.effects.clone(), if i == 0 { b.x.clone() } else { restart.clone() })
+                });
+                current = polished
+                    .into_iter()
+                    .filter(|f| f.cost.is_finite() && f.plausible())
+                    .chain(std::iter::once(b))
+                    .min_by(|a, b| a.cost.total_cmp(&b.cost))
+                    .expect("the accepted fit is there");
                 path.push(PathStep {
                     effects: current.effects.iter().map(|c| label(*c)).collect(),
                     error: current.error(),
