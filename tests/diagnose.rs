@@ -29,6 +29,9 @@ struct Truth {
     backlash_rad: f64,
     compliance: Option<(f64, f64)>, // (stiffness, motor fraction)
     set_point_nm: f64,
+    /// Coulomb friction of [M2, drive, M3], Nm, smoothed by tanh(w / 0.02 rad/s) (rigtwin
+    /// smooths algebraically, at another speed).
+    friction_nm: [f64; 3],
 }
 
 /// A 20 s sweep 1 → 30 Hz, ±8 Nm about the set point, sampled at 1 kHz, speeds with 2 mrad/s
@@ -87,13 +90,14 @@ fn sweep(rig: &RigParams, truth: Truth, seed: u64) -> Sweep {
         d[1] = x[5];
         d[2] = x[6];
         d[3] = x[7];
-        d[4] = (t - e.load_drag * x[4]) / jm;
-        d[6] = (t - e.load_drag * x[6]) / e.j_m3;
+        let fric = |k: usize, w: f64| truth.friction_nm[k] * (w / 0.02).tanh();
+        d[4] = (t - e.load_drag * x[4] - fric(0, x[4])) / jm;
+        d[6] = (t - e.load_drag * x[6] - fric(2, x[6])) / e.j_m3;
         if compliant {
             d[5] = (-2.0 * t + internal) / jc;
-            d[7] = (drive - internal) / jmot;
+            d[7] = (drive - internal - fric(1, x[7])) / jmot;
         } else {
-            d[5] = (-2.0 * t + drive) / jc;
+            d[5] = (-2.0 * t + drive - fric(1, x[5])) / jc;
         }
         if truth.lag_s > 0.0 {
             d[8] = (u - x[8]) / truth.lag_s;
@@ -144,8 +148,8 @@ fn within(p: &BTreeMap<String, f64>, key: &str, truth: f64, rel: f64) {
 fn check(d: &torsional::TorsionalDiagnosis, effect: &str) {
     assert_eq!(d.effect, effect, "candidates: {:#?}", d.candidates);
     assert!(d.error_after < 0.5 * d.error_before, "error {} → {}", d.error_before, d.error_after);
-    // every candidate is fitted and scored: none and the eight of the vocabulary (friction at
-    // each of the three machines)
+    // every candidate is fitted and scored: none and the nine of the vocabulary (friction at
+    // each of the three machines and at both load machines)
     assert_eq!(d.candidates.len(), 1 + torsional::Candidate::ALL.len(), "every candidate is fitted and scored");
 }
 
@@ -570,6 +574,15 @@ fn fmu_carries_a_drive_compliance() {
         Truth { compliance: Some((1500.0, 0.5)), set_point_nm: 40.0, ..Default::default() },
         24,
         "drive_compliance",
+    );
+}
+
+#[test]
+fn fmu_carries_coulomb_friction() {
+    fmu_reproduces_the_diagnosis(
+        Truth { friction_nm: [1.5, 0.0, 1.0], set_point_nm: 0.0, ..Default::default() },
+        25,
+        "coulomb_friction",
     );
 }
 
