@@ -89,9 +89,7 @@ fn record(rig: &RigParams, truth: Truth, seed: u64) -> Sweep {
         let drive = if truth.lag_s > 0.0 { x[10] } else { u };
         let internal = k_int * (x[4] - x[1]) + ratio_int * k_int * (x[9] - x[6]);
         let mut d = [0.0; 11];
-        for i in 0..5 {
-            d[i] = x[5 + i];
-        }
+        d[..5].copy_from_slice(&x[5..10]);
         d[5] = (t1 - e.load_drag * x[5] - fric(0, x[5])) / e.j_m2;
         d[8] = (t2 - e.load_drag * x[8] - fric(2, x[8])) / e.j_m3;
         d[7] = (t2 - t1) / (2.0 * js);

@@ -517,7 +517,7 @@ pub fn diagnose(
     }
     let torque_hp = filtfilt_high_pass(&sweep.torque_nm, dt, high_pass);
     let torque_amplitude = (2.0 * torque_hp.iter().map(|v| v * v).sum::<f64>() / n as f64).sqrt();
-    if !(torque_amplitude > 0.0) {
+    if torque_amplitude.is_nan() || torque_amplitude <= 0.0 {
         return Err(IdentError::Data("the drive torque does not vary: nothing excites the rig".into()));
     }
     drop(torque_hp);

@@ -1,0 +1,53 @@
+//! One-shot timing of the torsional diagnosis on 60 s, 1 kHz records (the criterion bench
+//! `cargo bench -p ident --bench diagnose` repeats them): `cargo run --release -p ident
+//! --example diagnose_timing`.
+
+use std::time::Instant;
+
+use ident::diagnose::torsional::diagnose;
+use ident::Sweep;
+use plant::effects::{DriveEffects, Powertrain};
+use plant::Variant;
+
+fn sweep(set_point: f64, effects: DriveEffects) -> Sweep {
+    let rig = plant::paper::damped_params();
+    let (n, dt) = (60_000, 1e-3);
+    let torque: Vec<f64> = (0..n)
+        .map(|k| {
+            let t = k as f64 * dt;
+            set_point + 8.0 * (2.0 * std::f64::consts::PI * (t + 0.5 * 29.0 / 60.0 * t * t)).sin()
+        })
+        .collect();
+    let truth = Powertrain::new(&rig, Variant::V1, &effects).unwrap();
+    let (w2, w3) = truth.simulate(&torque, dt, set_point).unwrap();
+    Sweep { dt_s: dt, torque_nm: torque, speed_m2_radps: w2, speed_m3_radps: w3 }
+}
+
+fn main() {
+    let rig = plant::paper::damped_params();
+    let cases = [
+        ("40 Nm, dead time", 40.0, DriveEffects { time_delay_s: 0.005, ..Default::default() }),
+        (
+            "0 Nm, dead time (play and friction excitable)",
+            0.0,
+            DriveEffects { time_delay_s: 0.005, ..Default::default() },
+        ),
+        (
+            "5 Nm, dead time + play",
+            5.0,
+            DriveEffects { time_delay_s: 0.005, backlash_rad: 0.003, ..Default::default() },
+        ),
+    ];
+    for (name, set_point, effects) in cases {
+        let s = sweep(set_point, effects);
+        let t0 = Instant::now();
+        let d = diagnose(&s, &rig, Variant::V1, &|_| {}).unwrap();
+        let found: Vec<&str> = d.effects.iter().map(|e| e.effect.as_str()).collect();
+        println!(
+            "{name}: {:.2} s, found {found:?}, error {:.4} → {:.4}",
+            t0.elapsed().as_secs_f64(),
+            d.error_before,
+            d.error_after
+        );
+    }
+}
