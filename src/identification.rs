@@ -133,6 +133,13 @@ pub struct ParametriseReport {
     pub estimate: EstimateReport,
     /// The other model.
     pub other_model: Comparison,
+    /// The extended models fitted when the open differential misses the variants (χ²/dof above
+    /// `ident::parametrise::EXTEND_ABOVE_CHI2_PER_DOF`), lowest χ² first; empty otherwise.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub extensions: Vec<ident::parametrise::ExtendedEstimate>,
+    /// The extension that explains the variants (the first of `extensions`): its j_drive and
+    /// c_short, with its intervals, are then the answer rather than `estimate`'s.
+    pub explained_by: Option<ident::parametrise::Extension>,
     /// Things the user should know.
     pub warnings: Vec<String>,
 }
@@ -254,6 +261,8 @@ pub fn parametrise(
         );
     }
     let e = problem.estimate(&meas, settings)?;
+    let (extensions, explains) = problem.explain(&meas, &e);
+    let explained_by = explains.then(|| extensions[0].extension);
     let mc_ci = e.monte_carlo.as_ref().and_then(|m| m.confidence.clone());
     let (ci, ci_method) = match (&mc_ci, &e.linearised) {
         (Some(c), _) => (Some(c.clone()), "monte_carlo"),
@@ -317,7 +326,41 @@ pub fn parametrise(
         c_short: other_fit.as_ref().map(|f| f.c_short),
         chi2: other_fit.as_ref().map(|f| f.chi2),
     };
-    Ok(ParametriseReport { model, method, measured_hz, measurements, pairs, estimate, other_model, warnings })
+    if let Some(x) = extensions.first().filter(|_| explains) {
+        warnings.push(format!(
+            "the variants are explained by the open differential with {} ({} = {:.4e}; χ² {:.3} → {:.3}): \
+             j_drive = {:.4} kg m^2 {}, c_short = {:.1} Nm/rad {} from that model (linearised 95 % intervals)",
+            match x.extension {
+                ident::parametrise::Extension::SideGears => "its side gears' inertia",
+                ident::parametrise::Extension::Asymmetry => "c_long/c_short fitted",
+            },
+            x.extension.parameter(),
+            x.value,
+            estimate.chi2,
+            x.chi2,
+            x.j_drive,
+            interval(x.j_drive_ci95, 4),
+            x.c_short,
+            interval(x.c_short_ci95, 1)
+        ));
+    } else if !extensions.is_empty() {
+        warnings.push(
+            "no extension (side gears' inertia, an asymmetry) explains the variants better: the misfit stays unexplained"
+                .into(),
+        );
+    }
+    Ok(ParametriseReport {
+        model,
+        method,
+        measured_hz,
+        measurements,
+        pairs,
+        estimate,
+        other_model,
+        extensions,
+        explained_by,
+        warnings,
+    })
 }
 
 fn interval(ci: Option<[f64; 2]>, digits: usize) -> String {
@@ -399,6 +442,23 @@ impl ParametriseReport {
                 "    linearised: j_drive {}, c_short {}",
                 interval(Some(l.j_drive_ci95), 4),
                 interval(Some(l.c_short_ci95), 1)
+            );
+        }
+        for x in &self.extensions {
+            let chosen = if Some(x.extension) == self.explained_by { " ← explains the variants" } else { "" };
+            let _ = writeln!(
+                s,
+                "  extended by {:?}: {} = {:.4e} {}, j_drive = {:.4} kg m^2 {}, c_short = {:.1} Nm/rad {}, χ² = {:.3} (dof {}){chosen}",
+                x.extension,
+                x.extension.parameter(),
+                x.value,
+                interval(x.value_ci95, 6),
+                x.j_drive,
+                interval(x.j_drive_ci95, 4),
+                x.c_short,
+                interval(x.c_short_ci95, 1),
+                x.chi2,
+                x.dof
             );
         }
         let o = &self.other_model;

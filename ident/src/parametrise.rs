@@ -524,6 +524,242 @@ impl Parametrisation {
     }
 }
 
+/// An extension of the open differential for variant sets it cannot explain (χ²/dof ≫ 1): the
+/// ideal differential ties the four variants' shuffle frequencies together, so a misfit of
+/// several σ is structure the model lacks, not noise.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Extension {
+    /// The side gears' inertia J_d2 = J_d3 (eq. (28); section 2.4 drops it): the two side
+    /// shafts are then not exactly in series, and V3 and V4 no longer mirror each other.
+    SideGears,
+    /// c_long/c_short free instead of the declared ratio: the two sides differ by more than
+    /// their shaft lengths say.
+    Asymmetry,
+}
+
+impl Extension {
+    /// Both, in the order they are tried.
+    pub const ALL: [Extension; 2] = [Extension::SideGears, Extension::Asymmetry];
+
+    /// The name of its parameter, with unit.
+    pub fn parameter(self) -> &'static str {
+        match self {
+            Extension::SideGears => "j_side_gear_kg_m2",
+            Extension::Asymmetry => "c_long_over_c_short",
+        }
+    }
+}
+
+/// χ²/dof above which the extensions are fitted: the declared model misses the variants by
+/// more than their uncertainties can explain (χ²/dof = 3 with 2 dof: p ≈ 0.05).
+pub const EXTEND_ABOVE_CHI2_PER_DOF: f64 = 3.0;
+/// An extension explains the variants when it lowers χ² by more than this: the 95 % quantile
+/// of χ² with one degree of freedom (the one parameter it adds).
+pub const EXTENSION_DELTA_CHI2: f64 = 3.84;
+
+/// The fit of an extended model.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ExtendedEstimate {
+    /// The extension.
+    pub extension: Extension,
+    /// Drive inertia J_drive of eq. (28) (the side gears beside it), kg m².
+    pub j_drive: f64,
+    /// Short side-shaft stiffness, Nm/rad.
+    pub c_short: f64,
+    /// Long side-shaft stiffness, Nm/rad.
+    pub c_long: f64,
+    /// The extension's parameter ([`Extension::parameter`]).
+    pub value: f64,
+    /// Σ ((f_model − f_meas)/σ)².
+    pub chi2: f64,
+    /// Degrees of freedom, measurements − 3.
+    pub dof: usize,
+    /// √max(1, χ²/dof) (1 with no degree of freedom).
+    pub sigma_scale: f64,
+    /// Linearised 95 % intervals of j_drive, c_short and the extension's parameter (null when
+    /// the three are not separable at the estimate).
+    pub j_drive_ci95: Option<[f64; 2]>,
+    /// Nm/rad.
+    pub c_short_ci95: Option<[f64; 2]>,
+    /// In the parameter's unit.
+    pub value_ci95: Option<[f64; 2]>,
+    /// Model − measured shuffle frequency per variant, Hz.
+    pub residuals_hz: Vec<(Variant, f64)>,
+}
+
+impl Parametrisation {
+    /// The shuffle frequency of the model with `extension` at `value`, Hz.
+    pub fn extended_shuffle_hz(
+        &self,
+        variant: Variant,
+        j: f64,
+        c: f64,
+        extension: Extension,
+        value: f64,
+    ) -> Option<f64> {
+        if !(j > 0.0 && c > 0.0 && value > 0.0 && j.is_finite() && c.is_finite() && value.is_finite()) {
+            return None;
+        }
+        let m = match extension {
+            Extension::SideGears => self.params(j, c).open_differential_with_side_gears(variant, value).ok()?,
+            Extension::Asymmetry => {
+                RigParams { c_long_ratio: value, ..self.params(j, c) }.open_differential(variant).ok()?
+            }
+        };
+        let modes = m.modes().ok()?;
+        modes.shuffle_mode(&m.layout?).map(|i| modes.frequencies_hz[i])
+    }
+
+    fn extended_residuals(&self, meas: &[Measurement], ext: Extension, theta: &[f64]) -> DVector<f64> {
+        let (j, c, v) = (theta[0].exp(), theta[1].exp(), theta[2].exp());
+        DVector::from_iterator(
+            meas.len(),
+            meas.iter().map(|m| match self.extended_shuffle_hz(m.variant, j, c, ext, v) {
+                Some(f) => (f - m.frequency_hz) / m.sigma_hz,
+                None => 1e6,
+            }),
+        )
+    }
+
+    fn extended_jacobian(&self, meas: &[Measurement], ext: Extension, theta: &[f64]) -> DMatrix<f64> {
+        let h = 1e-6;
+        let cols: Vec<DVector<f64>> = (0..3)
+            .map(|i| {
+                let (mut tp, mut tm) = (theta.to_vec(), theta.to_vec());
+                tp[i] += h;
+                tm[i] -= h;
+                (self.extended_residuals(meas, ext, &tp) - self.extended_residuals(meas, ext, &tm)) / (2.0 * h)
+            })
+            .collect();
+        DMatrix::from_columns(&cols)
+    }
+
+    /// Levenberg–Marquardt on (ln j, ln c, ln value) from `start`; (θ, χ²).
+    fn extended_from(&self, meas: &[Measurement], ext: Extension, start: [f64; 3]) -> Option<(Vec<f64>, f64)> {
+        let mut theta: Vec<f64> = start.iter().map(|v| v.ln()).collect();
+        let mut r = self.extended_residuals(meas, ext, &theta);
+        let mut cost = r.norm_squared();
+        let mut lambda = 1e-3;
+        for _ in 0..200 {
+            let jac = self.extended_jacobian(meas, ext, &theta);
+            let jtj = jac.transpose() * &jac;
+            let g = jac.transpose() * &r;
+            let mut accepted = false;
+            for _ in 0..40 {
+                let mut m = jtj.clone();
+                for i in 0..3 {
+                    m[(i, i)] = jtj[(i, i)] * (1.0 + lambda) + 1e-12;
+                }
+                let Some(step) = m.lu().solve(&(-&g)) else {
+                    lambda *= 10.0;
+                    continue;
+                };
+                // at most a factor e per iteration
+                let step = &step * (1.0f64).min(1.0 / step.amax().max(1e-300));
+                let trial: Vec<f64> = theta.iter().zip(step.iter()).map(|(a, b)| a + b).collect();
+                let rt = self.extended_residuals(meas, ext, &trial);
+                let ct = rt.norm_squared();
+                if ct < cost {
+                    let small = (cost - ct) <= 1e-10 * cost.max(1e-300) || step.amax() < 1e-9;
+                    theta = trial;
+                    r = rt;
+                    cost = ct;
+                    lambda = (lambda / 3.0).max(1e-15);
+                    accepted = true;
+                    if small {
+                        return Some((theta, cost));
+                    }
+                    break;
+                }
+                lambda *= 4.0;
+            }
+            if !accepted {
+                break;
+            }
+        }
+        (cost.is_finite() && cost < 1e11).then_some((theta, cost))
+    }
+
+    /// The least-squares fit of the model with `extension`, from the declared model's estimate
+    /// `(j, c)` and a few values of the extension's parameter, with linearised intervals
+    /// (widened by √(χ²/dof) as the declared model's are). None where no start converges.
+    pub fn estimate_extended(
+        &self,
+        meas: &[Measurement],
+        extension: Extension,
+        j: f64,
+        c: f64,
+    ) -> Option<ExtendedEstimate> {
+        let values: Vec<f64> = match extension {
+            // a few g m² on a drive of some 0.5 kg m²: 0.05 % to 5 % of j_drive each
+            Extension::SideGears => [5e-4, 2e-3, 6e-3, 2e-2, 5e-2].iter().map(|f| f * j).collect(),
+            Extension::Asymmetry => [0.7, 1.0, 1.4].iter().map(|f| f * self.ratio).collect(),
+        };
+        let (theta, chi2) = values
+            .into_iter()
+            .filter_map(|v| self.extended_from(meas, extension, [j, c, v]))
+            .min_by(|a, b| a.1.total_cmp(&b.1))?;
+        let p: Vec<f64> = theta.iter().map(|t| t.exp()).collect();
+        let dof = meas.len().saturating_sub(3);
+        let scale = if dof > 0 { (chi2 / dof as f64).max(1.0) } else { 1.0 };
+        let jac_log = self.extended_jacobian(meas, extension, &theta);
+        let jac = DMatrix::from_fn(meas.len(), 3, |i, k| jac_log[(i, k)] / p[k]);
+        let cov = (jac.transpose() * &jac)
+            .try_inverse()
+            .map(|m| m * scale)
+            .filter(|m| m.iter().all(|v| v.is_finite()) && (0..3).all(|i| m[(i, i)] > 0.0));
+        let ci = |k: usize| cov.as_ref().map(|m| [p[k] - 1.96 * m[(k, k)].sqrt(), p[k] + 1.96 * m[(k, k)].sqrt()]);
+        let c_long = match extension {
+            Extension::SideGears => self.ratio * p[1],
+            Extension::Asymmetry => p[2] * p[1],
+        };
+        let residuals_hz = meas
+            .iter()
+            .map(|m| {
+                let f = self.extended_shuffle_hz(m.variant, p[0], p[1], extension, p[2]);
+                (m.variant, f.map(|f| f - m.frequency_hz).unwrap_or(f64::NAN))
+            })
+            .collect();
+        Some(ExtendedEstimate {
+            extension,
+            j_drive: p[0],
+            c_short: p[1],
+            c_long,
+            value: p[2],
+            chi2,
+            dof,
+            sigma_scale: scale.sqrt(),
+            j_drive_ci95: ci(0),
+            c_short_ci95: ci(1),
+            value_ci95: ci(2),
+            residuals_hz,
+        })
+    }
+
+    /// When the declared model's `base` fit misses the variants (χ²/dof above
+    /// [`EXTEND_ABOVE_CHI2_PER_DOF`]), every [`Extension`] fitted; the one that explains them
+    /// (χ² lower by more than [`EXTENSION_DELTA_CHI2`], the lowest χ²) is the first returned,
+    /// `true` beside it. Empty when the declared model explains the variants, or with fewer
+    /// than four measurements (an extension needs a degree of freedom left).
+    pub fn explain(&self, meas: &[Measurement], base: &Estimate) -> (Vec<ExtendedEstimate>, bool) {
+        if self.model != ModelChoice::Differential
+            || meas.len() < 4
+            || base.dof == 0
+            || base.chi2 / (base.dof as f64) <= EXTEND_ABOVE_CHI2_PER_DOF
+        {
+            return (Vec::new(), false);
+        }
+        let mut fits: Vec<ExtendedEstimate> = Extension::ALL
+            .iter()
+            .filter_map(|&e| self.estimate_extended(meas, e, base.j_drive, base.c_short))
+            .collect();
+        fits.sort_by(|a, b| a.chi2.total_cmp(&b.chi2));
+        let explains = fits.first().is_some_and(|f| f.chi2 < base.chi2 - EXTENSION_DELTA_CHI2);
+        (fits, explains)
+    }
+}
+
 fn percentiles(v: &mut [f64]) -> [f64; 2] {
     v.sort_by(|a, b| a.total_cmp(b));
     let q = |p: f64| {

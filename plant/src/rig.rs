@@ -228,6 +228,41 @@ impl RigParams {
         Ok(three_dof(&e, springs))
     }
 
+    /// The open differential with its side gears' inertia `j_side` each: eq. (28) with
+    /// J_d2 = J_d3 = `j_side`, before section 2.4 drops them. Coordinates q = [φ_m2, φ_drive,
+    /// φ_d3, φ_m3] with φ_d2 = 2φ_drive − φ_d3 (eq. (27)), so J = [[J_m2, 0, 0, 0], [0,
+    /// J_drive + 4J_s, −2J_s, 0], [0, −2J_s, 2J_s, 0], [0, 0, 0, J_m3]], the short shaft on
+    /// 2φ_drive − φ_d3 − φ_m2, the long one on φ_d3 − φ_m3; `j_side` → 0 is
+    /// [`RigParams::open_differential`].
+    pub fn open_differential_with_side_gears(&self, variant: Variant, j_side: f64) -> Result<MechanicalModel> {
+        let e = self.effective(variant)?;
+        positive(|| "j_side_gear", j_side, "kg m^2")?;
+        let j_c = e.j_drive;
+        let mut inertia = DMatrix::zeros(4, 4);
+        inertia[(0, 0)] = e.j_m2;
+        inertia[(1, 1)] = j_c + 4.0 * j_side;
+        inertia[(1, 2)] = -2.0 * j_side;
+        inertia[(2, 1)] = -2.0 * j_side;
+        inertia[(2, 2)] = 2.0 * j_side;
+        inertia[(3, 3)] = e.j_m3;
+        let spring4 = |name: &str, el: [f64; 4], c: f64, d: f64| Spring {
+            name: name.into(),
+            elongation: DVector::from_row_slice(&el),
+            stiffness: c,
+            damping: d,
+        };
+        Ok(MechanicalModel {
+            dof_names: vec!["m2".into(), "drive".into(), "side_gear_m3".into(), "m3".into()],
+            inertia,
+            springs: vec![
+                spring4("short side shaft", [-1.0, 2.0, -1.0, 0.0], e.c_left, e.d_left),
+                spring4("long side shaft", [0.0, 0.0, 1.0, -1.0], e.c_right, e.d_right),
+            ],
+            drag: DVector::from_vec(vec![e.load_drag, 0.0, 0.0, e.load_drag]),
+            layout: Some(Layout { m2: 0, drive: Some(1), m3: 3, short_shaft: (0, 1), long_shaft: (2, 3) }),
+        })
+    }
+
     /// A copy whose side-shaft dampings give the open differential's shuffle mode of `variant`
     /// the damping ratio `zeta` (the "slight generic damping" of section 4.3). The dampings are
     /// stiffness-proportional, d = β c with β = 2ζ/ω_shuffle, so the shuffle mode stays a
@@ -445,6 +480,29 @@ impl Rig {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Side gears of vanishing inertia give the reduced open differential's frequencies (the
+    /// fourth mode, the side gears against each other, goes to infinity); the rigid motion's
+    /// inertia is the cage's and both side gears'.
+    #[test]
+    fn side_gears_vanish_into_the_open_differential() {
+        let rig = crate::paper::damped_params();
+        for variant in Variant::ALL {
+            let reduced = rig.open_differential(variant).unwrap().modes().unwrap().frequencies_hz;
+            let with = rig.open_differential_with_side_gears(variant, 1e-9).unwrap().modes().unwrap().frequencies_hz;
+            for k in 0..3 {
+                assert!((reduced[k] - with[k]).abs() <= 1e-6 * reduced[2], "{variant}: {reduced:?} vs {with:?}");
+            }
+            assert!(with[3] > 100.0 * reduced[2]);
+            // the rigid motion carries both side gears beside the cage
+            let m = rig.open_differential_with_side_gears(variant, 0.01).unwrap();
+            let ones = DVector::from_element(4, 1.0);
+            let e = rig.effective(variant).unwrap();
+            let total = (ones.transpose() * &m.inertia * &ones)[(0, 0)];
+            assert!((total - (e.j_m2 + e.j_drive + 0.02 + e.j_m3)).abs() < 1e-12);
+        }
+        assert!(rig.open_differential_with_side_gears(Variant::V1, 0.0).is_err());
+    }
     use approx::assert_relative_eq;
     use std::f64::consts::PI;
 
