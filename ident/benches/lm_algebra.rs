@@ -1,0 +1,86 @@
+//! The dense algebra of one Levenberg–Marquardt iteration of a 60 s, 1 kHz diagnosis (issue 15,
+//! item 6): a Jacobian of 120 000 residuals (two speeds) × p parameters (p = 5: j_drive, c_short
+//! and two effects' three parameters) and the step from it. Four ways, side by side:
+//! - `loops_f32`: what `ident::diagnose::lm` does — columns kept in f32 (half the memory),
+//!   JᵀJ and Jᵀr summed in f64 by plain loops, the p × p system by nalgebra's LU;
+//! - `nalgebra_normal`: an f64 DMatrix J, `J.tr_mul(&J)`, `J.tr_mul(&r)`, LU;
+//! - `faer_normal`: a faer Mat J, `Jᵀ * J`, `Jᵀ * r`, LU of the small system;
+//! - `faer_qr` / `nalgebra_qr`: least squares by QR of the tall J (no normal equations).
+//! `cargo bench -p ident --bench lm_algebra`.
+
+use std::hint::black_box;
+
+use criterion::{criterion_group, criterion_main, Criterion};
+use faer::linalg::solvers::{Solve, SolveLstsqCore};
+use nalgebra::{DMatrix, DVector};
+
+const ROWS: usize = 120_000;
+const P: usize = 5;
+
+fn column(j: usize) -> Vec<f64> {
+    (0..ROWS)
+        .map(|k| ((k as f64 * 0.001 * (j + 1) as f64).sin() + 0.1 * (k % (7 + j)) as f64) / (j + 1) as f64)
+        .collect()
+}
+
+fn bench(c: &mut Criterion) {
+    let cols: Vec<Vec<f64>> = (0..P).map(column).collect();
+    let r: Vec<f64> = (0..ROWS).map(|k| (k as f64 * 0.0037).cos()).collect();
+    let cols32: Vec<Vec<f32>> = cols.iter().map(|c| c.iter().map(|&v| v as f32).collect()).collect();
+    let jn = DMatrix::from_fn(ROWS, P, |i, j| cols[j][i]);
+    let rn = DVector::from_column_slice(&r);
+    let jf = faer::Mat::<f64>::from_fn(ROWS, P, |i, j| cols[j][i]);
+    let rf = faer::Mat::<f64>::from_fn(ROWS, 1, |i, _| r[i]);
+    let mut g = c.benchmark_group("lm_step_120000x5");
+    g.bench_function("loops_f32", |b| {
+        b.iter(|| {
+            let mut jtj = DMatrix::<f64>::zeros(P, P);
+            let mut grad = DVector::<f64>::zeros(P);
+            for j in 0..P {
+                grad[j] = cols32[j].iter().zip(&r).map(|(a, b)| *a as f64 * b).sum::<f64>();
+                for k in 0..=j {
+                    let v = cols32[j].iter().zip(&cols32[k]).map(|(a, b)| *a as f64 * *b as f64).sum::<f64>();
+                    jtj[(j, k)] = v;
+                    jtj[(k, j)] = v;
+                }
+            }
+            black_box(jtj.lu().solve(&grad))
+        })
+    });
+    g.bench_function("nalgebra_normal", |b| {
+        b.iter(|| {
+            let jtj = jn.tr_mul(&jn);
+            let grad = jn.tr_mul(&rn);
+            black_box(jtj.lu().solve(&grad))
+        })
+    });
+    g.bench_function("faer_normal", |b| {
+        b.iter(|| {
+            let jtj = jf.transpose() * &jf;
+            let grad = jf.transpose() * &rf;
+            black_box(jtj.partial_piv_lu().solve(&grad))
+        })
+    });
+    g.bench_function("nalgebra_qr", |b| {
+        b.iter(|| {
+            let qr = jn.clone().qr();
+            let qtr = qr.q().tr_mul(&rn);
+            black_box(qr.r().solve_upper_triangular(&qtr))
+        })
+    });
+    g.bench_function("faer_qr", |b| {
+        b.iter(|| {
+            let mut x = rf.clone();
+            jf.qr().solve_lstsq_in_place_with_conj(faer::Conj::No, x.as_mut());
+            black_box(x)
+        })
+    });
+    g.finish();
+}
+
+criterion_group! {
+    name = benches;
+    config = Criterion::default().sample_size(20).measurement_time(std::time::Duration::from_secs(3));
+    targets = bench
+}
+criterion_main!(benches);
