@@ -422,6 +422,10 @@ pub const BACKLASH_MAX_RAD: f64 = 0.05;
 /// Ratio of neighbouring plays of the profile (10 % apart: a basin of the error over the play
 /// is wider than that wherever contact switching shows in the data).
 pub const BACKLASH_GRID_RATIO: f64 = 1.1;
+/// The play's profile beside effects found before is also taken from the declared j_drive and
+/// c_short when theirs moved by more than this (ln): 1 %, far beyond what a profile point
+/// resolves.
+pub const PROFILE_BENT_LN: f64 = 0.01;
 /// The profile's best points (in distinct basins) refined by the full fit.
 pub const BACKLASH_REFINED: usize = 2;
 
@@ -439,8 +443,13 @@ pub const PLAUSIBLE_REFIT_FACTOR: f64 = 1.3;
 /// Most effects the forward selection adds.
 pub const MAX_EFFECTS: usize = 3;
 
-/// Levenberg–Marquardt iterations of a fit.
+/// Levenberg–Marquardt iterations of a fit (the re-fitted declared model, the polish of an
+/// accepted model, the leave-one-out checks).
 pub const LM_ITERATIONS: usize = 12;
+/// Levenberg–Marquardt iterations of a candidate's fit in a round of the selection: enough to
+/// rank the candidates (their starts come from a grid); the accepted one is then polished with
+/// [`LM_ITERATIONS`].
+pub const SCREEN_ITERATIONS: usize = 6;
 
 /// A found effect.
 #[derive(Debug, Clone, Serialize)]
@@ -572,9 +581,9 @@ pub fn diagnose(
         _ => true,
     };
 
-    let fit_with = |effects: Vec<Candidate>, x0: Vec<f64>| -> Fit {
+    let fit_with = |effects: Vec<Candidate>, x0: Vec<f64>, iterations: usize| -> Fit {
         let f = |x: &[f64]| problem.residual(&problem.build(&effects, x));
-        let (x, cost) = lm::minimise(&f, &x0, LM_ITERATIONS);
+        let (x, cost) = lm::minimise(&f, &x0, iterations);
         let k = x.len();
         Fit { effects, x, cost, score: score(cost, k) }
     };
@@ -589,7 +598,8 @@ pub fn diagnose(
         // very effect); the play's profile beside an effect also from the declared j_drive and
         // c_short (the effects found may have bent them to imitate the play)
         let mut bases: Vec<Vec<f64>> = Vec::new();
-        if base.effects.is_empty() || c == Candidate::Backlash {
+        let bent = base.x[..2].iter().any(|v| v.abs() > PROFILE_BENT_LN);
+        if base.effects.is_empty() || (c == Candidate::Backlash && bent) {
             let mut x = base.x.clone();
             x[..2].fill(0.0);
             bases.push(x);
@@ -598,14 +608,17 @@ pub fn diagnose(
             bases.push(base.x.clone());
         }
         let starts = c.starts(&problem, shuffle_hz);
-        let grid: Vec<(Vec<f64>, f64)> = bases
-            .iter()
-            .flat_map(|b| starts.iter().map(move |s| [b.as_slice(), s].concat()))
-            .map(|x| {
-                let cost = f(&x).map_or(f64::INFINITY, |r| r.iter().map(|v| v * v).sum::<f64>());
-                (x, cost)
-            })
-            .collect();
+        let points: Vec<Vec<f64>> =
+            bases.iter().flat_map(|b| starts.iter().map(move |s| [b.as_slice(), s].concat())).collect();
+        // a long grid (the play's profile) is shared by both workers: the cheap linear
+        // candidates are done long before it
+        let cost_at = |i: usize| f(&points[i]).map_or(f64::INFINITY, |r| r.iter().map(|v| v * v).sum::<f64>());
+        let costs: Vec<f64> = if points.len() > 20 {
+            super::on_two_workers(points.len(), &cost_at)
+        } else {
+            (0..points.len()).map(cost_at).collect()
+        };
+        let grid: Vec<(Vec<f64>, f64)> = points.into_iter().zip(costs).collect();
         let mut best: Vec<usize> = if c == Candidate::Backlash {
             // local minima of each profile, best first
             let len = starts.len();
@@ -628,8 +641,10 @@ pub fn diagnose(
                 .collect()
         };
         best.dedup();
-        let fits = best.into_iter().map(|i| fit_with(effects.clone(), grid[i].0.clone()));
-        fits.min_by(|a, b| a.cost.total_cmp(&b.cost)).unwrap_or(Fit {
+        let fits = super::on_two_workers(best.len(), &|k| {
+            fit_with(effects.clone(), grid[best[k]].0.clone(), SCREEN_ITERATIONS)
+        });
+        fits.into_iter().min_by(|a, b| a.cost.total_cmp(&b.cost)).unwrap_or(Fit {
             effects,
             x: Vec::new(),
             cost: f64::INFINITY,
@@ -638,7 +653,7 @@ pub fn diagnose(
     };
 
     // the declared model re-fitted: `none`
-    let none = fit_with(Vec::new(), vec![0.0, 0.0]);
+    let none = fit_with(Vec::new(), vec![0.0, 0.0], LM_ITERATIONS);
     if !none.cost.is_finite() {
         return Err(IdentError::Data("re-fitting the declared model failed".into()));
     }
@@ -686,7 +701,7 @@ pub fn diagnose(
                 let mut restart = b.x.clone();
                 restart[..2].fill(0.0);
                 let polished = super::on_two_workers(2, &|i| {
-                    fit_with(b.effects.clone(), if i == 0 { b.x.clone() } else { restart.clone() })
+                    fit_with(b.effects.clone(), if i == 0 { b.x.clone() } else { restart.clone() }, LM_ITERATIONS)
                 });
                 current = polished
                     .into_iter()
@@ -718,7 +733,7 @@ pub fn diagnose(
                     }
                     at += c.own_len();
                 }
-                fit_with(effects, x)
+                fit_with(effects, x, LM_ITERATIONS)
             })
             .collect();
         let weakest = without
