@@ -132,6 +132,9 @@ pub struct Powertrain {
     /// Non-zero entries (i, j, k0_ij, d0_ij) of k0 and d0.
     couplings: Vec<(usize, usize, f64, f64)>,
     input_dof: usize,
+    /// 1/J per coordinate, and whether any machine has friction (the right-hand side's hot path).
+    inv_inertia: Vec<f64>,
+    friction: bool,
     /// The effects.
     pub effects: DriveEffects,
 }
@@ -177,7 +180,22 @@ impl Powertrain {
         let d_shaft = [e.d_left * share_l, e.d_right * share_r];
         let couplings =
             (0..n * n).filter(|&m| k0[m] != 0.0 || d0[m] != 0.0).map(|m| (m / n, m % n, k0[m], d0[m])).collect();
-        Ok(Powertrain { inertia, k0, d0, a, c_s, d_s, d_shaft, couplings, input_dof, effects: *effects })
+        let inv_inertia = inertia.iter().map(|j| 1.0 / j).collect();
+        let friction = effects.coulomb_friction_nm.iter().any(|&f| f > 0.0);
+        Ok(Powertrain {
+            inertia,
+            k0,
+            d0,
+            a,
+            c_s,
+            d_s,
+            d_shaft,
+            couplings,
+            input_dof,
+            inv_inertia,
+            friction,
+            effects: *effects,
+        })
     }
 
     /// Degrees of freedom: 3, or 4 with a compliance (φ_motor last).
@@ -461,15 +479,17 @@ impl Powertrain {
         f[2] += torques[2];
         f[self.input_dof] += drive;
         // Coulomb friction of the machines, smoothed: T_c w/√(w² + v_s²)
-        let vs2 = self.effects.friction_smoothing_radps.powi(2);
-        for (k, &tc) in self.effects.coulomb_friction_nm.iter().enumerate() {
-            if tc > 0.0 {
-                let i = [0, self.input_dof, 2][k];
-                f[i] -= tc * w[i] / (w[i] * w[i] + vs2).sqrt();
+        if self.friction {
+            let vs2 = self.effects.friction_smoothing_radps.powi(2);
+            for (k, &tc) in self.effects.coulomb_friction_nm.iter().enumerate() {
+                if tc > 0.0 {
+                    let i = [0, self.input_dof, 2][k];
+                    f[i] -= tc * w[i] / (w[i] * w[i] + vs2).sqrt();
+                }
             }
         }
         for i in 0..n {
-            dx[n + i] = f[i] / self.inertia[i];
+            dx[n + i] = f[i] * self.inv_inertia[i];
         }
         if lagged {
             dx[2 * n] = (torques[1] - x[2 * n]) / self.effects.actuator_lag_s;
