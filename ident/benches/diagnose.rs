@@ -3,28 +3,15 @@
 //! crosses zero, so the play is profiled too), about 0 Nm (play and friction excitable), and a
 //! dead time with side-shaft play about 5 Nm (a two-effect search).
 
+#[path = "../examples/common/sweep.rs"]
+mod common;
+use common::sweep;
 use std::time::Duration;
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use ident::diagnose::torsional::diagnose;
-use ident::Sweep;
-use plant::effects::{DriveEffects, Powertrain};
+use plant::effects::DriveEffects;
 use plant::Variant;
-
-fn sweep(set_point: f64, effects: DriveEffects) -> Sweep {
-    let rig = plant::paper::damped_params();
-    let n = 60_000;
-    let dt = 1e-3;
-    let torque: Vec<f64> = (0..n)
-        .map(|k| {
-            let t = k as f64 * dt;
-            set_point + 8.0 * (2.0 * std::f64::consts::PI * (t + 0.5 * 29.0 / 60.0 * t * t)).sin()
-        })
-        .collect();
-    let truth = Powertrain::new(&rig, Variant::V1, &effects).unwrap();
-    let (w2, w3) = truth.simulate(&torque, dt, set_point).unwrap();
-    Sweep { dt_s: dt, torque_nm: torque, speed_m2_radps: w2, speed_m3_radps: w3 }
-}
 
 fn bench(c: &mut Criterion) {
     let rig = plant::paper::damped_params();

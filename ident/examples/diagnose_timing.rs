@@ -2,26 +2,14 @@
 //! `cargo bench -p ident --bench diagnose` repeats them): `cargo run --release -p ident
 //! --example diagnose_timing`.
 
+#[path = "common/sweep.rs"]
+mod common;
+use common::sweep;
 use std::time::Instant;
 
 use ident::diagnose::torsional::diagnose;
-use ident::Sweep;
-use plant::effects::{DriveEffects, Powertrain};
+use plant::effects::DriveEffects;
 use plant::Variant;
-
-fn sweep(set_point: f64, effects: DriveEffects) -> Sweep {
-    let rig = plant::paper::damped_params();
-    let (n, dt) = (60_000, 1e-3);
-    let torque: Vec<f64> = (0..n)
-        .map(|k| {
-            let t = k as f64 * dt;
-            set_point + 8.0 * (2.0 * std::f64::consts::PI * (t + 0.5 * 29.0 / 60.0 * t * t)).sin()
-        })
-        .collect();
-    let truth = Powertrain::new(&rig, Variant::V1, &effects).unwrap();
-    let (w2, w3) = truth.simulate(&torque, dt, set_point).unwrap();
-    Sweep { dt_s: dt, torque_nm: torque, speed_m2_radps: w2, speed_m3_radps: w3 }
-}
 
 fn main() {
     let rig = plant::paper::damped_params();

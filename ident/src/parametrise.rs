@@ -14,7 +14,7 @@
 //! frequency uncertainty, which also counts how often a plausible measurement has no solution at
 //! all — the honest answer for an ill-conditioned rig.
 
-use nalgebra::{DMatrix, DVector, Matrix2, Vector2};
+use nalgebra::{DMatrix, DVector, Vector2};
 use rand::rngs::StdRng;
 use rand::SeedableRng;
 use rand_distr::{Distribution, StandardNormal};
@@ -325,68 +325,16 @@ impl Parametrisation {
     }
 
     fn jacobian(&self, meas: &[Measurement], theta: &Vector2<f64>) -> DMatrix<f64> {
-        let h = 1e-6;
-        let cols: Vec<DVector<f64>> = (0..2)
-            .map(|i| {
-                let mut tp = *theta;
-                let mut tm = *theta;
-                tp[i] += h;
-                tm[i] -= h;
-                (self.residuals(meas, &tp) - self.residuals(meas, &tm)) / (2.0 * h)
-            })
-            .collect();
-        DMatrix::from_columns(&cols)
+        central_jacobian(&|t| self.residuals(meas, &Vector2::new(t[0], t[1])), theta.as_slice())
     }
 
     /// Levenberg–Marquardt on (ln j, ln c) from `start`; returns (j, c, χ²).
     fn least_squares_from(&self, meas: &[Measurement], start: (f64, f64)) -> Option<(f64, f64, f64)> {
-        let mut theta = Vector2::new(start.0.ln(), start.1.ln());
-        let mut r = self.residuals(meas, &theta);
-        let mut cost = r.norm_squared();
-        let mut lambda = 1e-3;
-        for _ in 0..200 {
-            let jac = self.jacobian(meas, &theta);
-            let jtj = jac.transpose() * &jac;
-            let g = jac.transpose() * &r;
-            let mut accepted = false;
-            for _ in 0..40 {
-                let m = Matrix2::new(
-                    jtj[(0, 0)] * (1.0 + lambda) + 1e-12,
-                    jtj[(0, 1)],
-                    jtj[(1, 0)],
-                    jtj[(1, 1)] * (1.0 + lambda) + 1e-12,
-                );
-                let Some(inv) = m.try_inverse() else {
-                    lambda *= 10.0;
-                    continue;
-                };
-                let step = -(inv * Vector2::new(g[0], g[1]));
-                // keep steps moderate: at most a factor e per iteration
-                let step = step * (1.0f64).min(1.0 / step.amax().max(1e-300));
-                let trial = theta + step;
-                let rt = self.residuals(meas, &trial);
-                let ct = rt.norm_squared();
-                if ct < cost {
-                    // converged when the cost stalls (relative 1e-10) or the step is below
-                    // 1e-9 in ln j, ln c — a relative change far under any uncertainty
-                    let small = (cost - ct) <= 1e-10 * cost.max(1e-300) || step.amax() < 1e-9;
-                    theta = trial;
-                    r = rt;
-                    cost = ct;
-                    lambda = (lambda / 3.0).max(1e-15);
-                    accepted = true;
-                    if small {
-                        return Some((theta[0].exp(), theta[1].exp(), cost));
-                    }
-                    break;
-                }
-                lambda *= 4.0;
-            }
-            if !accepted {
-                break;
-            }
-        }
-        cost.is_finite().then(|| (theta[0].exp(), theta[1].exp(), cost))
+        let (theta, cost) = levenberg_marquardt(
+            &|t| self.residuals(meas, &Vector2::new(t[0], t[1])),
+            vec![start.0.ln(), start.1.ln()],
+        )?;
+        Some((theta[0].exp(), theta[1].exp(), cost))
     }
 
     /// The best least-squares solution over several starts.
@@ -623,62 +571,13 @@ impl Parametrisation {
     }
 
     fn extended_jacobian(&self, meas: &[Measurement], ext: Extension, theta: &[f64]) -> DMatrix<f64> {
-        let h = 1e-6;
-        let cols: Vec<DVector<f64>> = (0..3)
-            .map(|i| {
-                let (mut tp, mut tm) = (theta.to_vec(), theta.to_vec());
-                tp[i] += h;
-                tm[i] -= h;
-                (self.extended_residuals(meas, ext, &tp) - self.extended_residuals(meas, ext, &tm)) / (2.0 * h)
-            })
-            .collect();
-        DMatrix::from_columns(&cols)
+        central_jacobian(&|t| self.extended_residuals(meas, ext, t), theta)
     }
 
     /// Levenberg–Marquardt on (ln j, ln c, ln value) from `start`; (θ, χ²).
     fn extended_from(&self, meas: &[Measurement], ext: Extension, start: [f64; 3]) -> Option<(Vec<f64>, f64)> {
-        let mut theta: Vec<f64> = start.iter().map(|v| v.ln()).collect();
-        let mut r = self.extended_residuals(meas, ext, &theta);
-        let mut cost = r.norm_squared();
-        let mut lambda = 1e-3;
-        for _ in 0..200 {
-            let jac = self.extended_jacobian(meas, ext, &theta);
-            let jtj = jac.transpose() * &jac;
-            let g = jac.transpose() * &r;
-            let mut accepted = false;
-            for _ in 0..40 {
-                let mut m = jtj.clone();
-                for i in 0..3 {
-                    m[(i, i)] = jtj[(i, i)] * (1.0 + lambda) + 1e-12;
-                }
-                let Some(step) = m.lu().solve(&(-&g)) else {
-                    lambda *= 10.0;
-                    continue;
-                };
-                // at most a factor e per iteration
-                let step = &step * (1.0f64).min(1.0 / step.amax().max(1e-300));
-                let trial: Vec<f64> = theta.iter().zip(step.iter()).map(|(a, b)| a + b).collect();
-                let rt = self.extended_residuals(meas, ext, &trial);
-                let ct = rt.norm_squared();
-                if ct < cost {
-                    let small = (cost - ct) <= 1e-10 * cost.max(1e-300) || step.amax() < 1e-9;
-                    theta = trial;
-                    r = rt;
-                    cost = ct;
-                    lambda = (lambda / 3.0).max(1e-15);
-                    accepted = true;
-                    if small {
-                        return Some((theta, cost));
-                    }
-                    break;
-                }
-                lambda *= 4.0;
-            }
-            if !accepted {
-                break;
-            }
-        }
-        (cost.is_finite() && cost < 1e11).then_some((theta, cost))
+        levenberg_marquardt(&|t| self.extended_residuals(meas, ext, t), start.iter().map(|v| v.ln()).collect())
+            .filter(|f| f.1 < 1e11)
     }
 
     /// The least-squares fit of the model with `extension`, from the declared model's estimate
@@ -758,6 +657,70 @@ impl Parametrisation {
         let explains = fits.first().is_some_and(|f| f.chi2 < base.chi2 - EXTENSION_DELTA_CHI2);
         (fits, explains)
     }
+}
+
+/// Central differences (step 1e-6 in the log parameters) of the residuals at `theta`.
+fn central_jacobian(residuals: &dyn Fn(&[f64]) -> DVector<f64>, theta: &[f64]) -> DMatrix<f64> {
+    let h = 1e-6;
+    let cols: Vec<DVector<f64>> = (0..theta.len())
+        .map(|i| {
+            let (mut tp, mut tm) = (theta.to_vec(), theta.to_vec());
+            tp[i] += h;
+            tm[i] -= h;
+            (residuals(&tp) - residuals(&tm)) / (2.0 * h)
+        })
+        .collect();
+    DMatrix::from_columns(&cols)
+}
+
+/// Levenberg–Marquardt on the log parameters `theta` (the frequencies' fits: a handful of
+/// residuals, so central differences and at most 200 iterations); (θ, χ²), None where the
+/// cost is not finite.
+fn levenberg_marquardt(residuals: &dyn Fn(&[f64]) -> DVector<f64>, mut theta: Vec<f64>) -> Option<(Vec<f64>, f64)> {
+    let p = theta.len();
+    let mut r = residuals(&theta);
+    let mut cost = r.norm_squared();
+    let mut lambda = 1e-3;
+    for _ in 0..200 {
+        let jac = central_jacobian(residuals, &theta);
+        let jtj = jac.transpose() * &jac;
+        let g = jac.transpose() * &r;
+        let mut accepted = false;
+        for _ in 0..40 {
+            let mut m = jtj.clone();
+            for i in 0..p {
+                m[(i, i)] = jtj[(i, i)] * (1.0 + lambda) + 1e-12;
+            }
+            let Some(step) = m.lu().solve(&(-&g)) else {
+                lambda *= 10.0;
+                continue;
+            };
+            // keep steps moderate: at most a factor e per iteration
+            let step = &step * (1.0f64).min(1.0 / step.amax().max(1e-300));
+            let trial: Vec<f64> = theta.iter().zip(step.iter()).map(|(a, b)| a + b).collect();
+            let rt = residuals(&trial);
+            let ct = rt.norm_squared();
+            if ct < cost {
+                // converged when the cost stalls (relative 1e-10) or the step is below 1e-9 in
+                // the log parameters — a relative change far under any uncertainty
+                let small = (cost - ct) <= 1e-10 * cost.max(1e-300) || step.amax() < 1e-9;
+                theta = trial;
+                r = rt;
+                cost = ct;
+                lambda = (lambda / 3.0).max(1e-15);
+                accepted = true;
+                if small {
+                    return Some((theta, cost));
+                }
+                break;
+            }
+            lambda *= 4.0;
+        }
+        if !accepted {
+            break;
+        }
+    }
+    cost.is_finite().then_some((theta, cost))
 }
 
 fn percentiles(v: &mut [f64]) -> [f64; 2] {

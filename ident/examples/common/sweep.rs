@@ -1,0 +1,21 @@
+//! The 60 s, 1 kHz sweep (1 → 30 Hz, ±8 Nm about a set point) of the paper's rig with drive
+//! effects that the diagnosis timing example and the criterion bench diagnose.
+
+use ident::Sweep;
+use plant::effects::{DriveEffects, Powertrain};
+use plant::Variant;
+
+/// The sweep of the damped paper rig (V1) with `effects` about `set_point` Nm.
+pub fn sweep(set_point: f64, effects: DriveEffects) -> Sweep {
+    let rig = plant::paper::damped_params();
+    let (n, dt) = (60_000, 1e-3);
+    let torque: Vec<f64> = (0..n)
+        .map(|k| {
+            let t = k as f64 * dt;
+            set_point + 8.0 * (2.0 * std::f64::consts::PI * (t + 0.5 * 29.0 / 60.0 * t * t)).sin()
+        })
+        .collect();
+    let truth = Powertrain::new(&rig, Variant::V1, &effects).expect("the paper rig with these effects");
+    let (w2, w3) = truth.simulate(&torque, dt, set_point).expect("the sweep simulates");
+    Sweep { dt_s: dt, torque_nm: torque, speed_m2_radps: w2, speed_m3_radps: w3 }
+}
