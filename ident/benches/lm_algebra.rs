@@ -6,7 +6,8 @@
 //! - `nalgebra_normal`: an f64 DMatrix J, `J.tr_mul(&J)`, `J.tr_mul(&r)`, LU;
 //! - `faer_normal`: a faer Mat J, `Jᵀ * J`, `Jᵀ * r`, LU of the small system;
 //! - `faer_qr` / `nalgebra_qr`: least squares by QR of the tall J (no normal equations).
-//! `cargo bench -p ident --bench lm_algebra`.
+//!
+//! Run: `cargo bench -p ident --bench lm_algebra`.
 
 use std::hint::black_box;
 
