@@ -21,6 +21,8 @@ const SIDE_GEAR_KG_M2: f64 = 0.003;
 
 #[derive(Clone, Copy, Default)]
 struct Truth {
+    /// Shaft damping ratio of the truth where the declared model has none.
+    zeta: Option<f64>,
     delay_s: f64,
     lag_s: f64,
     /// Total play of each side shaft, rad.
@@ -38,7 +40,8 @@ struct Truth {
 /// white noise. States: φ_m2, φ_cage, ψ (the side gears' differential angle: φ_s1,2 = φ_cage ± ψ),
 /// φ_m3, φ_motor, their speeds, the lagged torque.
 fn record(rig: &RigParams, truth: Truth, seed: u64) -> Sweep {
-    let e = rig.effective(Variant::V1).unwrap();
+    let damped = truth.zeta.map(|z| rig.with_shaft_damping_ratio(z, Variant::V1).unwrap());
+    let e = damped.as_ref().unwrap_or(rig).effective(Variant::V1).unwrap();
     let (n, dt, sub) = (20_000usize, 1e-3, 8);
     let mut rng = StdRng::seed_from_u64(seed);
     let lines: Vec<(f64, f64)> = (0..40).map(|i| (0.5 + i as f64 * 1.0, rng.random_range(0.0..2.0 * PI))).collect();
@@ -273,6 +276,51 @@ fn a_dead_time_under_a_multisine() {
     let d = run(&record(&declared(), truth, 16), &declared());
     print_params(&d);
     assert_eq!(found(&d), ["time_delay"]);
+    within(param(&d, "time_delay", None, "delay_s"), 0.004, 0.2, "delay_s");
+    halved_each_step(&d);
+}
+
+#[test]
+fn shaft_damping_missing_and_a_dead_time_about_40_nm() {
+    let undamped = RigParams { d_short: 0.0, d_long: 0.0, ..declared() };
+    let truth = Truth { zeta: Some(0.03), delay_s: 0.005, set_point_nm: 40.0, ..Default::default() };
+    let d = run(&record(&undamped, truth, 18), &undamped);
+    print_params(&d);
+    assert_eq!(found(&d), ["shaft_damping", "time_delay"]);
+    within(param(&d, "shaft_damping", None, "damping_ratio"), 0.03, 0.2, "damping_ratio");
+    within(param(&d, "time_delay", None, "delay_s"), 0.005, 0.2, "delay_s");
+    halved_each_step(&d);
+}
+
+#[test]
+fn friction_at_the_load_machines_and_play_about_zero_torque() {
+    let truth = Truth { friction_nm: [1.0, 0.0, 1.0], backlash_rad: 0.003, set_point_nm: 0.0, ..Default::default() };
+    let d = run(&record(&declared(), truth, 19), &declared());
+    print_params(&d);
+    assert_eq!(found(&d), ["backlash", "coulomb_friction at M2 and M3"]);
+    within(param(&d, "backlash", None, "backlash_rad"), 0.003, 0.2, "backlash_rad");
+    within(param(&d, "coulomb_friction", Some("M2 and M3"), "friction_M2_Nm"), 1.0, 0.2, "friction at M2");
+    halved_each_step(&d);
+}
+
+#[test]
+fn a_drive_compliance_and_a_dead_time_about_40_nm() {
+    let truth = Truth { compliance: Some((1500.0, 0.5)), delay_s: 0.005, set_point_nm: 40.0, ..Default::default() };
+    let d = run(&record(&declared(), truth, 20), &declared());
+    print_params(&d);
+    assert_eq!(found(&d), ["drive_compliance", "time_delay"]);
+    within(param(&d, "drive_compliance", None, "stiffness_Nm_per_rad"), 1500.0, 0.2, "stiffness");
+    within(param(&d, "time_delay", None, "delay_s"), 0.005, 0.2, "delay_s");
+    halved_each_step(&d);
+}
+
+#[test]
+fn an_actuator_lag_and_a_dead_time_about_40_nm() {
+    let truth = Truth { lag_s: 0.006, delay_s: 0.004, set_point_nm: 40.0, ..Default::default() };
+    let d = run(&record(&declared(), truth, 21), &declared());
+    print_params(&d);
+    assert_eq!(found(&d), ["actuator_lag", "time_delay"]);
+    within(param(&d, "actuator_lag", None, "time_constant_s"), 0.006, 0.2, "time_constant_s");
     within(param(&d, "time_delay", None, "delay_s"), 0.004, 0.2, "delay_s");
     halved_each_step(&d);
 }

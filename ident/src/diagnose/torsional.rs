@@ -15,10 +15,6 @@ use crate::error::{IdentError, Result};
 use crate::signal::{filtfilt_high_pass, filtfilt_high_pass_in_place, rfft};
 use crate::sweep::Sweep;
 
-/// The torsional vocabulary.
-pub const EFFECTS: [&str; 7] =
-    ["none", "shaft_damping", "time_delay", "actuator_lag", "backlash", "drive_compliance", "coulomb_friction"];
-
 /// What the residual shows before any candidate is fitted.
 #[derive(Debug, Clone, Serialize)]
 pub struct Evidence {
@@ -659,6 +655,7 @@ pub fn diagnose(
     }
     progress("none");
     let mut current = none.clone();
+    let mut last_plausible = none.clone();
     let mut path = vec![PathStep { effects: vec![], error: none.error(), score: none.score }];
     let mut first_round: Vec<Fit> = Vec::new();
     let mut skipped: Vec<Candidate> = Vec::new();
@@ -685,11 +682,22 @@ pub fn diagnose(
             }
             fit
         });
-        let best = fits
-            .iter()
-            .filter(|f| f.cost.is_finite() && f.plausible())
-            .min_by(|a, b| a.score.total_cmp(&b.score))
-            .cloned();
+        // the best plausible candidate that beats the model so far; where none is plausible
+        // (two effects at once can bend the mechanics of every one-effect model), the best
+        // that beats it as a step towards the next round, which must then end plausible
+        let beating = |plausible: bool| {
+            fits.iter()
+                .filter(|f| f.cost.is_finite() && f.plausible() == plausible && f.beats(&current))
+                .min_by(|a, b| a.score.total_cmp(&b.score))
+                .cloned()
+        };
+        let best = beating(true).or_else(|| {
+            if current.plausible() || current.effects.is_empty() {
+                beating(false)
+            } else {
+                None
+            }
+        });
         if round == 0 {
             first_round = fits;
         }
@@ -703,20 +711,35 @@ pub fn diagnose(
                 let polished = super::on_two_workers(2, &|i| {
                     fit_with(b.effects.clone(), if i == 0 { b.x.clone() } else { restart.clone() }, LM_ITERATIONS)
                 });
-                current = polished
-                    .into_iter()
-                    .filter(|f| f.cost.is_finite() && f.plausible())
-                    .chain(std::iter::once(b))
-                    .min_by(|a, b| a.cost.total_cmp(&b.cost))
-                    .expect("the accepted fit is there");
+                let fits: Vec<Fit> =
+                    polished.into_iter().filter(|f| f.cost.is_finite()).chain(std::iter::once(b)).collect();
+                let lowest = |plausible: bool| {
+                    fits.iter()
+                        .filter(|f| !plausible || f.plausible())
+                        .min_by(|a, b| a.cost.total_cmp(&b.cost))
+                        .cloned()
+                };
+                current = lowest(true).or_else(|| lowest(false)).expect("the accepted fit is there");
                 path.push(PathStep {
                     effects: current.effects.iter().map(|c| label(*c)).collect(),
                     error: current.error(),
                     score: current.score,
                 });
+                if current.plausible() {
+                    last_plausible = current.clone();
+                }
             }
             _ => break,
         }
+    }
+    // a step through bent mechanics that no plausible model followed is not an answer
+    if !current.plausible() && !current.effects.is_empty() {
+        current = last_plausible;
+        path.push(PathStep {
+            effects: current.effects.iter().map(|c| label(*c)).collect(),
+            error: current.error(),
+            score: current.score,
+        });
     }
     // each kept effect checked by leaving it out: one that the others do not need clearly
     // (the full model does not beat the model without it) goes, the least needed first
