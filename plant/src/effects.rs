@@ -483,7 +483,7 @@ impl Powertrain {
             let vs2 = self.effects.friction_smoothing_radps.powi(2);
             for (k, &tc) in self.effects.coulomb_friction_nm.iter().enumerate() {
                 if tc > 0.0 {
-                    let i = [0, self.input_dof, 2][k];
+                    let i = self.friction_dof(k);
                     f[i] -= tc * w[i] / (w[i] * w[i] + vs2).sqrt();
                 }
             }
@@ -506,10 +506,17 @@ impl Powertrain {
         }
         let mut rate = self.linear(true).0.complex_eigenvalues().iter().map(|l| l.norm()).fold(0.0, f64::max);
         for (k, &tc) in self.effects.coulomb_friction_nm.iter().enumerate() {
-            let i = [0, self.input_dof, 2][k];
+            let i = self.friction_dof(k);
             rate = rate.max(tc / (self.effects.friction_smoothing_radps * self.inertia[i]));
         }
         (crate::drive::RK4_STEP_TIMES_RATE / rate).clamp(1e-9, 8.0 * BACKLASH_STEP_S)
+    }
+
+    /// The coordinate friction `k` of [`DriveEffects::coulomb_friction_nm`] acts on: M2, the
+    /// drive's input coordinate (its motor when compliant), M3.
+    #[inline]
+    fn friction_dof(&self, k: usize) -> usize {
+        [0, self.input_dof, 2][k]
     }
 
     /// The friction's contribution to ∂ẇ_i/∂w_i at state `x`: (speed's state index, slope)
@@ -520,7 +527,7 @@ impl Powertrain {
         let mut v = Vec::new();
         for (k, &tc) in self.effects.coulomb_friction_nm.iter().enumerate() {
             if tc > 0.0 {
-                let i = [0, self.input_dof, 2][k];
+                let i = self.friction_dof(k);
                 let w = x[n + i];
                 v.push((n + i, -tc * vs2 / (w * w + vs2).powf(1.5) / self.inertia[i]));
             }

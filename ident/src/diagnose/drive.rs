@@ -16,13 +16,10 @@ use plant::drive::{DriveModel, Effect};
 use plant::{Domain, Quantity};
 use serde::Serialize;
 
-use super::{bic, effective_count, lag1_autocorrelation, lm, CandidateScore};
+use super::{bic, effective_count, lag1_autocorrelation, lm, rms, CandidateScore, FRICTION_SMOOTHING_FRACTION};
 use crate::error::{IdentError, Result};
 use crate::signal::filtfilt_high_pass_in_place;
 
-/// Offsets and drift are removed below max(`HIGH_PASS_PERIODS` / record length,
-/// `HIGH_PASS_MIN_HZ`): a few periods of the record's length, whatever the excitation.
-pub const HIGH_PASS_PERIODS: f64 = 3.0;
 /// Lowest high-pass corner, Hz.
 pub const HIGH_PASS_MIN_HZ: f64 = 0.02;
 /// The fits stop when a step gains less than this fraction of the cost (a 1e-5 change of the
@@ -38,10 +35,6 @@ pub const SCREEN_ITERATIONS: usize = 8;
 pub const SCREEN_KEEP: usize = 2;
 /// A declared inertia or stiffness may be re-fitted within this factor of its declared value.
 pub const MAX_REFIT_FACTOR: f64 = 100.0;
-/// Smoothing speed of a fitted Coulomb friction, as a fraction of the body's RMS speed in the
-/// declared model's simulation — or wider, where the friction's slope F_c/(v_s J) would
-/// otherwise be faster than the declared mechanics' fastest rate (and than 1/dt).
-pub const FRICTION_SMOOTHING_FRACTION: f64 = 0.01;
 
 /// What a candidate adds to the declared model.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -304,8 +297,7 @@ pub fn diagnose(rec: DriveRecord, progress: &(dyn Fn(&str) + Sync)) -> Result<Dr
         return Err(IdentError::Data(format!("a record of {len} samples is too short to diagnose (need 200)")));
     }
     let dt = rec.dt_s;
-    let record_s = dt * len as f64;
-    let high_pass_hz = (HIGH_PASS_PERIODS / record_s).max(HIGH_PASS_MIN_HZ);
+    let high_pass_hz = super::high_pass_corner_hz(len, dt, HIGH_PASS_MIN_HZ);
     let mut measured: Vec<Vec<f64>> = rec.measured.to_vec();
     let mut weights = Vec::new();
     for (i, y) in measured.iter_mut().enumerate() {
@@ -338,7 +330,6 @@ pub fn diagnose(rec: DriveRecord, progress: &(dyn Fn(&str) + Sync)) -> Result<Dr
     let declared_motion = m0
         .simulate(rec.inputs, dt, initial_speed, &[all_speeds, all_twists].concat())
         .map_err(|e| IdentError::Data(format!("the declared model cannot be simulated: {e}")))?;
-    let rms = |v: &[f64]| (v.iter().map(|x| x * x).sum::<f64>() / v.len() as f64).sqrt();
     let modes = m0.line.model()?.modes()?;
     let w_ref =
         2.0 * std::f64::consts::PI * modes.frequencies_hz.iter().copied().filter(|f| *f > 1e-3).fold(1.0, f64::max);

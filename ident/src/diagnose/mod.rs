@@ -12,6 +12,24 @@ use std::collections::BTreeMap;
 
 use serde::Serialize;
 
+/// Offsets and drift are removed below max(`HIGH_PASS_PERIODS` / record length, the diagnosis's
+/// lowest corner): a few periods of the record's length, whatever the excitation.
+pub const HIGH_PASS_PERIODS: f64 = 3.0;
+
+/// The high-pass corner of a record of `n` samples of `dt_s`, at least `min_hz`, Hz.
+pub fn high_pass_corner_hz(n: usize, dt_s: f64, min_hz: f64) -> f64 {
+    (HIGH_PASS_PERIODS / (n as f64 * dt_s)).max(min_hz)
+}
+
+/// Smoothing speed of a fitted Coulomb friction, as a fraction of an RMS speed of the record
+/// (or wider, where the friction's slope would be faster than the integration resolves).
+pub const FRICTION_SMOOTHING_FRACTION: f64 = 0.01;
+
+/// Root mean square of `v`.
+pub(crate) fn rms(v: &[f64]) -> f64 {
+    (v.iter().map(|x| x * x).sum::<f64>() / v.len() as f64).sqrt()
+}
+
 /// One candidate's result.
 #[derive(Debug, Clone, Serialize)]
 pub struct CandidateScore {

@@ -10,7 +10,7 @@ use plant::effects::{DriveEffects, Powertrain};
 use plant::rig::{RigParams, Variant};
 use serde::Serialize;
 
-use super::{bic, effective_count, lag1_autocorrelation, lm, CandidateScore};
+use super::{bic, effective_count, lag1_autocorrelation, lm, rms, CandidateScore, FRICTION_SMOOTHING_FRACTION};
 use crate::error::{IdentError, Result};
 use crate::signal::{filtfilt_high_pass, filtfilt_high_pass_in_place, rfft};
 use crate::sweep::Sweep;
@@ -400,15 +400,12 @@ impl Candidate {
     }
 }
 
-/// Offsets and drift are removed below max(`HIGH_PASS_PERIODS` / record length,
-/// `HIGH_PASS_MIN_HZ`): a few periods of the record's length, whatever the excitation.
-pub const HIGH_PASS_PERIODS: f64 = 3.0;
 /// Lowest high-pass corner, Hz.
 pub const HIGH_PASS_MIN_HZ: f64 = 0.05;
 
 /// The high-pass corner for a record of `n` samples of `dt_s`, Hz.
 pub fn high_pass_hz(n: usize, dt_s: f64) -> f64 {
-    (HIGH_PASS_PERIODS / (n as f64 * dt_s)).max(HIGH_PASS_MIN_HZ)
+    super::high_pass_corner_hz(n, dt_s, HIGH_PASS_MIN_HZ)
 }
 
 /// Smallest play of the backlash profile, rad.
@@ -425,8 +422,6 @@ pub const PROFILE_BENT_LN: f64 = 0.01;
 /// The profile's best points (in distinct basins) refined by the full fit.
 pub const BACKLASH_REFINED: usize = 2;
 
-/// Friction smoothing speed as a fraction of the load machines' RMS speed (measured).
-pub const FRICTION_SMOOTHING_FRACTION: f64 = 0.01;
 /// Fastest rate the friction's slope T_c/(v_s J) may have, 1/s: what RK4 steps of 0.25 ms
 /// (`Powertrain::rk4_step_s`: h·rate ≤ 0.5) resolve, four per millisecond.
 pub const MAX_FRICTION_RATE: f64 = 0.5 / (2.0 * plant::effects::BACKLASH_STEP_S);
@@ -489,6 +484,11 @@ impl Fit {
         self.x[..2].iter().all(|v| v.abs() <= PLAUSIBLE_REFIT_FACTOR.ln())
     }
 
+    /// This fit as a step of the selection's path.
+    fn step(&self) -> PathStep {
+        PathStep { effects: self.effects.iter().map(|c| label(*c)).collect(), error: self.error(), score: self.score }
+    }
+
     /// Whether this fit beats `other` clearly: a lower score and 10 % less error.
     fn beats(&self, other: &Fit) -> bool {
         self.score < other.score && self.error() < 0.9 * other.error()
@@ -526,7 +526,6 @@ pub fn diagnose(
         return Err(IdentError::Data("the drive torque does not vary: nothing excites the rig".into()));
     }
     drop(torque_hp);
-    let rms = |v: &[f64]| (v.iter().map(|x| x * x).sum::<f64>() / v.len() as f64).sqrt();
     let smoothing =
         (FRICTION_SMOOTHING_FRACTION * 0.5 * (rms(&sweep.speed_m2_radps) + rms(&sweep.speed_m3_radps))).max(1e-6);
     let speed0 = 0.5 * (sweep.speed_m2_radps[0] + sweep.speed_m3_radps[0]);
@@ -656,7 +655,7 @@ pub fn diagnose(
     progress("none");
     let mut current = none.clone();
     let mut last_plausible = none.clone();
-    let mut path = vec![PathStep { effects: vec![], error: none.error(), score: none.score }];
+    let mut path = vec![none.step()];
     let mut first_round: Vec<Fit> = Vec::new();
     let mut skipped: Vec<Candidate> = Vec::new();
     for round in 0..MAX_EFFECTS {
@@ -720,11 +719,7 @@ pub fn diagnose(
                         .cloned()
                 };
                 current = lowest(true).or_else(|| lowest(false)).expect("the accepted fit is there");
-                path.push(PathStep {
-                    effects: current.effects.iter().map(|c| label(*c)).collect(),
-                    error: current.error(),
-                    score: current.score,
-                });
+                path.push(current.step());
                 if current.plausible() {
                     last_plausible = current.clone();
                 }
@@ -735,11 +730,7 @@ pub fn diagnose(
     // a step through bent mechanics that no plausible model followed is not an answer
     if !current.plausible() && !current.effects.is_empty() {
         current = last_plausible;
-        path.push(PathStep {
-            effects: current.effects.iter().map(|c| label(*c)).collect(),
-            error: current.error(),
-            score: current.score,
-        });
+        path.push(current.step());
     }
     // each kept effect checked by leaving it out: one that the others do not need clearly
     // (the full model does not beat the model without it) goes, the least needed first
@@ -766,11 +757,7 @@ pub fn diagnose(
         match weakest {
             Some(w) => {
                 current = w;
-                path.push(PathStep {
-                    effects: current.effects.iter().map(|c| label(*c)).collect(),
-                    error: current.error(),
-                    score: current.score,
-                });
+                path.push(current.step());
             }
             None => break,
         }
