@@ -4,13 +4,15 @@
 //! diagnosis's model, not a copy of it. The states are the plant's: positions, speeds, one per
 //! lagged input. Co-simulation: the step is split where a delayed input changes (each input's
 //! own dead time, from its history); each piece is exact (ZOH of the linear model, cached per
-//! piece length) without friction and backlash, else RK4 sub-steps with h·|λ|max ≤
-//! `plant::drive::RK4_STEP_TIMES_RATE`, as the record simulation takes them.
+//! piece length) without friction and backlash, else the record simulation's integrator
+//! (`plant::integrate::PiecewiseRk4` with `Dynamics::rk4_steps_s`: coarse steps within a smooth
+//! piece, fine ones across a play's edges and a friction's steep band).
 
 use nalgebra::{DMatrix, DVector};
 
-use plant::drive::RK4_STEP_TIMES_RATE;
+use plant::drive::HeldInputs;
 use plant::effects::DelayLine;
+use plant::integrate::PiecewiseRk4;
 use plant::{DriveModel, Dynamics, Quantity};
 
 use crate::model::{longest_exact_piece, ZohCache, MAX_PIECES};
@@ -24,8 +26,8 @@ pub struct DriveDynamics {
     b: DMatrix<f64>,
     /// Longest exact piece, s: ‖[A B]‖₁ · piece = `plant::statespace::ZOH_MAX_NORM` / 2^10.
     max_piece_s: f64,
-    /// The rate RK4 sub-steps resolve, 1/s.
-    rate: f64,
+    /// The nonlinear model's integrator.
+    rk: PiecewiseRk4,
     cache: ZohCache,
     breaks: Vec<f64>,
     segments: Vec<(f64, f64)>,
@@ -34,7 +36,6 @@ pub struct DriveDynamics {
     couplings: usize,
     xs: DVector<f64>,
     next: DVector<f64>,
-    work: Vec<Vec<f64>>,
 }
 
 impl DriveDynamics {
@@ -46,15 +47,16 @@ impl DriveDynamics {
             return Err("the parameters give a system matrix with non-finite entries".into());
         }
         let max_piece_s = longest_exact_piece(&a, &b)?;
-        let rate = dynamics.rk4_rate();
-        if !rate.is_finite() {
+        let (coarse, fine) = dynamics.rk4_steps_s();
+        if dynamics.is_nonlinear() && !(coarse > 0.0 && fine > 0.0 && coarse.is_finite() && fine.is_finite()) {
             return Err("the model's rates are not finite".into());
         }
+        let rk = dynamics.integrator();
         let nx = dynamics.nstates();
         let nu = dynamics.ninputs();
         Ok(DriveDynamics {
             max_piece_s,
-            rate,
+            rk,
             a,
             b,
             cache: ZohCache::default(),
@@ -65,7 +67,6 @@ impl DriveDynamics {
             couplings: m.line.couplings.len(),
             xs: DVector::zeros(nx),
             next: DVector::zeros(nx),
-            work: vec![vec![0.0; nx]; 5],
             dynamics,
         })
     }
@@ -150,7 +151,7 @@ impl DriveDynamics {
         delays: &[DelayLine],
     ) -> Result<(), String> {
         let nonlinear = self.dynamics.is_nonlinear();
-        let sub_steps = if nonlinear { h * self.rate / RK4_STEP_TIMES_RATE } else { h / self.max_piece_s };
+        let sub_steps = if nonlinear { h / self.rk.fine_s } else { h / self.max_piece_s };
         if sub_steps.is_nan() || sub_steps > MAX_PIECES as f64 {
             return Err(format!("a step of {h} s needs more than {MAX_PIECES} pieces for this model"));
         }
@@ -191,10 +192,7 @@ impl DriveDynamics {
                 *value = if tau > 0.0 { delays[j].value_at(mid - tau, u[j]) } else { u[j] };
             }
             if nonlinear {
-                let n = (len * self.rate / RK4_STEP_TIMES_RATE - 1e-9).ceil().max(1.0) as usize;
-                for _ in 0..n {
-                    self.dynamics.rk4(state.as_mut_slice(), &self.u_piece, len / n as f64, &mut self.work);
-                }
+                self.rk.advance(&mut HeldInputs { d: &self.dynamics, u: &self.u_piece }, state.as_mut_slice(), len);
             } else {
                 let n = (len / self.max_piece_s).ceil().max(1.0) as usize;
                 let i = match self.cache.index(&self.a, &self.b, len / n as f64) {

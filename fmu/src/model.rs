@@ -6,15 +6,17 @@
 //! `variables::STATES`); every matrix below is in z unless its name says otherwise. Without backlash the model
 //! is linear, x' = A x + B u, and the co-simulation step is exact for inputs held over the step:
 //! x⁺ = Ad x + Bd u with (Ad, Bd) from the matrix exponential, cached per step length. A dead
-//! time splits the step where the delayed drive torque changes, each piece exact; backlash is
-//! integrated by RK4 with steps of at most `Powertrain::rk4_step_s` (backlash:
-//! `plant::effects::BACKLASH_STEP_S`), the diagnosis's integrator.
+//! time splits the step where the delayed drive torque changes, each piece exact; backlash and
+//! friction are integrated by the diagnosis's integrator, `plant::integrate::PiecewiseRk4` with
+//! the steps of `Powertrain::rk4_steps_s` (coarse within a smooth piece, fine across the play's
+//! edges and the friction's steep band).
 
 use nalgebra::{DMatrix, DVector};
 
 use crate::params::FmuParams;
 use crate::variables::{powertrain_states, Table};
 use plant::effects::{DelayLine, Powertrain};
+use plant::integrate::{PiecewiseRk4, PiecewiseSmooth};
 
 /// Number of inputs: M_m2, M_drive, M_m3, bearing F_x, F_y.
 pub const NU: usize = 5;
@@ -48,8 +50,9 @@ pub struct Model {
     next: DVector<f64>,
     /// Longest exact piece, s: ‖[A B]‖₁ · piece = `plant::statespace::ZOH_MAX_NORM` / 2^10.
     max_piece_s: f64,
-    /// Longest RK4 step of the nonlinear model (`Powertrain::rk4_step_s`), s.
-    rk4_step_s: f64,
+    /// The nonlinear model's integrator (`Powertrain::rk4_steps_s`, the coarse step shortened
+    /// where the bearing block is faster).
+    rk: PiecewiseRk4,
     powertrain: Powertrain,
     /// State-vector index of each powertrain state.
     map: Vec<usize>,
@@ -57,7 +60,6 @@ pub struct Model {
     scratch: DVector<f64>,
     u_eff: DVector<f64>,
     pieces: Vec<(f64, f64)>,
-    work: [DVector<f64>; 5],
     pt_x: Vec<f64>,
     pt_dx: Vec<f64>,
 }
@@ -138,10 +140,12 @@ impl Model {
         // the powertrain's RK4 step (the diagnosis's), shorter only where the bearing block is
         // faster than it resolves (h·|λ|max ≤ 0.5)
         let bearing_rate = br.a.complex_eigenvalues().iter().map(|l| l.norm()).fold(0.0, f64::max);
-        let rk4_step_s = powertrain.rk4_step_s().min(plant::drive::RK4_STEP_TIMES_RATE / bearing_rate.max(1e-300));
+        let (coarse, fine) = powertrain.rk4_steps_s();
+        let coarse = coarse.min(plant::drive::RK4_STEP_TIMES_RATE / bearing_rate.max(1e-300));
+        let rk = PiecewiseRk4::new(nx, coarse, fine);
         Ok(Model {
             max_piece_s,
-            rk4_step_s,
+            rk,
             next: DVector::zeros(nx),
             a,
             b,
@@ -160,7 +164,6 @@ impl Model {
             scratch: DVector::zeros(nx),
             u_eff: DVector::zeros(NU),
             pieces: Vec::new(),
-            work: std::array::from_fn(|_| DVector::zeros(nx)),
             pt_x: vec![0.0; npt],
             pt_dx: vec![0.0; npt],
         })
@@ -212,7 +215,7 @@ impl Model {
             let mut xs = std::mem::take(&mut self.xs);
             xs.gemv(1.0, &self.t_inv, &DVector::from_column_slice(z), 0.0);
             let mut dx = DVector::zeros(z.len());
-            rhs(self, xs.as_slice(), &u_eff, dx.as_mut_slice());
+            self.system(u_eff).rhs(xs.as_slice(), dx.as_mut_slice());
             out.copy_from_slice((&self.t * dx).as_slice());
             self.xs = xs;
         } else {
@@ -289,10 +292,10 @@ impl Model {
         h: f64,
         delay: &DelayLine,
     ) -> Result<(), String> {
-        let rk4_step = self.rk4_step_s;
-        let sub_steps = if self.nonlinear() { h / rk4_step } else { h / self.max_piece_s };
+        let finest = if self.nonlinear() { self.rk.fine_s } else { self.max_piece_s };
+        let sub_steps = h / finest;
         if sub_steps.is_nan() || sub_steps > MAX_PIECES as f64 {
-            let longest = MAX_PIECES as f64 * if self.nonlinear() { rk4_step } else { self.max_piece_s };
+            let longest = MAX_PIECES as f64 * finest;
             return Err(format!(
                 "a step of {h} s is longer than this model integrates exactly (at most {longest:.4e} s)"
             ));
@@ -316,10 +319,9 @@ impl Model {
         for &(len, drive) in &pieces {
             u_eff[DRIVE_INPUT] = drive;
             if self.nonlinear() {
-                let n = (len / rk4_step - 1e-9).ceil().max(1.0) as usize;
-                for _ in 0..n {
-                    self.rk4(&mut x, &u_eff, len / n as f64);
-                }
+                let mut rk = std::mem::replace(&mut self.rk, PiecewiseRk4::new(0, 1.0, 1.0));
+                rk.advance(&mut self.system(u_eff), x.as_mut_slice(), len);
+                self.rk = rk;
             } else {
                 // pieces short enough for an exact exponential, all of one length
                 let n = (len / self.max_piece_s).ceil().max(1.0) as usize;
@@ -355,18 +357,17 @@ impl Model {
         result
     }
 
-    fn rk4(&mut self, x: &mut DVector<f64>, u: &[f64; NU], h: f64) {
-        let mut w = std::mem::replace(&mut self.work, std::array::from_fn(|_| DVector::zeros(0)));
-        let [k1, k2, k3, k4, tmp] = &mut w;
-        rhs(self, x.as_slice(), u, k1.as_mut_slice());
-        tmp.copy_from(&(&*x + &*k1 * (0.5 * h)));
-        rhs(self, tmp.as_slice(), u, k2.as_mut_slice());
-        tmp.copy_from(&(&*x + &*k2 * (0.5 * h)));
-        rhs(self, tmp.as_slice(), u, k3.as_mut_slice());
-        tmp.copy_from(&(&*x + &*k3 * h));
-        rhs(self, tmp.as_slice(), u, k4.as_mut_slice());
-        *x += (&*k1 + &*k2 * 2.0 + &*k3 * 2.0 + &*k4) * (h / 6.0);
-        self.work = w;
+    /// The right-hand side in absolute angles with the inputs `u` held.
+    fn system(&mut self, u: [f64; NU]) -> System<'_> {
+        System {
+            a_x: &self.a_x,
+            b_x: &self.b_x,
+            powertrain: &self.powertrain,
+            map: &self.map,
+            pt_x: &mut self.pt_x,
+            pt_dx: &mut self.pt_dx,
+            u,
+        }
     }
 
     /// (Ad, Bd) of step size `h` (the linear model, shafts engaged).
@@ -433,17 +434,40 @@ fn affine(a: &DMatrix<f64>, b: &DMatrix<f64>, x: &[f64], u: &[f64], out: &mut [f
 }
 
 /// ẋ = A x + B u in absolute angles, the powertrain's rows from its own (nonlinear) derivative
-/// with backlash.
-fn rhs(m: &mut Model, x: &[f64], u: &[f64; NU], out: &mut [f64]) {
-    affine(&m.a_x, &m.b_x, x, u, out);
-    if m.nonlinear() {
-        for (k, &i) in m.map.iter().enumerate() {
-            m.pt_x[k] = x[i];
+/// with backlash and friction; its pieces are the powertrain's.
+struct System<'a> {
+    a_x: &'a DMatrix<f64>,
+    b_x: &'a DMatrix<f64>,
+    powertrain: &'a Powertrain,
+    map: &'a [usize],
+    pt_x: &'a mut Vec<f64>,
+    pt_dx: &'a mut Vec<f64>,
+    u: [f64; NU],
+}
+
+impl System<'_> {
+    fn gather(&mut self, x: &[f64]) {
+        for (k, &i) in self.map.iter().enumerate() {
+            self.pt_x[k] = x[i];
         }
-        m.powertrain.derivative(&m.pt_x, [u[0], u[1], u[2]], &mut m.pt_dx);
-        for (k, &i) in m.map.iter().enumerate() {
-            out[i] = m.pt_dx[k];
+    }
+}
+
+impl PiecewiseSmooth for System<'_> {
+    fn rhs(&mut self, x: &[f64], out: &mut [f64]) {
+        affine(self.a_x, self.b_x, x, &self.u, out);
+        if self.powertrain.effects.is_nonlinear() {
+            self.gather(x);
+            self.powertrain.derivative(self.pt_x, [self.u[0], self.u[1], self.u[2]], self.pt_dx);
+            for (k, &i) in self.map.iter().enumerate() {
+                out[i] = self.pt_dx[k];
+            }
         }
+    }
+
+    fn piece(&mut self, x: &[f64]) -> u64 {
+        self.gather(x);
+        self.powertrain.piece(self.pt_x)
     }
 }
 

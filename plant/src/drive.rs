@@ -2,7 +2,9 @@
 //! forces (torques) acting on some of its bodies, and the effects attached to its elements —
 //! Coulomb friction at a body, backlash in a coupling, a dead time and a first-order lag of an
 //! input. One nonlinear right-hand side, one linearisation (in contact, friction left out), one
-//! exact ZOH for a model without nonlinear effects, one fixed-step RK4 for a model with them.
+//! exact ZOH for a model without nonlinear effects, one fixed-step RK4 for a model with them
+//! ([`crate::integrate::PiecewiseRk4`]: coarse within a smooth piece, fine across a play's edges
+//! and a friction's steep band).
 //!
 //! States x = [q (one per body); q̇; z (one per lagged input)]. Inputs are held constant over a
 //! sample (ZOH), as a DAQ's torque command is; a dead time τ = (m + f)·dt shifts the held
@@ -13,10 +15,12 @@ use nalgebra::{DMatrix, DVector};
 use serde::{Deserialize, Serialize};
 
 use crate::error::{PlantError, Result};
+use crate::integrate::{PiecewiseRk4, PiecewiseSmooth};
 use crate::line::{Line, Quantity};
 use crate::statespace::zoh;
 
-/// Most RK4 sub-steps per sample: a model stiffer than this at the record's sample rate is
+/// Most RK4 steps per sample within a smooth piece (the fine sub-steps across pieces may be
+/// [`FINE_PER_COARSE`] times as many): a model stiffer than this at the record's sample rate is
 /// refused instead of being integrated for minutes.
 pub const MAX_SUBSTEPS: usize = 2000;
 
@@ -491,7 +495,16 @@ pub struct Dynamics {
     inputs: Vec<(usize, f64, f64, usize)>,
     nstates: usize,
     nonlinear: bool,
+    /// RK4 steps within a smooth piece and across pieces, s (nonlinear models).
+    coarse_s: f64,
+    fine_s: f64,
+    /// Half-width of each body's steep friction band, m/s or rad/s (0: none).
+    friction_band: Vec<f64>,
 }
+
+/// Fine sub-steps per coarse step where a step crosses a coupling's play (as
+/// `plant::effects::BACKLASH_STEP_S` is an eighth of the rig's millisecond).
+pub const FINE_PER_COARSE: f64 = 8.0;
 
 impl Dynamics {
     /// The dynamics of a validated model.
@@ -515,7 +528,7 @@ impl Dynamics {
                 }
             }
         }
-        Ok(Dynamics {
+        let mut d = Dynamics {
             n,
             inv_j: m.line.bodies.iter().map(|b| 1.0 / b.inertia).collect(),
             drag: m.line.bodies.iter().map(|b| b.drag).collect(),
@@ -524,7 +537,73 @@ impl Dynamics {
             inputs,
             nstates,
             nonlinear: m.is_nonlinear(),
-        })
+            coarse_s: f64::INFINITY,
+            fine_s: f64::INFINITY,
+            friction_band: vec![0.0; n],
+        };
+        if d.nonlinear {
+            d.steps_and_bands();
+        }
+        Ok(d)
+    }
+
+    /// The RK4 steps (within a piece: h·rate ≤ [`RK4_STEP_TIMES_RATE`] of the contact piece's
+    /// fastest rate; across pieces: [`FINE_PER_COARSE`] times shorter with backlash, and h·rate
+    /// ≤ [`RK4_STEP_TIMES_RATE`] of the friction's slopes F_c/(v_s·J)) and the friction's steep
+    /// bands (where F_c v_s²/(J (v² + v_s²)^{3/2}) is faster than the coarse step resolves).
+    fn steps_and_bands(&mut self) {
+        let slope = |i: usize| {
+            let (fc, vs) = self.friction[i];
+            fc / vs * self.inv_j[i]
+        };
+        let bodies = || (0..self.n).filter(|&i| self.friction[i].0 > 0.0);
+        let friction_step = bodies().map(|i| RK4_STEP_TIMES_RATE / slope(i)).fold(f64::INFINITY, f64::min);
+        // a line without springs (a free mass) has no linear rate: its steps are the friction's
+        let mut coarse = RK4_STEP_TIMES_RATE / self.linear_rate();
+        if !coarse.is_finite() {
+            coarse = friction_step;
+        }
+        let backlash = self.couplings.iter().any(|c| c.3 > 0.0);
+        self.fine_s = if backlash { coarse / FINE_PER_COARSE } else { coarse }.min(friction_step);
+        for i in bodies() {
+            let (fc, vs) = self.friction[i];
+            let j = 1.0 / self.inv_j[i];
+            let w2 = (2.0 * coarse * fc * vs * vs / j).powf(2.0 / 3.0) - vs * vs;
+            self.friction_band[i] = w2.max(0.0).sqrt();
+        }
+        self.coarse_s = coarse;
+    }
+
+    /// The RK4 steps of the nonlinear model (within a smooth piece, across pieces), s; infinite
+    /// for a linear model.
+    pub fn rk4_steps_s(&self) -> (f64, f64) {
+        (self.coarse_s, self.fine_s)
+    }
+
+    /// An integrator of this model ([`Dynamics::rk4_steps_s`]).
+    pub fn integrator(&self) -> PiecewiseRk4 {
+        PiecewiseRk4::new(self.nstates, self.coarse_s, self.fine_s)
+    }
+
+    /// The smooth piece of state `x`: each coupling with play in contact on either side or
+    /// inside it, each body with friction clear of its steep band on either side or in it.
+    pub fn piece(&self, x: &[f64]) -> u64 {
+        let n = self.n;
+        let mut key: u64 = 0;
+        let mut mix = |class: u64| key = (key ^ class).wrapping_mul(0x9E37_79B9_7F4A_7C15).wrapping_add(1);
+        for (i, &(_, _, inv_r, half)) in self.couplings.iter().enumerate() {
+            if half > 0.0 {
+                let twist = x[i] * inv_r - x[i + 1];
+                mix(u64::from(twist > half) + 2 * u64::from(twist < -half));
+            }
+        }
+        for (i, &band) in self.friction_band.iter().enumerate() {
+            if band > 0.0 {
+                let v = x[n + i];
+                mix(u64::from(v > band) + 2 * u64::from(v < -band));
+            }
+        }
+        key
     }
 
     /// ẋ = f(x, u): `u` the inputs after their dead time.
@@ -566,6 +645,7 @@ impl Dynamics {
         let linear = Dynamics {
             couplings: self.couplings.iter().map(|&(c, d, r, _)| (c, d, r, 0.0)).collect(),
             friction: vec![(0.0, 1.0); self.n],
+            friction_band: vec![0.0; self.n],
             inv_j: self.inv_j.clone(),
             drag: self.drag.clone(),
             inputs: self.inputs.clone(),
@@ -594,19 +674,6 @@ impl Dynamics {
     /// Fastest rate of the linear part, max |λ(A)|, 1/s.
     fn linear_rate(&self) -> f64 {
         self.linear().0.complex_eigenvalues().iter().map(|l| l.norm()).fold(0.0, f64::max)
-    }
-
-    /// The rate an RK4 sub-step must resolve, 1/s: the fastest of the contact piece (lags
-    /// included) and of the friction's smoothing slope F_c/(v_s·J); sub-steps h ≤
-    /// [`RK4_STEP_TIMES_RATE`] / rate.
-    pub fn rk4_rate(&self) -> f64 {
-        let mut rate = self.linear_rate();
-        for (i, &(fc, vs)) in self.friction.iter().enumerate() {
-            if fc > 0.0 {
-                rate = rate.max(fc / vs * self.inv_j[i]);
-            }
-        }
-        rate
     }
 
     /// Number of states.
@@ -749,29 +816,26 @@ impl Dynamics {
             return Ok(y);
         }
 
-        let rate = self.rk4_rate();
-        if !rate.is_finite() {
-            return Err(PlantError::Numerical("the model's rates are not finite".into()));
-        }
-        let per_sample = (dt * rate / RK4_STEP_TIMES_RATE).ceil().max(1.0);
-        if per_sample > MAX_SUBSTEPS as f64 {
+        let (coarse, fine) = self.rk4_steps_s();
+        let mut rk = self.integrator();
+        let worst = rk.counts(dt).map(|(c, f)| c as f64 * f as f64);
+        if !(coarse > 0.0 && fine > 0.0 && coarse.is_finite() && fine.is_finite())
+            || worst.is_none_or(|w| w > FINE_PER_COARSE * MAX_SUBSTEPS as f64)
+        {
             return Err(PlantError::Invalid(format!(
-                "the model needs {per_sample:.0} integration steps per sample (fastest rate {rate:.3e} 1/s at a {dt} s sample): \
-                 too stiff for this sample rate (a friction smoothing speed or an element far stiffer than the data can show)"
+                "the model needs up to {:.0} integration steps per sample (steps of {coarse:.3e} s, {fine:.3e} s where \
+                 contact or friction switches, at a {dt} s sample): too stiff for this sample rate (a friction \
+                 smoothing speed or an element far stiffer than the data can show)",
+                worst.unwrap_or(f64::INFINITY)
             )));
         }
-        let mut work = vec![vec![0.0; ns]; 5];
         for k in 0..len {
             for (yo, &o) in y.iter_mut().zip(outputs) {
                 yo.push(self.output(&x, o));
             }
             for &(phase, frac) in &pieces {
                 input_at(&mut u, k, phase);
-                let steps = (per_sample * frac).ceil().max(1.0) as usize;
-                let h = frac * dt / steps as f64;
-                for _ in 0..steps {
-                    self.rk4(&mut x, &u, h, &mut work);
-                }
+                rk.advance(&mut HeldInputs { d: self, u: &u }, &mut x, frac * dt);
             }
             if !x.iter().all(|v| v.is_finite()) {
                 return Err(PlantError::Numerical(format!("the simulation diverged at sample {k}")));
@@ -779,27 +843,24 @@ impl Dynamics {
         }
         Ok(y)
     }
+}
 
-    /// One classical RK4 step of length `h` with `u` held; `w` five work vectors of the state's
-    /// length.
-    pub fn rk4(&self, x: &mut [f64], u: &[f64], h: f64, w: &mut [Vec<f64>]) {
-        let [k1, k2, k3, k4, xt] = w else { return };
-        self.rhs(x, u, k1);
-        for i in 0..x.len() {
-            xt[i] = x[i] + 0.5 * h * k1[i];
-        }
-        self.rhs(xt, u, k2);
-        for i in 0..x.len() {
-            xt[i] = x[i] + 0.5 * h * k2[i];
-        }
-        self.rhs(xt, u, k3);
-        for i in 0..x.len() {
-            xt[i] = x[i] + h * k3[i];
-        }
-        self.rhs(xt, u, k4);
-        for i in 0..x.len() {
-            x[i] += h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]);
-        }
+/// The dynamics with the inputs held over a step.
+pub struct HeldInputs<'a> {
+    /// The model.
+    pub d: &'a Dynamics,
+    /// The inputs after their dead times.
+    pub u: &'a [f64],
+}
+
+impl PiecewiseSmooth for HeldInputs<'_> {
+    #[inline]
+    fn rhs(&mut self, x: &[f64], dx: &mut [f64]) {
+        self.d.rhs(x, self.u, dx);
+    }
+    #[inline]
+    fn piece(&mut self, x: &[f64]) -> u64 {
+        self.d.piece(x)
     }
 }
 

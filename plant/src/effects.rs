@@ -7,6 +7,7 @@ use nalgebra::DMatrix;
 use serde::{Deserialize, Serialize};
 
 use crate::error::{non_negative, PlantError, Result};
+use crate::integrate::{PiecewiseRk4, PiecewiseSmooth};
 use crate::rig::{RigParams, Variant};
 use crate::statespace::StateSpace;
 
@@ -135,6 +136,11 @@ pub struct Powertrain {
     /// 1/J per coordinate, and whether any machine has friction (the right-hand side's hot path).
     inv_inertia: Vec<f64>,
     friction: bool,
+    /// RK4 steps within a piece and across pieces, s; half-widths of the friction's steep bands
+    /// [M2, drive, M3], rad/s.
+    coarse_s: f64,
+    fine_s: f64,
+    friction_band: [f64; 3],
     /// The effects.
     pub effects: DriveEffects,
 }
@@ -182,7 +188,7 @@ impl Powertrain {
             (0..n * n).filter(|&m| k0[m] != 0.0 || d0[m] != 0.0).map(|m| (m / n, m % n, k0[m], d0[m])).collect();
         let inv_inertia = inertia.iter().map(|j| 1.0 / j).collect();
         let friction = effects.coulomb_friction_nm.iter().any(|&f| f > 0.0);
-        Ok(Powertrain {
+        let mut p = Powertrain {
             inertia,
             k0,
             d0,
@@ -194,8 +200,15 @@ impl Powertrain {
             input_dof,
             inv_inertia,
             friction,
+            coarse_s: 8.0 * BACKLASH_STEP_S,
+            fine_s: BACKLASH_STEP_S,
+            friction_band: [0.0; 3],
             effects: *effects,
-        })
+        };
+        if effects.is_nonlinear() {
+            p.steps_and_bands();
+        }
+        Ok(p)
     }
 
     /// Degrees of freedom: 3, or 4 with a compliance (φ_motor last).
@@ -496,20 +509,59 @@ impl Powertrain {
         }
     }
 
-    /// Longest RK4 step of the nonlinear model, s, in the diagnosis and in the FMU alike: with
-    /// backlash [`BACKLASH_STEP_S`] (contact switching makes the response sensitive to the step);
-    /// with friction alone h·rate ≤ 0.5 of the fastest of the linear part and the friction's
-    /// slopes T_c/(v_s J) (as `plant::drive` steps), at most [`BACKLASH_STEP_S`] × 8.
-    pub fn rk4_step_s(&self) -> f64 {
-        if self.effects.backlash_rad > 0.0 {
-            return BACKLASH_STEP_S;
-        }
-        let mut rate = self.linear(true).0.complex_eigenvalues().iter().map(|l| l.norm()).fold(0.0, f64::max);
+    /// The RK4 steps of the nonlinear model (coarse, fine), s, in the diagnosis and in the FMU
+    /// alike ([`crate::integrate::PiecewiseRk4`]): within a smooth piece h·rate ≤ 0.5 of the
+    /// linear part's fastest rate, at most [`BACKLASH_STEP_S`] × 8; where a step leaves its piece,
+    /// [`BACKLASH_STEP_S`] with backlash (contact switching makes the response sensitive to the
+    /// step) and h·rate ≤ 0.5 of the friction's slopes T_c/(v_s J).
+    pub fn rk4_steps_s(&self) -> (f64, f64) {
+        (self.coarse_s, self.fine_s)
+    }
+
+    fn steps_and_bands(&mut self) {
+        let linear = self.linear(true).0.complex_eigenvalues().iter().map(|l| l.norm()).fold(0.0, f64::max);
+        let coarse = (crate::drive::RK4_STEP_TIMES_RATE / linear).clamp(1e-9, 8.0 * BACKLASH_STEP_S);
+        let mut fine = if self.effects.backlash_rad > 0.0 { BACKLASH_STEP_S.min(coarse) } else { coarse };
+        let v = self.effects.friction_smoothing_radps;
         for (k, &tc) in self.effects.coulomb_friction_nm.iter().enumerate() {
-            let i = self.friction_dof(k);
-            rate = rate.max(tc / (self.effects.friction_smoothing_radps * self.inertia[i]));
+            if tc > 0.0 {
+                let j = self.inertia[self.friction_dof(k)];
+                fine = fine.min((crate::drive::RK4_STEP_TIMES_RATE * v * j / tc).max(1e-9));
+                // the band |w| < w_b where the slope T_c v²/(J (w² + v²)^{3/2}) is steeper than
+                // the coarse step resolves (h·slope > 0.5)
+                let w2 = (2.0 * coarse * tc * v * v / j).powf(2.0 / 3.0) - v * v;
+                self.friction_band[k] = w2.max(0.0).sqrt();
+            }
         }
-        (crate::drive::RK4_STEP_TIMES_RATE / rate).clamp(1e-9, 8.0 * BACKLASH_STEP_S)
+        self.coarse_s = coarse;
+        self.fine_s = fine;
+    }
+
+    /// The smooth piece state `x` lies in: the side shafts in contact on either side or inside
+    /// the play, and each machine with friction clear of its steep band on either side or in it.
+    pub fn piece(&self, x: &[f64]) -> u64 {
+        let mut key = 0;
+        if self.effects.backlash_rad > 0.0 {
+            let (s, _) = self.twist(x);
+            let b = self.effects.backlash_rad;
+            key = u64::from(s > b) + 2 * u64::from(s < -b);
+        }
+        if self.friction {
+            let n = self.dofs();
+            for (k, &band) in self.friction_band.iter().enumerate() {
+                if band > 0.0 {
+                    let w = x[n + self.friction_dof(k)];
+                    key = 4 * key + u64::from(w > band) + 2 * u64::from(w < -band);
+                }
+            }
+        }
+        key
+    }
+
+    /// An integrator of this model ([`Powertrain::rk4_steps_s`]) for `nstates` states (the
+    /// powertrain's, or a larger model's that embeds it).
+    pub fn integrator(&self, nstates: usize) -> PiecewiseRk4 {
+        PiecewiseRk4::new(nstates, self.coarse_s, self.fine_s)
     }
 
     /// The coordinate friction `k` of [`DriveEffects::coulomb_friction_nm`] acts on: M2, the
@@ -560,19 +612,33 @@ impl Powertrain {
 
     fn simulate_rk4(&self, u: &[f64], dt_s: f64, mut x: Vec<f64>) -> (Vec<f64>, Vec<f64>) {
         let n = self.dofs();
-        let ns = x.len();
-        let sub = (dt_s / self.rk4_step_s() - 1e-9).ceil().max(1.0) as usize;
-        let h = dt_s / sub as f64;
-        let mut work: [Vec<f64>; 5] = std::array::from_fn(|_| vec![0.0; ns]);
+        let mut rk = self.integrator(x.len());
         let (mut w2, mut w3) = (Vec::with_capacity(u.len()), Vec::with_capacity(u.len()));
         for &uk in u {
             w2.push(x[n]);
             w3.push(x[n + 2]);
-            for _ in 0..sub {
-                self.rk4_step(&mut x, [0.0, uk, 0.0], h, &mut work);
-            }
+            rk.advance(&mut Held { p: self, torques: [0.0, uk, 0.0] }, &mut x, dt_s);
         }
         (w2, w3)
+    }
+}
+
+/// The powertrain with its torques held over a step.
+pub struct Held<'a> {
+    /// The model.
+    pub p: &'a Powertrain,
+    /// [M_m2, M_drive, M_m3], the drive's already delayed.
+    pub torques: [f64; 3],
+}
+
+impl PiecewiseSmooth for Held<'_> {
+    #[inline]
+    fn rhs(&mut self, x: &[f64], dx: &mut [f64]) {
+        self.p.derivative(x, self.torques, dx);
+    }
+    #[inline]
+    fn piece(&mut self, x: &[f64]) -> u64 {
+        self.p.piece(x)
     }
 }
 
@@ -788,35 +854,42 @@ mod tests {
     }
 
     #[test]
-    fn backlash_steps_like_fine_rk4() {
-        // a sweep about 0 Nm, so the shafts cross the play twice a period, against RK4 with
-        // 0.025 ms steps (5× finer) over 5 s, before the rattling's sensitivity builds up
-        let effects = DriveEffects { backlash_rad: 0.004, ..Default::default() };
-        let p = Powertrain::new(&rig(), Variant::V1, &effects).unwrap();
-        let dt = 1e-3;
-        let torque: Vec<f64> = (0..5000)
-            .map(|k| {
-                let t = k as f64 * dt;
-                8.0 * (2.0 * std::f64::consts::PI * (1.0 * t + 1.5 * t * t)).sin()
-            })
-            .collect();
-        let (w2, _) = p.simulate(&torque, dt, 0.0).unwrap();
-        let mut x = p.steady_state(torque[0], 0.0);
-        let mut work: [Vec<f64>; 5] = std::array::from_fn(|_| vec![0.0; x.len()]);
-        let mut reference = Vec::new();
-        for &u in &torque {
-            reference.push(x[3]);
-            for _ in 0..40 {
-                p.rk4_step(&mut x, [0.0, u, 0.0], dt / 40.0, &mut work);
+    fn play_and_friction_step_like_fine_rk4() {
+        // a sweep about 0 Nm, so the shafts cross the play twice a period and the machines'
+        // speeds reverse, against plain RK4 with 0.025 ms steps everywhere (5× finer than the
+        // fine steps, 40× finer than the coarse ones) over 5 s, before the rattling's
+        // sensitivity builds up
+        let play = DriveEffects { backlash_rad: 0.004, ..Default::default() };
+        let friction =
+            DriveEffects { coulomb_friction_nm: [1.0, 0.5, 1.0], friction_smoothing_radps: 0.01, ..Default::default() };
+        for effects in [play, friction] {
+            let p = Powertrain::new(&rig(), Variant::V1, &effects).unwrap();
+            let dt = 1e-3;
+            let torque: Vec<f64> = (0..5000)
+                .map(|k| {
+                    let t = k as f64 * dt;
+                    8.0 * (2.0 * std::f64::consts::PI * (1.0 * t + 1.5 * t * t)).sin()
+                })
+                .collect();
+            let (w2, _) = p.simulate(&torque, dt, 0.0).unwrap();
+            let mut x = p.steady_state(torque[0], 0.0);
+            let mut work: [Vec<f64>; 5] = std::array::from_fn(|_| vec![0.0; x.len()]);
+            let mut reference = Vec::new();
+            for &u in &torque {
+                reference.push(x[3]);
+                for _ in 0..40 {
+                    p.rk4_step(&mut x, [0.0, u, 0.0], dt / 40.0, &mut work);
+                }
             }
+            let range = reference.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+            let worst = w2.iter().zip(&reference).fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
+            // the kinks inside the fine sub-steps are where RK4 loses its order: 3e-4 (play) and
+            // 7e-4 (friction) of the range seen; 1 ms steps across the play leave 3e-3
+            assert!(worst < 1e-3 * range, "{effects:?}: max |Δw_m2| {worst} of {range}");
+            // and the pieces are left: some samples inside the play, speeds reversing
+            let crossings = reference.windows(2).filter(|w| w[0].signum() != w[1].signum()).count();
+            assert!(crossings > 20, "{crossings}");
         }
-        let range = reference.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-        let worst = w2.iter().zip(&reference).fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
-        // the kinks inside the sub-steps are where RK4 loses its order
-        assert!(worst < 2e-3 * range, "max |Δw_m2| {worst} of {range}");
-        // and the play is crossed: some samples are inside it
-        let crossings = torque.windows(2).filter(|w| w[0].signum() != w[1].signum()).count();
-        assert!(crossings > 20);
     }
 
     #[test]

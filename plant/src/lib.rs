@@ -29,6 +29,7 @@ pub mod chain;
 pub mod drive;
 pub mod effects;
 pub mod error;
+pub mod integrate;
 pub mod line;
 pub mod mechanical;
 pub mod modal;

@@ -423,7 +423,7 @@ pub const PROFILE_BENT_LN: f64 = 0.01;
 pub const BACKLASH_REFINED: usize = 2;
 
 /// Fastest rate the friction's slope T_c/(v_s J) may have, 1/s: what RK4 steps of 0.25 ms
-/// (`Powertrain::rk4_step_s`: h·rate ≤ 0.5) resolve, four per millisecond.
+/// (`Powertrain::rk4_steps_s`: h·rate ≤ 0.5) resolve, four per millisecond.
 pub const MAX_FRICTION_RATE: f64 = 0.5 / (2.0 * plant::effects::BACKLASH_STEP_S);
 
 /// A re-fitted j_drive or c_short more than this factor from its declared value is

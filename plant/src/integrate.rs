@@ -1,0 +1,162 @@
+//! One fixed-step integrator for the nonlinear models (backlash, Coulomb friction), shared by
+//! the simulations of the diagnosis and the FMU's co-simulation step.
+//!
+//! The right-hand sides are smooth *within pieces*: a coupling in contact or inside its play,
+//! a machine's speed clear of the steep band of its smoothed friction. Inside one piece the
+//! model is linear or gently nonlinear and classical RK4 is accurate at steps set by the linear
+//! part's fastest rate; only where a step crosses from one piece to another (a kink of the
+//! backlash, the friction's steep slope near zero speed) does RK4 lose its order. So each step
+//! is tried whole and kept when its start, its three stage states and its end lie in one piece;
+//! otherwise it is taken again in fine sub-steps. A rattling shaft crosses the play twice a
+//! period, so most of a record is stepped coarsely.
+
+/// A right-hand side that is smooth within pieces.
+pub trait PiecewiseSmooth {
+    /// ẋ at `x` (inputs held over the step).
+    fn rhs(&mut self, x: &[f64], dx: &mut [f64]);
+    /// The piece `x` lies in: equal keys at a step's start, stages and end mean the step never
+    /// left one smooth piece.
+    fn piece(&mut self, x: &[f64]) -> u64;
+}
+
+/// Classical RK4 with steps of at most `coarse_s`, each retaken in sub-steps of at most
+/// `fine_s` where it leaves its piece.
+#[derive(Debug, Clone)]
+pub struct PiecewiseRk4 {
+    /// Longest step within one piece, s.
+    pub coarse_s: f64,
+    /// Longest step across pieces, s.
+    pub fine_s: f64,
+    work: [Vec<f64>; 6],
+}
+
+impl PiecewiseRk4 {
+    /// An integrator for `nstates` states.
+    pub fn new(nstates: usize, coarse_s: f64, fine_s: f64) -> Self {
+        PiecewiseRk4 { coarse_s, fine_s: fine_s.min(coarse_s), work: std::array::from_fn(|_| vec![0.0; nstates]) }
+    }
+
+    /// Number of coarse steps and fine sub-steps per coarse step for an interval of `h`
+    /// seconds; `None` when either count is not finite.
+    pub fn counts(&self, h: f64) -> Option<(usize, usize)> {
+        let coarse = (h / self.coarse_s - 1e-9).ceil().max(1.0);
+        let fine = (h / coarse / self.fine_s - 1e-9).ceil().max(1.0);
+        (coarse.is_finite() && fine.is_finite()).then_some((coarse as usize, fine as usize))
+    }
+
+    /// Advances `x` over `h` seconds with the inputs held; the number of steps is bounded by
+    /// [`PiecewiseRk4::counts`]. Returns the number of fine sub-steps taken.
+    pub fn advance(&mut self, sys: &mut impl PiecewiseSmooth, x: &mut [f64], h: f64) -> usize {
+        let Some((coarse, fine)) = self.counts(h) else { return 0 };
+        let hc = h / coarse as f64;
+        let mut taken = 0;
+        for _ in 0..coarse {
+            let [start, ..] = &mut self.work;
+            start.copy_from_slice(x);
+            if !rk4(sys, x, hc, &mut self.work, true) {
+                x.copy_from_slice(&self.work[0]);
+                for _ in 0..fine {
+                    rk4(sys, x, hc / fine as f64, &mut self.work, false);
+                }
+                taken += fine;
+            }
+        }
+        taken
+    }
+}
+
+/// One RK4 step of `h`; with `check`, false (and `x` undefined) when a stage or the end leaves
+/// the start's piece. `w[0]` is kept for the caller.
+fn rk4(sys: &mut impl PiecewiseSmooth, x: &mut [f64], h: f64, w: &mut [Vec<f64>; 6], check: bool) -> bool {
+    let [_, k1, k2, k3, k4, tmp] = w;
+    let ns = x.len();
+    let piece = if check { sys.piece(x) } else { 0 };
+    sys.rhs(x, k1);
+    for i in 0..ns {
+        tmp[i] = x[i] + 0.5 * h * k1[i];
+    }
+    if check && sys.piece(tmp) != piece {
+        return false;
+    }
+    sys.rhs(tmp, k2);
+    for i in 0..ns {
+        tmp[i] = x[i] + 0.5 * h * k2[i];
+    }
+    if check && sys.piece(tmp) != piece {
+        return false;
+    }
+    sys.rhs(tmp, k3);
+    for i in 0..ns {
+        tmp[i] = x[i] + h * k3[i];
+    }
+    if check && sys.piece(tmp) != piece {
+        return false;
+    }
+    sys.rhs(tmp, k4);
+    for i in 0..ns {
+        x[i] += h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]);
+    }
+    !check || sys.piece(x) == piece
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A mass on a spring with play ±b and a stop: ẍ = −k·(x ∓ b) beyond the play.
+    struct Play {
+        k: f64,
+        b: f64,
+        calls: usize,
+    }
+
+    impl PiecewiseSmooth for Play {
+        fn rhs(&mut self, x: &[f64], dx: &mut [f64]) {
+            self.calls += 1;
+            dx[0] = x[1];
+            dx[1] = if x[0] > self.b {
+                -self.k * (x[0] - self.b)
+            } else if x[0] < -self.b {
+                -self.k * (x[0] + self.b)
+            } else {
+                0.0
+            };
+        }
+        fn piece(&mut self, x: &[f64]) -> u64 {
+            u64::from(x[0] > self.b) + 2 * u64::from(x[0] < -self.b)
+        }
+    }
+
+    #[test]
+    fn rattling_in_a_play_matches_its_exact_period() {
+        // analytic: in contact a half period π/ω (ω = √k), across the play 2b/v at the speed
+        // v = ω·A of the contact arc's amplitude A; started at the play's edge with speed v
+        let (k, b, v) = (400.0f64, 0.05, 1.0);
+        let w = k.sqrt();
+        let period = 2.0 * (std::f64::consts::PI / w + 2.0 * b / v);
+        let mut sys = Play { k, b, calls: 0 };
+        let mut rk = PiecewiseRk4::new(2, 0.01, 0.01 / 16.0);
+        let mut x = [b, v];
+        let h = 0.01;
+        let steps = (10.0 * period / h).round() as usize;
+        let mut crossings = Vec::new();
+        let mut prev = x[0];
+        for k in 0..steps {
+            rk.advance(&mut sys, &mut x, h);
+            // upward crossings of the play's centre, interpolated
+            if prev < 0.0 && x[0] >= 0.0 {
+                crossings.push((k as f64 + prev / (prev - x[0])) * h);
+            }
+            prev = x[0];
+        }
+        let measured = (crossings[crossings.len() - 1] - crossings[0]) / (crossings.len() - 1) as f64;
+        // 1e-4 of the period: the kinks are crossed in 1/16 ms sub-steps (first order there)
+        assert!((measured - period).abs() < 1e-4 * period, "{measured} vs {period}");
+        // energy ½v² + ½k·e² (e beyond the play) kept
+        let e = (x[0].abs() - b).max(0.0);
+        let energy = 0.5 * x[1] * x[1] + 0.5 * k * e * e;
+        assert!((energy / (0.5 * v * v) - 1.0).abs() < 1e-3, "energy {energy}");
+        // and most steps were taken whole: fewer calls than all-fine stepping (16 × 4 per ms)
+        assert!(sys.calls < steps * 4 * 16 / 3, "{} calls for {steps} steps", sys.calls);
+    }
+}
