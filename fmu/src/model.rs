@@ -15,7 +15,7 @@ use nalgebra::{DMatrix, DVector};
 
 use crate::params::FmuParams;
 use crate::variables::{powertrain_states, Table};
-use plant::effects::{DelayLine, Powertrain};
+use plant::effects::{DelayLine, PieceMaps, Powertrain};
 use plant::integrate::{PiecewiseRk4, PiecewiseSmooth};
 
 /// Number of inputs: M_m2, M_drive, M_m3, bearing F_x, F_y.
@@ -37,9 +37,15 @@ pub struct Model {
     /// System matrix and torques inside the backlash play (shafts carry nothing).
     a_open: DMatrix<f64>,
     torque_open: DMatrix<f64>,
-    /// The engaged system and input matrices in absolute angles (the backlash integrator's).
+    /// The engaged system and input matrices in absolute angles (the backlash integrator's),
+    /// the system inside the play and the play's offset (`Powertrain::play_offset`).
     a_x: DMatrix<f64>,
     b_x: DMatrix<f64>,
+    a_open_x: DMatrix<f64>,
+    play_offset_x: Vec<f64>,
+    /// Exact steps of the play's linear pieces per step length (backlash without friction), as
+    /// the diagnosis steps them.
+    piece_maps: Vec<PieceMaps>,
     /// z = T x and x = T⁻¹ z.
     t: DMatrix<f64>,
     t_inv: DMatrix<f64>,
@@ -143,6 +149,10 @@ impl Model {
         let (coarse, fine) = powertrain.rk4_steps_s();
         let coarse = coarse.min(plant::drive::RK4_STEP_TIMES_RATE / bearing_rate.max(1e-300));
         let rk = PiecewiseRk4::new(nx, coarse, fine);
+        let mut play_offset_x = vec![0.0; nx];
+        for (&i, e) in map.iter().zip(powertrain.play_offset()) {
+            play_offset_x[i] = e;
+        }
         Ok(Model {
             max_piece_s,
             rk,
@@ -154,6 +164,9 @@ impl Model {
             torque_open: torque_open_x * &t_inv,
             a_x,
             b_x,
+            a_open_x,
+            play_offset_x,
+            piece_maps: Vec::new(),
             t,
             t_inv,
             motor,
@@ -215,7 +228,7 @@ impl Model {
             let mut xs = std::mem::take(&mut self.xs);
             xs.gemv(1.0, &self.t_inv, &DVector::from_column_slice(z), 0.0);
             let mut dx = DVector::zeros(z.len());
-            self.system(u_eff).rhs(xs.as_slice(), dx.as_mut_slice());
+            self.system(u_eff, None).rhs(xs.as_slice(), dx.as_mut_slice());
             out.copy_from_slice((&self.t * dx).as_slice());
             self.xs = xs;
         } else {
@@ -319,8 +332,9 @@ impl Model {
         for &(len, drive) in &pieces {
             u_eff[DRIVE_INPUT] = drive;
             if self.nonlinear() {
+                let maps = self.piece_maps_for(len);
                 let mut rk = std::mem::replace(&mut self.rk, PiecewiseRk4::new(0, 1.0, 1.0));
-                rk.advance(&mut self.system(u_eff), x.as_mut_slice(), len);
+                rk.advance(&mut self.system(u_eff, maps), x.as_mut_slice(), len);
                 self.rk = rk;
             } else {
                 // pieces short enough for an exact exponential, all of one length
@@ -357,8 +371,9 @@ impl Model {
         result
     }
 
-    /// The right-hand side in absolute angles with the inputs `u` held.
-    fn system(&mut self, u: [f64; NU]) -> System<'_> {
+    /// The right-hand side in absolute angles with the inputs `u` held, and the exact steps of
+    /// the play's pieces `maps` (an index into the cache).
+    fn system(&mut self, u: [f64; NU], maps: Option<usize>) -> System<'_> {
         System {
             a_x: &self.a_x,
             b_x: &self.b_x,
@@ -367,7 +382,30 @@ impl Model {
             pt_x: &mut self.pt_x,
             pt_dx: &mut self.pt_dx,
             u,
+            maps: maps.and_then(|i| self.piece_maps.get(i)),
         }
+    }
+
+    /// The index of the exact piece steps of length `h` (built on first use, [`CACHE`] kept);
+    /// `None` where the pieces are not linear (friction) or cannot be discretised (RK4 then).
+    fn piece_maps_for(&mut self, h: f64) -> Option<usize> {
+        if !self.powertrain.pieces_are_linear() {
+            return None;
+        }
+        if let Some(i) = self.piece_maps.iter().position(|m| m.h() == h) {
+            return Some(i);
+        }
+        let (a, a_open, b) = (&self.a_x, &self.a_open_x, &self.b_x);
+        let maps = PieceMaps::new(
+            h,
+            &|contact| (if contact { a.clone() } else { a_open.clone() }, b.clone()),
+            &self.play_offset_x,
+        )?;
+        if self.piece_maps.len() >= CACHE {
+            self.piece_maps.remove(0);
+        }
+        self.piece_maps.push(maps);
+        Some(self.piece_maps.len() - 1)
     }
 
     /// (Ad, Bd) of step size `h` (the linear model, shafts engaged).
@@ -443,6 +481,7 @@ struct System<'a> {
     pt_x: &'a mut Vec<f64>,
     pt_dx: &'a mut Vec<f64>,
     u: [f64; NU],
+    maps: Option<&'a PieceMaps>,
 }
 
 impl System<'_> {
@@ -468,6 +507,10 @@ impl PiecewiseSmooth for System<'_> {
     fn piece(&mut self, x: &[f64]) -> u64 {
         self.gather(x);
         self.powertrain.piece(self.pt_x)
+    }
+
+    fn exact(&mut self, piece: u64, x: &[f64], h: f64, out: &mut [f64]) -> bool {
+        self.maps.is_some_and(|m| m.step(piece, x, &self.u, h, out))
     }
 }
 

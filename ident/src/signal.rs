@@ -233,32 +233,68 @@ pub fn filtfilt_high_pass(x: &[f64], dt_s: f64, cutoff_hz: f64) -> Vec<f64> {
 
 /// [`filtfilt_high_pass`] overwriting its input (no second buffer for a long record).
 pub fn filtfilt_high_pass_in_place(x: &mut [f64], dt_s: f64, cutoff_hz: f64) {
+    filtfilt_high_pass_pair(x, &mut [], dt_s, cutoff_hz);
+}
+
+/// [`filtfilt_high_pass_in_place`] of two signals at once (an empty one is left alone): the
+/// recurrence is bound by its own latency, so two independent ones run in the time of one.
+pub fn filtfilt_high_pass_pair(x: &mut [f64], y: &mut [f64], dt_s: f64, cutoff_hz: f64) {
     let k = (std::f64::consts::PI * cutoff_hz * dt_s).tan();
     let q = std::f64::consts::FRAC_1_SQRT_2;
     let norm = 1.0 / (1.0 + k / q + k * k);
     let (b0, b1, b2) = (norm, -2.0 * norm, norm);
     let (a1, a2) = (2.0 * (k * k - 1.0) * norm, (1.0 - k / q + k * k) * norm);
-    let run = |values: &mut dyn Iterator<Item = &mut f64>| {
-        let (mut x1, mut x2, mut y1, mut y2) = (0.0, 0.0, 0.0, 0.0);
-        let mut first = true;
-        for slot in values {
-            let v = *slot;
-            if first {
-                // start from rest at the first value: no step into the filter
-                x1 = v;
-                x2 = v;
-                first = false;
-            }
-            let y = b0 * v + b1 * x1 + b2 * x2 - a1 * y1 - a2 * y2;
-            x2 = x1;
-            x1 = v;
-            y2 = y1;
-            y1 = y;
-            *slot = y;
+    let c = [b0, b1, b2, a1, a2];
+    /// One direction of the biquad, started from rest at its first value (no step into the
+    /// filter).
+    #[derive(Clone, Copy)]
+    struct Biquad {
+        x1: f64,
+        x2: f64,
+        y1: f64,
+        y2: f64,
+    }
+    impl Biquad {
+        fn start(v: f64) -> Self {
+            Biquad { x1: v, x2: v, y1: 0.0, y2: 0.0 }
         }
-    };
-    run(&mut x.iter_mut());
-    run(&mut x.iter_mut().rev());
+        #[inline(always)]
+        fn next(&mut self, v: f64, c: &[f64; 5]) -> f64 {
+            let [b0, b1, b2, a1, a2] = *c;
+            let y = b0 * v + b1 * self.x1 + b2 * self.x2 - a1 * self.y1 - a2 * self.y2;
+            self.x2 = self.x1;
+            self.x1 = v;
+            self.y2 = self.y1;
+            self.y1 = y;
+            y
+        }
+    }
+    for backward in [false, true] {
+        let (n, m) = (x.len(), y.len());
+        let at = |i: usize, len: usize| if backward { len - 1 - i } else { i };
+        let mut fx = x.first().map(|_| Biquad::start(x[at(0, n)]));
+        let mut fy = y.first().map(|_| Biquad::start(y[at(0, m)]));
+        let both = if fx.is_some() && fy.is_some() { n.min(m) } else { 0 };
+        if let (Some(p), Some(q)) = (fx.as_mut(), fy.as_mut()) {
+            for i in 0..both {
+                let (ix, iy) = (at(i, n), at(i, m));
+                x[ix] = p.next(x[ix], &c);
+                y[iy] = q.next(y[iy], &c);
+            }
+        }
+        if let Some(p) = fx.as_mut() {
+            for i in both..n {
+                let ix = at(i, n);
+                x[ix] = p.next(x[ix], &c);
+            }
+        }
+        if let Some(q) = fy.as_mut() {
+            for i in both..m {
+                let iy = at(i, m);
+                y[iy] = q.next(y[iy], &c);
+            }
+        }
+    }
 }
 
 #[cfg(test)]
@@ -275,6 +311,37 @@ mod tests {
         assert_eq!(s.len(), 501);
         assert_relative_eq!(s[50].re, n as f64 / 2.0, epsilon = 1e-8);
         assert!(s[49].norm() < 1e-8);
+    }
+
+    #[test]
+    fn two_signals_filtered_together_are_each_filtered_alone() {
+        // the pair interleaves two recurrences: neither may see the other, whatever the lengths;
+        // and each direction is the biquad's recurrence (checked at one sample by hand)
+        let (dt, fc) = (1e-3, 2.0);
+        let a: Vec<f64> = (0..3000).map(|i| (i as f64 * 0.013).sin() + 0.5).collect();
+        let b: Vec<f64> = (0..1700).map(|i| (i as f64 * 0.031).cos() * 2.0 - 1.0).collect();
+        let (mut pa, mut pb) = (a.clone(), b.clone());
+        filtfilt_high_pass_pair(&mut pa, &mut pb, dt, fc);
+        let (mut sa, mut sb) = (a.clone(), b.clone());
+        filtfilt_high_pass_pair(&mut sa, &mut [], dt, fc);
+        filtfilt_high_pass_pair(&mut [], &mut sb, dt, fc);
+        assert_eq!(pa, sa);
+        assert_eq!(pb, sb);
+        let (mut pb2, mut pa2) = (b.clone(), a.clone());
+        filtfilt_high_pass_pair(&mut pb2, &mut pa2, dt, fc);
+        assert_eq!(pa2, sa);
+        assert_eq!(pb2, sb);
+        // forward pass alone at sample 2 from rest at the first value: y0 = 0 (x1 = x2 = x0),
+        // y1 = b0 x1 + b1 x0 + b2 x0 − a1·0
+        let k = (PI * fc * dt).tan();
+        let q = std::f64::consts::FRAC_1_SQRT_2;
+        let norm = 1.0 / (1.0 + k / q + k * k);
+        let y1 = norm * (a[1] - 2.0 * a[0] + a[0]);
+        let mut fwd = a[..2].to_vec();
+        // a two-sample signal filtered both ways: backward starts from rest at y1
+        filtfilt_high_pass_pair(&mut fwd, &mut [], dt, fc);
+        assert_relative_eq!(fwd[1], 0.0, epsilon = 1e-15);
+        assert_relative_eq!(fwd[0], norm * (0.0 - 2.0 * y1 + y1), epsilon = 1e-12);
     }
 
     #[test]

@@ -7,7 +7,7 @@ use nalgebra::DMatrix;
 use serde::{Deserialize, Serialize};
 
 use crate::error::{non_negative, PlantError, Result};
-use crate::integrate::{PiecewiseRk4, PiecewiseSmooth};
+use crate::integrate::{AffineStep, PiecewiseRk4, PiecewiseSmooth};
 use crate::rig::{RigParams, Variant};
 use crate::statespace::StateSpace;
 
@@ -387,16 +387,13 @@ impl Powertrain {
         let ss = self.state_space();
         let d = ss.c2d(dt_s)?;
         let ns = self.nstates();
-        let ad: Vec<f64> = (0..ns * ns).map(|k| d.ad[(k / ns, k % ns)]).collect();
-        let bd: Vec<f64> = (0..ns).map(|i| d.bd[(i, 0)]).collect();
+        let step = AffineStep::new(d.ad.as_slice(), d.bd.column(0).as_slice(), &vec![0.0; ns])
+            .ok_or_else(|| PlantError::Invalid(format!("{ns} states: more than an exact step takes")))?;
         let mut x = x0;
         let mut next = vec![0.0; ns];
         for &uk in u {
             out(&x);
-            for i in 0..ns {
-                let row = &ad[i * ns..(i + 1) * ns];
-                next[i] = row.iter().zip(&x).map(|(a, b)| a * b).sum::<f64>() + bd[i] * uk;
-            }
+            step.apply(&x, &[uk], &mut next);
             std::mem::swap(&mut x, &mut next);
         }
         Ok(())
@@ -613,13 +610,91 @@ impl Powertrain {
     fn simulate_rk4(&self, u: &[f64], dt_s: f64, mut x: Vec<f64>) -> (Vec<f64>, Vec<f64>) {
         let n = self.dofs();
         let mut rk = self.integrator(x.len());
+        let maps = self.piece_maps(dt_s);
         let (mut w2, mut w3) = (Vec::with_capacity(u.len()), Vec::with_capacity(u.len()));
         for &uk in u {
             w2.push(x[n]);
             w3.push(x[n + 2]);
-            rk.advance(&mut Held { p: self, torques: [0.0, uk, 0.0] }, &mut x, dt_s);
+            rk.advance(&mut Held { p: self, torques: [0.0, uk, 0.0], maps: maps.as_ref() }, &mut x, dt_s);
         }
         (w2, w3)
+    }
+
+    /// The constant generalised force of the play beyond its positive edge, as a state
+    /// derivative: in contact there the shafts' force c_s (s − b) + d_s ṡ is the engaged model's
+    /// less c_s b, a force a_i c_s b on each coordinate (below the negative edge its negative).
+    pub fn play_offset(&self) -> Vec<f64> {
+        let n = self.dofs();
+        let mut e = vec![0.0; self.nstates()];
+        for i in 0..n {
+            e[n + i] = self.a[i] * self.c_s * self.effects.backlash_rad / self.inertia[i];
+        }
+        e
+    }
+
+    /// Whether the only nonlinearity is the play (no friction): its pieces are linear and
+    /// are stepped exactly ([`PieceMaps`]).
+    pub fn pieces_are_linear(&self) -> bool {
+        !self.friction && self.effects.backlash_rad > 0.0
+    }
+
+    /// The exact steps of `h` of the three linear pieces of a model whose only nonlinearity is
+    /// the play, driven by the drive torque alone; `None` otherwise.
+    pub fn piece_maps(&self, h: f64) -> Option<PieceMaps> {
+        if !self.pieces_are_linear() {
+            return None;
+        }
+        let offset = self.play_offset();
+        PieceMaps::new(
+            h,
+            &|contact| {
+                let (a, b, _) = self.linear(contact);
+                (a, b.columns(1, 1).into_owned())
+            },
+            &offset,
+        )
+    }
+}
+
+/// The exact steps of a backlash model's pieces (inside the play, beyond it, below it: the keys
+/// of [`Powertrain::piece`]) over `h` seconds.
+#[derive(Debug, Clone)]
+pub struct PieceMaps {
+    h: f64,
+    maps: [AffineStep; 3],
+}
+
+impl PieceMaps {
+    /// The maps of `h` for the system `(A, B)` of `linear(contact)` and the play's offset
+    /// (state derivative beyond the positive edge): x⁺ = Φ x + Γ u + e per piece.
+    pub fn new(h: f64, linear: &dyn Fn(bool) -> (DMatrix<f64>, DMatrix<f64>), offset: &[f64]) -> Option<PieceMaps> {
+        let ns = offset.len();
+        let map = |contact: bool, sign: f64| -> Option<AffineStep> {
+            let (a, b) = linear(contact);
+            let m = b.ncols();
+            let mut inputs = DMatrix::zeros(ns, m + 1);
+            inputs.columns_mut(0, m).copy_from(&b);
+            for (i, &e) in offset.iter().enumerate() {
+                inputs[(i, m)] = sign * e;
+            }
+            let (phi, gamma) = crate::statespace::zoh(&a, &inputs, h).ok()?;
+            let g = gamma.as_slice();
+            AffineStep::new(phi.as_slice(), &g[..ns * m], &g[ns * m..])
+        };
+        Some(PieceMaps { h, maps: [map(false, 0.0)?, map(true, 1.0)?, map(true, -1.0)?] })
+    }
+
+    /// The step length, s.
+    pub fn h(&self) -> f64 {
+        self.h
+    }
+
+    /// x⁺ of piece `piece` under the inputs `u` held over `h`; false for another step length or
+    /// an unknown piece.
+    pub fn step(&self, piece: u64, x: &[f64], u: &[f64], h: f64, out: &mut [f64]) -> bool {
+        let Some(m) = self.maps.get(piece as usize).filter(|_| h == self.h) else { return false };
+        m.apply(x, u, out);
+        true
     }
 }
 
@@ -629,6 +704,8 @@ pub struct Held<'a> {
     pub p: &'a Powertrain,
     /// [M_m2, M_drive, M_m3], the drive's already delayed.
     pub torques: [f64; 3],
+    /// Exact steps of its linear pieces (the load torques then zero).
+    pub maps: Option<&'a PieceMaps>,
 }
 
 impl PiecewiseSmooth for Held<'_> {
@@ -639,6 +716,11 @@ impl PiecewiseSmooth for Held<'_> {
     #[inline]
     fn piece(&mut self, x: &[f64]) -> u64 {
         self.p.piece(x)
+    }
+    fn exact(&mut self, piece: u64, x: &[f64], h: f64, out: &mut [f64]) -> bool {
+        self.torques[0] == 0.0
+            && self.torques[2] == 0.0
+            && self.maps.is_some_and(|m| m.step(piece, x, &self.torques[1..2], h, out))
     }
 }
 

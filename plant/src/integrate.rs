@@ -8,7 +8,9 @@
 //! backlash, the friction's steep slope near zero speed) does RK4 lose its order. So each step
 //! is tried whole and kept when its start, its three stage states and its end lie in one piece;
 //! otherwise it is taken again in fine sub-steps. A rattling shaft crosses the play twice a
-//! period, so most of a record is stepped coarsely.
+//! period, so most of a record is stepped coarsely. Where the pieces are linear (backlash
+//! alone) the system may step a piece exactly instead, kept when the end lies in the start's
+//! piece.
 
 /// A right-hand side that is smooth within pieces.
 pub trait PiecewiseSmooth {
@@ -17,6 +19,11 @@ pub trait PiecewiseSmooth {
     /// The piece `x` lies in: equal keys at a step's start, stages and end mean the step never
     /// left one smooth piece.
     fn piece(&mut self, x: &[f64]) -> u64;
+    /// Steps `x` over `h` exactly into `out` as if it stayed in `piece` (a linear piece: its
+    /// matrix exponential); false where the system has none, and RK4 steps are taken.
+    fn exact(&mut self, _piece: u64, _x: &[f64], _h: f64, _out: &mut [f64]) -> bool {
+        false
+    }
 }
 
 /// Classical RK4 with steps of at most `coarse_s`, each retaken in sub-steps of at most
@@ -28,12 +35,19 @@ pub struct PiecewiseRk4 {
     /// Longest step across pieces, s.
     pub fine_s: f64,
     work: [Vec<f64>; 6],
+    /// The counts of the last interval length (a record's samples are all one length).
+    last: (f64, Option<(usize, usize)>),
 }
 
 impl PiecewiseRk4 {
     /// An integrator for `nstates` states.
     pub fn new(nstates: usize, coarse_s: f64, fine_s: f64) -> Self {
-        PiecewiseRk4 { coarse_s, fine_s: fine_s.min(coarse_s), work: std::array::from_fn(|_| vec![0.0; nstates]) }
+        PiecewiseRk4 {
+            coarse_s,
+            fine_s: fine_s.min(coarse_s),
+            work: std::array::from_fn(|_| vec![0.0; nstates]),
+            last: (f64::NAN, None),
+        }
     }
 
     /// Number of coarse steps and fine sub-steps per coarse step for an interval of `h`
@@ -47,7 +61,24 @@ impl PiecewiseRk4 {
     /// Advances `x` over `h` seconds with the inputs held; the number of steps is bounded by
     /// [`PiecewiseRk4::counts`]. Returns the number of fine sub-steps taken.
     pub fn advance(&mut self, sys: &mut impl PiecewiseSmooth, x: &mut [f64], h: f64) -> usize {
-        let Some((coarse, fine)) = self.counts(h) else { return 0 };
+        if h != self.last.0 {
+            self.last = (h, self.counts(h));
+        }
+        let Some((coarse, fine)) = self.last.1 else { return 0 };
+        let piece = sys.piece(x);
+        let [.., end] = &mut self.work;
+        if sys.exact(piece, x, h, end) {
+            if sys.piece(end) == piece {
+                x.copy_from_slice(end);
+                return 0;
+            }
+            // the piece was left: the whole interval in fine sub-steps
+            let n = coarse * fine;
+            for _ in 0..n {
+                rk4(sys, x, h / n as f64, &mut self.work, false);
+            }
+            return n;
+        }
         let hc = h / coarse as f64;
         let mut taken = 0;
         for _ in 0..coarse {
@@ -62,6 +93,68 @@ impl PiecewiseRk4 {
             }
         }
         taken
+    }
+}
+
+/// Most states of an [`AffineStep`].
+pub const AFFINE_MAX_STATES: usize = 16;
+
+/// x⁺ = Φ x + Γ u + e for up to [`AFFINE_MAX_STATES`] states: the exact step of a linear piece
+/// (the ZOH of its matrix exponential) with its inputs held. Stored by columns, padded, so the
+/// product is a sum of columns that the compiler vectorises.
+#[derive(Debug, Clone)]
+pub struct AffineStep {
+    ns: usize,
+    phi: Vec<[f64; AFFINE_MAX_STATES]>,
+    gamma: Vec<[f64; AFFINE_MAX_STATES]>,
+    offset: [f64; AFFINE_MAX_STATES],
+}
+
+impl AffineStep {
+    /// The step of Φ (`ns` × `ns`), Γ (`ns` × inputs), both column-major as nalgebra stores
+    /// them, and e; `None` for more than [`AFFINE_MAX_STATES`] states or mismatched lengths.
+    pub fn new(phi_column_major: &[f64], gamma_column_major: &[f64], offset: &[f64]) -> Option<Self> {
+        let ns = offset.len();
+        if ns == 0
+            || ns > AFFINE_MAX_STATES
+            || phi_column_major.len() != ns * ns
+            || !gamma_column_major.len().is_multiple_of(ns)
+        {
+            return None;
+        }
+        let pad = |v: &[f64]| {
+            let mut p = [0.0; AFFINE_MAX_STATES];
+            p[..ns].copy_from_slice(v);
+            p
+        };
+        Some(AffineStep {
+            ns,
+            phi: phi_column_major.chunks(ns).map(pad).collect(),
+            gamma: gamma_column_major.chunks(ns).map(pad).collect(),
+            offset: pad(offset),
+        })
+    }
+
+    /// out = Φ x + Γ u + e (`u` as many as Γ has columns).
+    #[inline]
+    pub fn apply(&self, x: &[f64], u: &[f64], out: &mut [f64]) {
+        // the columns summed over whole groups of four lanes (one AVX register each)
+        fn sum<const W: usize>(s: &AffineStep, x: &[f64], u: &[f64], out: &mut [f64]) {
+            let mut acc = [0.0; W];
+            acc.copy_from_slice(&s.offset[..W]);
+            for (col, &v) in s.phi.iter().zip(x).chain(s.gamma.iter().zip(u)) {
+                for (a, c) in acc.iter_mut().zip(&col[..W]) {
+                    *a += c * v;
+                }
+            }
+            out[..s.ns].copy_from_slice(&acc[..s.ns]);
+        }
+        match self.ns {
+            0..=4 => sum::<4>(self, x, u, out),
+            5..=8 => sum::<8>(self, x, u, out),
+            9..=12 => sum::<12>(self, x, u, out),
+            _ => sum::<AFFINE_MAX_STATES>(self, x, u, out),
+        }
     }
 }
 

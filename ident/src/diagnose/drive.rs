@@ -18,7 +18,7 @@ use serde::Serialize;
 
 use super::{bic, effective_count, lag1_autocorrelation, lm, rms, CandidateScore, FRICTION_SMOOTHING_FRACTION};
 use crate::error::{IdentError, Result};
-use crate::signal::filtfilt_high_pass_in_place;
+use crate::signal::{filtfilt_high_pass_in_place, filtfilt_high_pass_pair};
 
 /// Lowest high-pass corner, Hz.
 pub const HIGH_PASS_MIN_HZ: f64 = 0.02;
@@ -206,13 +206,15 @@ impl Problem<'_> {
     /// The model's outputs, high-passed as the measurement is.
     fn simulate(&self, m: &DriveModel) -> Option<Vec<Vec<f64>>> {
         let mut y = m.simulate(self.rec.inputs, self.rec.dt_s, self.initial_speed, self.rec.outputs).ok()?;
-        for s in y.iter_mut() {
-            filtfilt_high_pass_in_place(s, self.rec.dt_s, self.high_pass_hz);
-            if !s.iter().all(|v| v.is_finite()) {
-                return None;
+        // two outputs at a time (the filter's recurrences interleaved)
+        for pair in y.chunks_mut(2) {
+            match pair {
+                [a, b] => filtfilt_high_pass_pair(a, b, self.rec.dt_s, self.high_pass_hz),
+                [a] => filtfilt_high_pass_in_place(a, self.rec.dt_s, self.high_pass_hz),
+                _ => {}
             }
         }
-        Some(y)
+        y.iter().all(|s| s.iter().all(|v| v.is_finite())).then_some(y)
     }
 
     fn residual_of(&self, y: &[Vec<f64>]) -> Vec<f64> {

@@ -12,7 +12,7 @@ use serde::Serialize;
 
 use super::{bic, effective_count, lag1_autocorrelation, lm, rms, CandidateScore, FRICTION_SMOOTHING_FRACTION};
 use crate::error::{IdentError, Result};
-use crate::signal::{filtfilt_high_pass, filtfilt_high_pass_in_place, rfft};
+use crate::signal::{filtfilt_high_pass, filtfilt_high_pass_pair, rfft};
 use crate::sweep::Sweep;
 
 /// What the residual shows before any candidate is fitted.
@@ -131,8 +131,7 @@ impl Problem<'_> {
         if !a.iter().chain(&b).all(|v| v.is_finite()) {
             return None;
         }
-        filtfilt_high_pass_in_place(&mut a, self.sweep.dt_s, self.high_pass_hz);
-        filtfilt_high_pass_in_place(&mut b, self.sweep.dt_s, self.high_pass_hz);
+        filtfilt_high_pass_pair(&mut a, &mut b, self.sweep.dt_s, self.high_pass_hz);
         Some([a, b])
     }
 
