@@ -177,14 +177,28 @@ fn within(v: f64, truth: f64, rel: f64, what: &str) {
 }
 
 /// The error at least halved at each step of the path declared → +A → +A+B: the declared
-/// model's error (not re-fitted) to the first effect's, then from effect to effect.
+/// model's error (not re-fitted) to the first effect's, then from effect to effect — for every
+/// addition of an effect the answer keeps (the selection may add an effect that the
+/// leave-one-out check later drops; that step is not part of the answer's path), and the
+/// answer's error no worse than where its last effect was added.
 fn halved_each_step(d: &TorsionalDiagnosis) {
     assert!(d.error_after < 0.5 * d.error_before, "error {} → {}", d.error_before, d.error_after);
+    let kept = found(d);
     let mut prev = d.error_before;
+    let mut size = 0;
+    let mut last_kept = d.error_after;
     for p in d.path.iter().filter(|p| !p.effects.is_empty()) {
-        assert!(p.error < 0.5 * prev, "path step {:?}: {} after {}", p.effects, p.error, prev);
+        if p.effects.len() > size {
+            let added = p.effects.last().unwrap();
+            if kept.contains(added) {
+                assert!(p.error < 0.5 * prev, "path step {:?}: {} after {}", p.effects, p.error, prev);
+                last_kept = p.error;
+            }
+        }
+        size = p.effects.len();
         prev = p.error;
     }
+    assert!(d.error_after <= 1.05 * last_kept, "error {} after the last kept effect's {last_kept}", d.error_after);
 }
 
 fn print_params(d: &TorsionalDiagnosis) {
@@ -322,5 +336,111 @@ fn an_actuator_lag_and_a_dead_time_about_40_nm() {
     assert_eq!(found(&d), ["actuator_lag", "time_delay"]);
     within(param(&d, "actuator_lag", None, "time_constant_s"), 0.006, 0.2, "time_constant_s");
     within(param(&d, "time_delay", None, "delay_s"), 0.004, 0.2, "delay_s");
+    halved_each_step(&d);
+}
+
+// The remaining pairs of the vocabulary, written after the algorithm was settled and not tuned
+// on (issue 15: "every pair of effects"), each at an operating point where both can show:
+// friction about 0 Nm (the speeds reverse), play about a small set point (the shaft torques
+// cross zero at resonance), the linear effects anywhere.
+
+#[test]
+fn shaft_damping_missing_and_an_actuator_lag_about_40_nm() {
+    let undamped = RigParams { d_short: 0.0, d_long: 0.0, ..declared() };
+    let truth = Truth { zeta: Some(0.03), lag_s: 0.006, set_point_nm: 40.0, ..Default::default() };
+    let d = run(&record(&undamped, truth, 31), &undamped);
+    print_params(&d);
+    assert_eq!(found(&d), ["actuator_lag", "shaft_damping"]);
+    within(param(&d, "shaft_damping", None, "damping_ratio"), 0.03, 0.2, "damping_ratio");
+    within(param(&d, "actuator_lag", None, "time_constant_s"), 0.006, 0.2, "time_constant_s");
+    halved_each_step(&d);
+}
+
+#[test]
+fn shaft_damping_missing_and_play_about_a_small_set_point() {
+    let undamped = RigParams { d_short: 0.0, d_long: 0.0, ..declared() };
+    let truth = Truth { zeta: Some(0.03), backlash_rad: 0.003, set_point_nm: 5.0, ..Default::default() };
+    let d = run(&record(&undamped, truth, 32), &undamped);
+    print_params(&d);
+    assert_eq!(found(&d), ["backlash", "shaft_damping"]);
+    within(param(&d, "shaft_damping", None, "damping_ratio"), 0.03, 0.2, "damping_ratio");
+    within(param(&d, "backlash", None, "backlash_rad"), 0.003, 0.2, "backlash_rad");
+    halved_each_step(&d);
+}
+
+#[test]
+#[ignore = "open (issue 15): the undamped declared model's resonance dominates; damping alone is implausible (c_short × 0.37 imitates the compliance), a lag is taken instead and the compliance is never reached (0.97 error left)"]
+fn shaft_damping_missing_and_a_drive_compliance_about_40_nm() {
+    let undamped = RigParams { d_short: 0.0, d_long: 0.0, ..declared() };
+    let truth = Truth { zeta: Some(0.03), compliance: Some((1500.0, 0.5)), set_point_nm: 40.0, ..Default::default() };
+    let d = run(&record(&undamped, truth, 33), &undamped);
+    print_params(&d);
+    assert_eq!(found(&d), ["drive_compliance", "shaft_damping"]);
+    within(param(&d, "shaft_damping", None, "damping_ratio"), 0.03, 0.2, "damping_ratio");
+    within(param(&d, "drive_compliance", None, "stiffness_Nm_per_rad"), 1500.0, 0.2, "stiffness");
+    halved_each_step(&d);
+}
+
+#[test]
+fn shaft_damping_missing_and_friction_at_the_load_machines_about_zero_torque() {
+    let undamped = RigParams { d_short: 0.0, d_long: 0.0, ..declared() };
+    let truth = Truth { zeta: Some(0.03), friction_nm: [1.0, 0.0, 1.0], set_point_nm: 0.0, ..Default::default() };
+    let d = run(&record(&undamped, truth, 34), &undamped);
+    print_params(&d);
+    assert_eq!(found(&d), ["coulomb_friction at M2 and M3", "shaft_damping"]);
+    within(param(&d, "shaft_damping", None, "damping_ratio"), 0.03, 0.2, "damping_ratio");
+    within(param(&d, "coulomb_friction", Some("M2 and M3"), "friction_M2_Nm"), 1.0, 0.2, "friction at M2");
+    halved_each_step(&d);
+}
+
+#[test]
+#[ignore = "open (issue 15): forward selection takes a dead time for the lag and cannot swap it (time_delay, backlash, shaft_damping found)"]
+fn an_actuator_lag_and_play_about_a_small_set_point() {
+    let truth = Truth { lag_s: 0.006, backlash_rad: 0.003, set_point_nm: 5.0, ..Default::default() };
+    let d = run(&record(&declared(), truth, 35), &declared());
+    print_params(&d);
+    assert_eq!(found(&d), ["actuator_lag", "backlash"]);
+    within(param(&d, "actuator_lag", None, "time_constant_s"), 0.006, 0.2, "time_constant_s");
+    within(param(&d, "backlash", None, "backlash_rad"), 0.003, 0.2, "backlash_rad");
+    halved_each_step(&d);
+}
+
+#[test]
+#[ignore = "open (issue 15): a dead time taken for the lag and a spurious friction at the drive (no swap step)"]
+fn an_actuator_lag_and_friction_at_the_load_machines_about_zero_torque() {
+    let truth = Truth { lag_s: 0.006, friction_nm: [1.0, 0.0, 1.0], set_point_nm: 0.0, ..Default::default() };
+    let d = run(&record(&declared(), truth, 36), &declared());
+    print_params(&d);
+    assert_eq!(found(&d), ["actuator_lag", "coulomb_friction at M2 and M3"]);
+    within(param(&d, "actuator_lag", None, "time_constant_s"), 0.006, 0.2, "time_constant_s");
+    within(param(&d, "coulomb_friction", Some("M2 and M3"), "friction_M2_Nm"), 1.0, 0.2, "friction at M2");
+    halved_each_step(&d);
+}
+
+#[test]
+#[ignore = "open (issue 15): both found, but the fit stops at error 0.12 and a spurious shaft_damping is kept"]
+fn play_and_a_drive_compliance_about_a_small_set_point() {
+    let truth = Truth { backlash_rad: 0.003, compliance: Some((1500.0, 0.5)), set_point_nm: 5.0, ..Default::default() };
+    let d = run(&record(&declared(), truth, 37), &declared());
+    print_params(&d);
+    assert_eq!(found(&d), ["backlash", "drive_compliance"]);
+    within(param(&d, "backlash", None, "backlash_rad"), 0.003, 0.2, "backlash_rad");
+    within(param(&d, "drive_compliance", None, "stiffness_Nm_per_rad"), 1500.0, 0.2, "stiffness");
+    halved_each_step(&d);
+}
+
+#[test]
+fn a_drive_compliance_and_friction_at_the_load_machines_about_zero_torque() {
+    let truth = Truth {
+        compliance: Some((1500.0, 0.5)),
+        friction_nm: [1.0, 0.0, 1.0],
+        set_point_nm: 0.0,
+        ..Default::default()
+    };
+    let d = run(&record(&declared(), truth, 38), &declared());
+    print_params(&d);
+    assert_eq!(found(&d), ["coulomb_friction at M2 and M3", "drive_compliance"]);
+    within(param(&d, "drive_compliance", None, "stiffness_Nm_per_rad"), 1500.0, 0.2, "stiffness");
+    within(param(&d, "coulomb_friction", Some("M2 and M3"), "friction_M2_Nm"), 1.0, 0.2, "friction at M2");
     halved_each_step(&d);
 }

@@ -358,6 +358,14 @@ impl Powertrain {
         let u = delayed(torque, dt_s, self.effects.time_delay_s);
         let x0 = self.steady_state(u.first().copied().unwrap_or(0.0), speed0);
         if self.effects.is_nonlinear() {
+            let worst = self.integrator(0).counts(dt_s).map_or(f64::INFINITY, |(c, f)| c as f64 * f as f64);
+            if worst > crate::drive::FINE_PER_COARSE * crate::drive::MAX_SUBSTEPS as f64 {
+                return Err(PlantError::Invalid(format!(
+                    "the model needs up to {worst:.0} integration steps per {dt_s} s sample (steps of {:.3e} s, {:.3e} s \
+                     across the play or the friction's steep band): faster than the record resolves",
+                    self.coarse_s, self.fine_s
+                )));
+            }
             return Ok(self.simulate_rk4(&u, dt_s, x0));
         }
         let n = self.dofs();
@@ -933,6 +941,22 @@ mod tests {
         let (a, _, _) = p.linear(true);
         let fd = (dp[i] - dm[i]) / (2.0 * h) - a[(i, i)];
         assert!((fd - slope).abs() < 1e-6 * slope.abs(), "{fd} vs {slope}");
+    }
+
+    #[test]
+    fn a_model_faster_than_the_record_is_refused_not_integrated_for_minutes() {
+        // friction beside a lag of 0.1 µs: RK4 would need 10⁴ steps per 1 ms sample
+        let e = DriveEffects {
+            coulomb_friction_nm: [1.0, 0.0, 1.0],
+            friction_smoothing_radps: 0.01,
+            actuator_lag_s: 1e-7,
+            ..Default::default()
+        };
+        let p = Powertrain::new(&rig(), Variant::V1, &e).unwrap();
+        let t0 = std::time::Instant::now();
+        let r = p.simulate(&vec![1.0; 60_000], 1e-3, 0.0);
+        assert!(matches!(r, Err(PlantError::Invalid(ref m)) if m.contains("integration steps")), "{r:?}");
+        assert!(t0.elapsed().as_secs_f64() < 1.0);
     }
 
     #[test]

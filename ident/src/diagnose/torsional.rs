@@ -122,6 +122,13 @@ impl Problem<'_> {
             return None;
         }
         let p = Powertrain::new(&model.rig, model.variant, &model.effects).ok()?;
+        // a nonlinear model faster than the record resolves (a lag or an overdamped pole far
+        // below the sample time) would need thousands of RK4 steps per sample: not a candidate
+        if model.effects.is_nonlinear()
+            && p.integrator(0).counts(self.sweep.dt_s).is_none_or(|(coarse, _)| coarse > MAX_STEPS_PER_SAMPLE)
+        {
+            return None;
+        }
         if e.compliance_stiffness_nm_per_rad > 0.0
             && p.frequencies_hz().last().copied().unwrap_or(0.0) > 0.1 / self.sweep.dt_s
         {
@@ -429,6 +436,11 @@ pub const MAX_FRICTION_RATE: f64 = 0.5 / (2.0 * plant::effects::BACKLASH_STEP_S)
 /// implausible: such a candidate imitates a missing effect by distorting the declared
 /// mechanics and is not chosen (reported with `implausible`).
 pub const PLAUSIBLE_REFIT_FACTOR: f64 = 1.3;
+
+/// Most RK4 steps per sample within a smooth piece of a candidate with play or friction: a
+/// model needing more has a time scale below an eighth of the sample time (a lag, an overdamped
+/// pole) that the record cannot show, and is not simulated.
+pub const MAX_STEPS_PER_SAMPLE: usize = 8;
 
 /// Most effects the forward selection adds.
 pub const MAX_EFFECTS: usize = 3;
