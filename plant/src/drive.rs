@@ -567,9 +567,7 @@ impl Dynamics {
         self.fine_s = if backlash { coarse / FINE_PER_COARSE } else { coarse }.min(friction_step);
         for i in bodies() {
             let (fc, vs) = self.friction[i];
-            let j = 1.0 / self.inv_j[i];
-            let w2 = (2.0 * coarse * fc * vs * vs / j).powf(2.0 / 3.0) - vs * vs;
-            self.friction_band[i] = w2.max(0.0).sqrt();
+            self.friction_band[i] = crate::integrate::friction_band(coarse, fc, vs, 1.0 / self.inv_j[i]);
         }
         self.coarse_s = coarse;
     }

@@ -532,10 +532,7 @@ impl Powertrain {
             if tc > 0.0 {
                 let j = self.inertia[self.friction_dof(k)];
                 fine = fine.min((crate::drive::RK4_STEP_TIMES_RATE * v * j / tc).max(1e-9));
-                // the band |w| < w_b where the slope T_c v²/(J (w² + v²)^{3/2}) is steeper than
-                // the coarse step resolves (h·slope > 0.5)
-                let w2 = (2.0 * coarse * tc * v * v / j).powf(2.0 / 3.0) - v * v;
-                self.friction_band[k] = w2.max(0.0).sqrt();
+                self.friction_band[k] = crate::integrate::friction_band(coarse, tc, v, j);
             }
         }
         self.coarse_s = coarse;
@@ -590,29 +587,6 @@ impl Powertrain {
             }
         }
         v
-    }
-
-    /// One classical RK4 step of length `h` with the torques held; `work` holds 5 scratch
-    /// vectors of the state's length.
-    pub fn rk4_step(&self, x: &mut [f64], torques: [f64; 3], h: f64, work: &mut [Vec<f64>; 5]) {
-        let ns = x.len();
-        let [k1, k2, k3, k4, tmp] = work;
-        self.derivative(x, torques, k1);
-        for i in 0..ns {
-            tmp[i] = x[i] + 0.5 * h * k1[i];
-        }
-        self.derivative(tmp, torques, k2);
-        for i in 0..ns {
-            tmp[i] = x[i] + 0.5 * h * k2[i];
-        }
-        self.derivative(tmp, torques, k3);
-        for i in 0..ns {
-            tmp[i] = x[i] + h * k3[i];
-        }
-        self.derivative(tmp, torques, k4);
-        for i in 0..ns {
-            x[i] += h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]);
-        }
     }
 
     fn simulate_rk4(&self, u: &[f64], dt_s: f64, mut x: Vec<f64>) -> (Vec<f64>, Vec<f64>) {
@@ -943,6 +917,29 @@ mod tests {
         assert!((fd - slope).abs() < 1e-6 * slope.abs(), "{fd} vs {slope}");
     }
 
+    /// The reference: one plain classical RK4 step of length `h` with the torques held; `work` holds 5 scratch
+    /// vectors of the state's length.
+    fn rk4_step(p: &Powertrain, x: &mut [f64], torques: [f64; 3], h: f64, work: &mut [Vec<f64>; 5]) {
+        let ns = x.len();
+        let [k1, k2, k3, k4, tmp] = work;
+        p.derivative(x, torques, k1);
+        for i in 0..ns {
+            tmp[i] = x[i] + 0.5 * h * k1[i];
+        }
+        p.derivative(tmp, torques, k2);
+        for i in 0..ns {
+            tmp[i] = x[i] + 0.5 * h * k2[i];
+        }
+        p.derivative(tmp, torques, k3);
+        for i in 0..ns {
+            tmp[i] = x[i] + h * k3[i];
+        }
+        p.derivative(tmp, torques, k4);
+        for i in 0..ns {
+            x[i] += h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]);
+        }
+    }
+
     #[test]
     fn a_model_faster_than_the_record_is_refused_not_integrated_for_minutes() {
         // friction beside a lag of 0.1 µs: RK4 would need 10⁴ steps per 1 ms sample
@@ -984,7 +981,7 @@ mod tests {
             for &u in &torque {
                 reference.push(x[3]);
                 for _ in 0..40 {
-                    p.rk4_step(&mut x, [0.0, u, 0.0], dt / 40.0, &mut work);
+                    rk4_step(&p, &mut x, [0.0, u, 0.0], dt / 40.0, &mut work);
                 }
             }
             let range = reference.iter().fold(0.0f64, |m, v| m.max(v.abs()));

@@ -96,6 +96,16 @@ impl PiecewiseRk4 {
     }
 }
 
+/// Half-width of the band |w| < w_b about zero speed where a Coulomb friction `friction`
+/// smoothed as F_c w/√(w² + v_s²) (`smoothing` v_s, on inertia `inertia`) has a slope
+/// F_c v_s²/(J (w² + v_s²)^{3/2}) steeper than steps of `coarse_s` resolve (h·slope >
+/// `drive::RK4_STEP_TIMES_RATE`); 0 where the coarse step resolves it everywhere.
+pub fn friction_band(coarse_s: f64, friction: f64, smoothing: f64, inertia: f64) -> f64 {
+    let v2 = smoothing * smoothing;
+    let w2 = (coarse_s * friction * v2 / (crate::drive::RK4_STEP_TIMES_RATE * inertia)).powf(2.0 / 3.0) - v2;
+    w2.max(0.0).sqrt()
+}
+
 /// Most states of an [`AffineStep`].
 pub const AFFINE_MAX_STATES: usize = 16;
 
