@@ -23,9 +23,12 @@ pub struct DiagnosisReport {
     /// is `effect`/`parameters`).
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub effects: Vec<ident::diagnose::torsional::FoundEffect>,
-    /// The selection's path: declared (re-fitted) → +A → +A+B, with the error and score of each.
+    /// The answer's path: declared (re-fitted) → +A → +A+B, with the error and score of each.
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub path: Vec<ident::diagnose::torsional::PathStep>,
+    /// What the search did, where it differs from `path` (effects left out or swapped).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub search: Vec<ident::diagnose::torsional::PathStep>,
     /// Error of the declared model.
     pub error_before: f64,
     /// Error of the extended model.
@@ -185,6 +188,8 @@ fn torsional(file: &Path, progress: &(dyn Fn(&str) + Sync)) -> anyhow::Result<Di
     let d = ident::diagnose::torsional::diagnose(&b.sweep, &b.model, b.variant, progress)
         .map_err(|e| anyhow::anyhow!("{}: {e}", file.display()))?;
     let mut notes = fit_notes(&d.effect, "the declared parameters", d.structured_residual, d.error_after);
+    let same_steps =
+        d.search.len() == d.path.len() && d.search.iter().zip(&d.path).all(|(a, b)| a.effects == b.effects);
     if d.effects.len() > 1 {
         let names: Vec<String> = d
             .path
@@ -195,6 +200,15 @@ fn torsional(file: &Path, progress: &(dyn Fn(&str) + Sync)) -> anyhow::Result<Di
             })
             .collect();
         notes.push(format!("{} effects found: {}", d.effects.len(), names.join(" → ")));
+        let needed: Vec<String> = d
+            .effects
+            .iter()
+            .map(|e| {
+                let at = e.at.as_ref().map(|a| format!(" at {a}")).unwrap_or_default();
+                format!("{}{at} {:.4}", e.effect, e.error_without)
+            })
+            .collect();
+        notes.push(format!("error with each effect left out (the others re-fitted): {}", needed.join(", ")));
     }
     for c in d.candidates.iter().filter(|c| c.implausible) {
         let at = c.at.as_ref().map(|a| format!(" at {a}")).unwrap_or_default();
@@ -249,6 +263,7 @@ fn torsional(file: &Path, progress: &(dyn Fn(&str) + Sync)) -> anyhow::Result<Di
             at: d.at,
             parameters: d.parameters,
             effects: d.effects,
+            search: if same_steps { Vec::new() } else { d.search },
             path: d.path,
             error_before: d.error_before,
             error_after: d.error_after,
@@ -377,6 +392,7 @@ fn bearing(file: &Path, _progress: &(dyn Fn(&str) + Sync)) -> anyhow::Result<Dia
             parameters: d.parameters,
             effects: vec![],
             path: vec![],
+            search: vec![],
             error_before: d.error_before,
             error_after: d.error_after,
             candidates: d.candidates,
@@ -511,6 +527,7 @@ fn drive(file: &Path, progress: &(dyn Fn(&str) + Sync)) -> anyhow::Result<Diagno
             parameters: d.parameters.clone(),
             effects: vec![],
             path: vec![],
+            search: vec![],
             error_before: d.error_before,
             error_after: d.error_after,
             candidates: d.candidates.clone(),

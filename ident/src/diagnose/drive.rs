@@ -16,15 +16,14 @@ use plant::drive::{DriveModel, Effect};
 use plant::{Domain, Quantity};
 use serde::Serialize;
 
-use super::{bic, effective_count, lag1_autocorrelation, lm, rms, CandidateScore, FRICTION_SMOOTHING_FRACTION};
+use super::{
+    bic, effective_count, lag1_autocorrelation, lm, rms, CandidateScore, FRICTION_SMOOTHING_FRACTION, LM_REL_TOL,
+};
 use crate::error::{IdentError, Result};
 use crate::signal::{filtfilt_high_pass_in_place, filtfilt_high_pass_pair};
 
 /// Lowest high-pass corner, Hz.
 pub const HIGH_PASS_MIN_HZ: f64 = 0.02;
-/// The fits stop when a step gains less than this fraction of the cost (a 1e-5 change of the
-/// squared error is far below what the information criterion can tell apart).
-pub const LM_REL_TOL: f64 = 1e-5;
 
 /// Levenberg–Marquardt iterations of the screen (an effect's own 1–2 parameters, the declared
 /// inertias and stiffnesses held).

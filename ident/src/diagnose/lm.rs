@@ -4,12 +4,8 @@
 use nalgebra::{DMatrix, DVector};
 
 /// Minimises ‖f(x)‖² from `x0`; `f` returns `None` where the model cannot be evaluated.
-/// Returns the best x and its sum of squares. Stops when a step gains less than 1e-7 of the cost.
-pub fn minimise(f: &dyn Fn(&[f64]) -> Option<Vec<f64>>, x0: &[f64], max_iter: usize) -> (Vec<f64>, f64) {
-    minimise_to(f, x0, max_iter, 1e-7)
-}
-
-/// [`minimise`] stopping when a step gains less than `rel_tol` of the cost.
+/// Returns the best x and its sum of squares. Stops after `max_iter` iterations or when a step
+/// gains less than `rel_tol` of the cost.
 pub fn minimise_to(
     f: &dyn Fn(&[f64]) -> Option<Vec<f64>>,
     x0: &[f64],

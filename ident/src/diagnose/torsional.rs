@@ -10,7 +10,9 @@ use plant::effects::{DriveEffects, Powertrain};
 use plant::rig::{RigParams, Variant};
 use serde::Serialize;
 
-use super::{bic, effective_count, lag1_autocorrelation, lm, rms, CandidateScore, FRICTION_SMOOTHING_FRACTION};
+use super::{
+    bic, effective_count, lag1_autocorrelation, lm, rms, CandidateScore, FRICTION_SMOOTHING_FRACTION, LM_REL_TOL,
+};
 use crate::error::{IdentError, Result};
 use crate::signal::{filtfilt_high_pass, filtfilt_high_pass_pair, rfft};
 use crate::sweep::Sweep;
@@ -54,8 +56,11 @@ pub struct TorsionalDiagnosis {
     pub parameters: BTreeMap<String, f64>,
     /// Every effect found, in the order found, with its parameters in the final model.
     pub effects: Vec<FoundEffect>,
-    /// The forward selection's path: declared (re-fitted) → +A → +A+B (→ an effect left out).
+    /// The answer's path: declared (re-fitted) → +A → +A+B, the kept effects in the order
+    /// that lowers the error most (each model re-fitted); the order of `effects`.
     pub path: Vec<PathStep>,
+    /// What the search did: each model it moved to (effects added, left out, swapped).
+    pub search: Vec<PathStep>,
     /// Normalised error of the declared model (1 = no better than predicting nothing).
     pub error_before: f64,
     /// Normalised error of the extended model.
@@ -303,6 +308,25 @@ impl Candidate {
         }
     }
 
+    /// The candidates tried in its place once the selection has ended (the swap step): those
+    /// that imitate it in a fit — a dead time and a lag (both a phase lag of the drive torque
+    /// growing with frequency), friction at another machine — and the compliance itself,
+    /// re-seated from its grid beside the effects found after it (its valleys are narrow in
+    /// frequency, and those effects move them).
+    fn alternatives(self) -> Vec<Candidate> {
+        match self {
+            Candidate::TimeDelay => vec![Candidate::ActuatorLag],
+            Candidate::ActuatorLag => vec![Candidate::TimeDelay],
+            Candidate::DriveCompliance => vec![Candidate::DriveCompliance],
+            Candidate::CoulombFriction(m) => [Machine::M2, Machine::Drive, Machine::M3, Machine::Loads]
+                .into_iter()
+                .filter(|&o| o != m)
+                .map(Candidate::CoulombFriction)
+                .collect(),
+            Candidate::ShaftDamping | Candidate::Backlash => Vec::new(),
+        }
+    }
+
     /// Adds it to a model: `own` its parameters (log space; the compliance's motor share as a
     /// logit).
     fn apply(self, rig: &mut RigParams, e: &mut DriveEffects, own: &[f64], variant: Variant) {
@@ -463,6 +487,9 @@ pub struct FoundEffect {
     pub at: Option<String>,
     /// Its parameters in the final model.
     pub parameters: BTreeMap<String, f64>,
+    /// The answer's error with this effect left out and the others re-fitted (the declared
+    /// model re-fitted for a single effect): what the effect explains.
+    pub error_without: f64,
 }
 
 /// One step of the forward selection.
@@ -498,6 +525,25 @@ impl Fit {
     /// This fit as a step of the selection's path.
     fn step(&self) -> PathStep {
         PathStep { effects: self.effects.iter().map(|c| label(*c)).collect(), error: self.error(), score: self.score }
+    }
+
+    /// This fit's first `len` effects (their parameters as fitted; cost and score unknown).
+    fn truncated(&self, len: usize) -> Fit {
+        let own: usize = self.effects[..len].iter().map(|c| c.own_len()).sum();
+        Fit { effects: self.effects[..len].to_vec(), x: self.x[..2 + own].to_vec(), cost: f64::NAN, score: f64::NAN }
+    }
+
+    /// This fit with its effects (and their parameters) in `order` (indices of its effects).
+    fn reordered(&self, order: &[usize]) -> Fit {
+        let mut at = vec![2];
+        for c in &self.effects {
+            at.push(at.last().expect("not empty") + c.own_len());
+        }
+        let mut x = self.x[..2].to_vec();
+        for &k in order {
+            x.extend_from_slice(&self.x[at[k]..at[k + 1]]);
+        }
+        Fit { effects: order.iter().map(|&k| self.effects[k]).collect(), x, ..self.clone() }
     }
 
     /// Whether this fit beats `other` clearly: a lower score and 10 % less error.
@@ -589,7 +635,7 @@ pub fn diagnose(
 
     let fit_with = |effects: Vec<Candidate>, x0: Vec<f64>, iterations: usize| -> Fit {
         let f = |x: &[f64]| problem.residual(&problem.build(&effects, x));
-        let (x, cost) = lm::minimise(&f, &x0, iterations);
+        let (x, cost) = lm::minimise_to(&f, &x0, iterations, LM_REL_TOL);
         let k = x.len();
         Fit { effects, x, cost, score: score(cost, k) }
     };
@@ -602,10 +648,11 @@ pub fn diagnose(
         // beside the effects found so far at their fitted values; the first effect from the
         // declared j_drive and c_short (the re-fitted `none` may have bent them to imitate the
         // very effect); the play's profile beside an effect also from the declared j_drive and
-        // c_short (the effects found may have bent them to imitate the play)
+        // c_short (the effects found may have bent them to imitate the play), and beside an
+        // implausible model (one followed a round ahead) also from the declared ones
         let mut bases: Vec<Vec<f64>> = Vec::new();
         let bent = base.x[..2].iter().any(|v| v.abs() > PROFILE_BENT_LN);
-        if base.effects.is_empty() || (c == Candidate::Backlash && bent) {
+        if base.effects.is_empty() || (c == Candidate::Backlash && bent) || !base.plausible() {
             let mut x = base.x.clone();
             x[..2].fill(0.0);
             bases.push(x);
@@ -640,10 +687,13 @@ pub fn diagnose(
             minima.truncate(BACKLASH_REFINED);
             minima
         } else {
-            (0..grid.len())
-                .filter(|&i| grid[i].1.is_finite())
-                .min_by(|&a, &b| grid[a].1.total_cmp(&grid[b].1))
-                .into_iter()
+            // the best start beside each base
+            (0..bases.len())
+                .filter_map(|b| {
+                    (b * starts.len()..(b + 1) * starts.len())
+                        .filter(|&i| grid[i].1.is_finite())
+                        .min_by(|&a, &b| grid[a].1.total_cmp(&grid[b].1))
+                })
                 .collect()
         };
         best.dedup();
@@ -658,121 +708,223 @@ pub fn diagnose(
         })
     };
 
+    // the accepted model polished: its fit continued, and one restarted from the declared
+    // j_drive and c_short (those of the model before may have been bent to imitate the effect
+    // just found); the lowest plausible kept (the lowest if none is)
+    let polish = |b: Fit| -> Fit {
+        let mut restart = b.x.clone();
+        restart[..2].fill(0.0);
+        let polished = super::on_two_workers(2, &|i| {
+            fit_with(b.effects.clone(), if i == 0 { b.x.clone() } else { restart.clone() }, LM_ITERATIONS)
+        });
+        let fits: Vec<Fit> = polished.into_iter().filter(|f| f.cost.is_finite()).chain(std::iter::once(b)).collect();
+        let lowest = |plausible: bool| {
+            fits.iter().filter(|f| !plausible || f.plausible()).min_by(|a, b| a.cost.total_cmp(&b.cost)).cloned()
+        };
+        lowest(true).or_else(|| lowest(false)).expect("the accepted fit is there")
+    };
+    // one round of the selection: every excitable candidate that sets nothing `base` sets,
+    // fitted beside it
+    let round = |base: &Fit| -> Vec<Fit> {
+        let todo: Vec<Candidate> = Candidate::ALL
+            .into_iter()
+            .filter(|c| !base.effects.iter().any(|f| f.overlaps(*c)) && excitable(*c))
+            .collect();
+        super::on_two_workers(todo.len(), &|i| {
+            let fit = extend(base, todo[i]);
+            if base.effects.is_empty() {
+                progress(todo[i].name());
+            }
+            fit
+        })
+    };
+    // the best fit of `fits` (plausible or not) that beats `base` clearly
+    let best_beating = |fits: &[Fit], base: &Fit, plausible: bool| -> Option<Fit> {
+        fits.iter()
+            .filter(|f| f.cost.is_finite() && f.plausible() == plausible && f.beats(base))
+            .min_by(|a, b| a.score.total_cmp(&b.score))
+            .cloned()
+    };
+    // `fit` without its `i`-th effect (its parameters dropped, the others as fitted)
+    let without = |fit: &Fit, i: usize| -> Fit {
+        let mut effects = fit.effects.clone();
+        effects.remove(i);
+        let mut x = fit.x[..2].to_vec();
+        let mut at = 2;
+        for (k, c) in fit.effects.iter().enumerate() {
+            if k != i {
+                x.extend_from_slice(&fit.x[at..at + c.own_len()]);
+            }
+            at += c.own_len();
+        }
+        Fit { effects, x, cost: f64::NAN, score: f64::NAN }
+    };
+    // each kept effect checked by leaving it out: one that the others do not need clearly
+    // (the full model does not beat the model without it) goes, the least needed first.
+    // Returns the models on the way and, for the model it ends at, each model without one of
+    // its effects (re-fitted; none for a single effect).
+    let leave_out = |mut current: Fit| -> (Vec<Fit>, Vec<Fit>) {
+        let mut steps = Vec::new();
+        while current.effects.len() >= 2 {
+            let candidates: Vec<Fit> = (0..current.effects.len()).map(|i| without(&current, i)).collect();
+            let refitted = super::on_two_workers(candidates.len(), &|i| {
+                fit_with(candidates[i].effects.clone(), candidates[i].x.clone(), LM_ITERATIONS)
+            });
+            let weakest = refitted
+                .iter()
+                .filter(|w| w.cost.is_finite() && w.plausible() && !current.beats(w))
+                .min_by(|a, b| a.score.total_cmp(&b.score));
+            match weakest {
+                Some(w) => {
+                    current = w.clone();
+                    steps.push(current.clone());
+                }
+                None => return (steps, refitted),
+            }
+        }
+        (steps, Vec::new())
+    };
+
     // the declared model re-fitted: `none`
     let none = fit_with(Vec::new(), vec![0.0, 0.0], LM_ITERATIONS);
     if !none.cost.is_finite() {
         return Err(IdentError::Data("re-fitting the declared model failed".into()));
     }
     progress("none");
+    let skipped: Vec<Candidate> = Candidate::ALL.into_iter().filter(|c| !excitable(*c)).collect();
     let mut current = none.clone();
-    let mut last_plausible = none.clone();
-    let mut path = vec![none.step()];
+    let mut search = vec![none.step()];
     let mut first_round: Vec<Fit> = Vec::new();
-    let mut skipped: Vec<Candidate> = Vec::new();
-    for round in 0..MAX_EFFECTS {
-        let todo: Vec<Candidate> = Candidate::ALL
-            .into_iter()
-            .filter(|c| !current.effects.iter().any(|f| f.overlaps(*c)))
-            .filter(|&c| {
-                let ok = excitable(c);
-                if !ok && round == 0 {
-                    skipped.push(c);
-                }
-                ok
-            })
-            .collect();
-        if todo.is_empty() {
-            break;
-        }
-        let base = &current;
-        let fits = super::on_two_workers(todo.len(), &|i| {
-            let fit = extend(base, todo[i]);
-            if round == 0 {
-                progress(todo[i].name());
-            }
-            fit
-        });
-        // the best plausible candidate that beats the model so far; where none is plausible
-        // (two effects at once can bend the mechanics of every one-effect model), the best
-        // that beats it as a step towards the next round, which must then end plausible
-        let beating = |plausible: bool| {
-            fits.iter()
-                .filter(|f| f.cost.is_finite() && f.plausible() == plausible && f.beats(&current))
-                .min_by(|a, b| a.score.total_cmp(&b.score))
-                .cloned()
-        };
-        let best = beating(true).or_else(|| {
-            if current.plausible() || current.effects.is_empty() {
-                beating(false)
-            } else {
-                None
-            }
-        });
-        if round == 0 {
+    // forward selection: the best plausible candidate that beats the model so far is added.
+    // An implausible one that scores better (it bends the declared mechanics to imitate an
+    // effect, as damping missing beside a compliance does) is followed one round ahead: it is
+    // taken only if a plausible model one effect later beats the plausible step. Every model
+    // kept is plausible.
+    while current.effects.len() < MAX_EFFECTS {
+        let fits = round(&current);
+        let plausible = best_beating(&fits, &current, true);
+        let implausible =
+            best_beating(&fits, &current, false).filter(|i| plausible.as_ref().is_none_or(|p| i.score < p.score));
+        if current.effects.is_empty() {
             first_round = fits;
         }
-        match best {
-            Some(b) if b.beats(&current) => {
-                // polish the accepted model: its fit continued, and one restarted from the
-                // declared j_drive and c_short (those of the model before may have been bent
-                // to imitate the effect just found); the better kept
-                let mut restart = b.x.clone();
-                restart[..2].fill(0.0);
-                let polished = super::on_two_workers(2, &|i| {
-                    fit_with(b.effects.clone(), if i == 0 { b.x.clone() } else { restart.clone() }, LM_ITERATIONS)
-                });
-                let fits: Vec<Fit> =
-                    polished.into_iter().filter(|f| f.cost.is_finite()).chain(std::iter::once(b)).collect();
-                let lowest = |plausible: bool| {
-                    fits.iter()
-                        .filter(|f| !plausible || f.plausible())
-                        .min_by(|a, b| a.cost.total_cmp(&b.cost))
-                        .cloned()
-                };
-                current = lowest(true).or_else(|| lowest(false)).expect("the accepted fit is there");
-                path.push(current.step());
-                if current.plausible() {
-                    last_plausible = current.clone();
-                }
+        let mut steps: Option<Vec<Fit>> = None;
+        if let Some(i) = implausible.filter(|_| current.effects.len() + 1 < MAX_EFFECTS) {
+            let i = polish(i);
+            let ahead = round(&i);
+            if let Some(next) = best_beating(&ahead, &i, true).filter(|n| plausible.as_ref().is_none_or(|p| n.beats(p)))
+            {
+                steps = Some(vec![i, polish(next)]);
             }
-            _ => break,
         }
-    }
-    // a step through bent mechanics that no plausible model followed is not an answer
-    if !current.plausible() && !current.effects.is_empty() {
-        current = last_plausible;
-        path.push(current.step());
-    }
-    // each kept effect checked by leaving it out: one that the others do not need clearly
-    // (the full model does not beat the model without it) goes, the least needed first
-    while current.effects.len() >= 2 {
-        let without: Vec<Fit> = (0..current.effects.len())
-            .map(|i| {
-                let mut effects = current.effects.clone();
-                effects.remove(i);
-                let mut x = current.x[..2].to_vec();
-                let mut at = 2;
-                for (k, c) in current.effects.iter().enumerate() {
-                    if k != i {
-                        x.extend_from_slice(&current.x[at..at + c.own_len()]);
-                    }
-                    at += c.own_len();
+        match steps.or_else(|| plausible.map(|p| vec![polish(p)])) {
+            Some(steps) => {
+                for s in steps {
+                    search.push(s.step());
+                    current = s;
                 }
-                fit_with(effects, x, LM_ITERATIONS)
-            })
-            .collect();
-        let weakest = without
-            .into_iter()
-            .filter(|w| w.cost.is_finite() && w.plausible() && !current.beats(w))
-            .min_by(|a, b| a.score.total_cmp(&b.score));
-        match weakest {
-            Some(w) => {
-                current = w;
-                path.push(current.step());
             }
             None => break,
         }
     }
+    let (steps, mut leaving_out) = leave_out(current.clone());
+    for s in steps {
+        search.push(s.step());
+        current = s;
+    }
+    // the swap step: each kept effect replaced by the candidates that can imitate it
+    // ([`Candidate::alternatives`]: forward selection may have taken a dead time for a lag
+    // before the other effects were there to tell them apart). The selection is replayed
+    // from where the effect joined: the alternative in its place, then the effects found after
+    // it added again in their order, each from its own starts (they may have been bent to
+    // make up for the wrong one). A swap that lowers the score is kept, then the effects are
+    // checked by leaving each out again.
+    let replay = |fit: &Fit, i: usize, a: Candidate| -> Fit {
+        let mut f = if i == 0 {
+            first_round.iter().find(|f| f.effects == [a]).cloned().unwrap_or_else(|| extend(&none, a))
+        } else {
+            extend(&fit.truncated(i), a)
+        };
+        for &r in &fit.effects[i + 1..] {
+            if f.cost.is_finite() {
+                f = extend(&f, r);
+            }
+        }
+        if f.cost.is_finite() {
+            polish(f)
+        } else {
+            f
+        }
+    };
+    for _ in 0..MAX_EFFECTS {
+        let trials: Vec<(usize, Candidate)> = current
+            .effects
+            .iter()
+            .enumerate()
+            .flat_map(|(i, c)| c.alternatives().into_iter().map(move |a| (i, a)))
+            .filter(|&(i, a)| excitable(a) && !current.effects.iter().enumerate().any(|(k, o)| k != i && o.overlaps(a)))
+            .collect();
+        let swapped: Vec<Fit> = super::on_two_workers(trials.len(), &|t| replay(&current, trials[t].0, trials[t].1));
+        let best = swapped
+            .into_iter()
+            .filter(|f| f.cost.is_finite() && f.plausible() && f.score < current.score)
+            .min_by(|a, b| a.score.total_cmp(&b.score));
+        match best {
+            Some(b) => {
+                current = polish(b);
+                search.push(current.step());
+                let (steps, left_out) = leave_out(current.clone());
+                for s in steps {
+                    search.push(s.step());
+                    current = s;
+                }
+                leaving_out = left_out;
+            }
+            None => break,
+        }
+    }
+
+    // The answer's own path, declared → +A → +A+B: where the search reached the answer only
+    // by additions, its steps; otherwise (an effect left out or swapped) the nested models
+    // re-fitted, each adding the kept effect that lowers the error most, and the answer's
+    // effects put in that order.
+    let additive = search.len() == current.effects.len() + 1
+        && search.windows(2).all(|w| w[1].effects.len() == w[0].effects.len() + 1);
+    let path: Vec<PathStep> = if additive {
+        search.clone()
+    } else {
+        // nested[k]: the best model of all but k kept effects; built down from the answer by
+        // leaving out the effect that costs least (the first level is the leave-out check's)
+        let lowest =
+            |fits: &[Fit]| fits.iter().filter(|f| f.cost.is_finite()).min_by(|a, b| a.cost.total_cmp(&b.cost)).cloned();
+        let mut nested = vec![current.clone()];
+        nested.extend(lowest(&leaving_out));
+        while nested.len() > 1 && nested.last().is_some_and(|f| f.effects.len() > 1) {
+            let big = nested.last().expect("not empty").clone();
+            let smaller: Vec<Fit> = (0..big.effects.len()).map(|i| without(&big, i)).collect();
+            let refitted = super::on_two_workers(smaller.len(), &|i| {
+                fit_with(smaller[i].effects.clone(), smaller[i].x.clone(), LM_ITERATIONS)
+            });
+            match lowest(&refitted) {
+                Some(f) => nested.push(f),
+                None => break,
+            }
+        }
+        nested.reverse();
+        // the answer's effects in the order they join
+        let mut order: Vec<usize> = Vec::new();
+        for f in &nested {
+            for c in &f.effects {
+                let k = current.effects.iter().position(|e| e == c).expect("a kept effect");
+                if !order.contains(&k) {
+                    order.push(k);
+                }
+            }
+        }
+        order.extend((0..current.effects.len()).filter(|k| !order.contains(k)).collect::<Vec<_>>());
+        current = current.reordered(&order);
+        std::iter::once(none.step()).chain(nested.iter().map(|f| f.step())).collect()
+    };
 
     // the first round's table: every candidate beside the declared parameters
     let entry = |f: &Fit| -> CandidateScore {
@@ -816,7 +968,18 @@ pub fn diagnose(
     let effects: Vec<FoundEffect> = current
         .effects
         .iter()
-        .map(|c| FoundEffect { effect: c.name().into(), at: c.at(), parameters: c.report(&model) })
+        .map(|c| {
+            // the answer without it, the others re-fitted (the leave-out check's fits)
+            let error_without = if current.effects.len() == 1 {
+                none.error()
+            } else {
+                leaving_out
+                    .iter()
+                    .find(|f| !f.effects.contains(c) && f.effects.len() + 1 == current.effects.len())
+                    .map_or(f64::NAN, |f| f.error())
+            };
+            FoundEffect { effect: c.name().into(), at: c.at(), parameters: c.report(&model), error_without }
+        })
         .collect();
     let mut parameters = declared_keys(&model);
     if let Some(first) = effects.first() {
@@ -837,6 +1000,7 @@ pub fn diagnose(
         parameters,
         effects,
         path,
+        search,
         error_before,
         error_after: current.error(),
         candidates,
