@@ -383,6 +383,12 @@ pub fn diagnose(rec: DriveRecord, progress: &(dyn Fn(&str) + Sync)) -> Result<Dr
         .ok_or_else(|| IdentError::Data("the declared model cannot be simulated (check its parameters)".into()))?;
     let r0 = problem.residual_of(&sim0);
     let error_before = r0.iter().map(|v| v * v).sum::<f64>().sqrt();
+    let nres = r0.len();
+    let n_eff = effective_count(nres, lag1_autocorrelation(&r0));
+    // the fits run without the declared model's signals (memory: a few record-sized buffers
+    // per worker); its outputs are simulated again for the traces
+    drop(r0);
+    drop(sim0);
 
     // the vocabulary at every element where it can act and the data can show it
     let mut cands = vec![Candidate::None, Candidate::Damping];
@@ -403,6 +409,7 @@ pub fn diagnose(rec: DriveRecord, progress: &(dyn Fn(&str) + Sync)) -> Result<Dr
         cands.push(Candidate::TimeDelay(j));
         cands.push(Candidate::ActuatorLag(j));
     }
+    drop(declared_motion);
 
     // Two stages. Screen: every effect's own parameters fitted with the declared inertias and
     // stiffnesses held (1–2 parameters, few simulations each). Then the re-fit of everything
@@ -472,8 +479,6 @@ pub fn diagnose(rec: DriveRecord, progress: &(dyn Fn(&str) + Sync)) -> Result<Dr
         }
     }
 
-    let nres = r0.len();
-    let n_eff = effective_count(nres, lag1_autocorrelation(&r0));
     let norm2 = 1.0; // residuals are already normalised
     let mut scored: Vec<(CandidateScore, DriveModel, f64)> = Vec::new();
     for (i, x, cost, fitted) in fits {
@@ -512,11 +517,14 @@ pub fn diagnose(rec: DriveRecord, progress: &(dyn Fn(&str) + Sync)) -> Result<Dr
     }
     let (chosen, model, rho) = scored[best].clone();
     let structured_residual = rho.abs() > 0.5 && chosen.error_after > 0.02;
-    let after = problem.simulate(&model).unwrap_or_else(|| sim0.clone());
+    let before = problem
+        .simulate(m0)
+        .ok_or_else(|| IdentError::Data("the declared model cannot be simulated (check its parameters)".into()))?;
+    let after = problem.simulate(&model).unwrap_or_else(|| before.clone());
     let traces = DriveTraces {
         time_s: (0..len).map(|k| k as f64 * dt).collect(),
         measured: problem.measured.clone(),
-        before: sim0,
+        before,
         after,
     };
     let mut candidates: Vec<CandidateScore> = scored.into_iter().map(|s| s.0).collect();
