@@ -547,8 +547,20 @@ fn fmu_reproduces_the_diagnosis(truth: Truth, seed: u64, effect: &str) {
         let k = ma.len();
         assert_eq!(k, (me_seconds / s.dt_s).round() as usize + 1);
         let range = a[..k].iter().chain(&b[..k]).fold(0.0f64, |m, x| m.max((x - speed0).abs()));
-        let diff = ma.iter().zip(&a).chain(mb.iter().zip(&b)).fold(0.0f64, |m, (x, y)| m.max((x - y).abs()));
-        eprintln!("{effect} {version} ME vs CS: max |Δw| {diff:.2e} rad/s of {range:.3}");
+        // Compared up to where the model's own sensitivity shows: the first sample at which
+        // CVode at 1e-9 and at 1e-8 differ by more than 1e-4 of the range (a grazing contact
+        // in a rattling play decides a side by round-off, and the trajectories part for any
+        // two integrations, ME or CS). The whole window for a model without such a point; at
+        // least a third of it in any case.
+        let (la, lb) = (speeds(&format!("{version}_me_loose"), "w_m2"), speeds(&format!("{version}_me_loose"), "w_m3"));
+        let horizon = (0..k).find(|&i| (ma[i] - la[i]).abs().max((mb[i] - lb[i]).abs()) > 1e-4 * range).unwrap_or(k);
+        assert!(horizon >= k / 3, "{effect} {version}: ME at 1e-9 and 1e-8 part after {horizon} of {k} samples");
+        let diff = ma[..horizon]
+            .iter()
+            .zip(&a)
+            .chain(mb[..horizon].iter().zip(&b))
+            .fold(0.0f64, |m, (x, y)| m.max((x - y).abs()));
+        eprintln!("{effect} {version} ME vs CS over {horizon} of {k} samples: max |Δw| {diff:.2e} rad/s of {range:.3}");
         assert!(diff <= 1e-3 * range, "{effect} {version}: ME and CS differ by {diff} rad/s (range {range})");
     }
 }

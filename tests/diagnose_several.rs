@@ -414,7 +414,6 @@ fn shaft_damping_missing_and_friction_at_the_load_machines_about_zero_torque() {
 }
 
 #[test]
-#[ignore = "open (issue 15): a dead time is taken for the lag (0.177 against 0.190 alone); the swap step's replay with the lag ends at 0.074 against the dead time's 0.047, where the true model from the truth's values fits to 0.039"]
 fn an_actuator_lag_and_play_about_a_small_set_point() {
     let truth = Truth { lag_s: 0.006, backlash_rad: 0.003, set_point_nm: 5.0, ..Default::default() };
     let d = run(&record(&declared(), truth, 35), &declared());
@@ -440,7 +439,6 @@ fn an_actuator_lag_and_friction_at_the_load_machines_about_zero_torque() {
 }
 
 #[test]
-#[ignore = "open (issue 15): both found (error 0.072, the spurious damping dropped after the compliance's swap), but the compliance's stiffness ends at 2190 N m/rad for 1500; from the truth's values the same model fits to 0.011"]
 fn play_and_a_drive_compliance_about_a_small_set_point() {
     let truth = Truth { backlash_rad: 0.003, compliance: Some((1500.0, 0.5)), set_point_nm: 5.0, ..Default::default() };
     let d = run(&record(&declared(), truth, 37), &declared());

@@ -442,8 +442,8 @@ pub fn high_pass_hz(n: usize, dt_s: f64) -> f64 {
 pub const BACKLASH_MIN_RAD: f64 = 2e-5;
 /// Largest play of the backlash profile, rad.
 pub const BACKLASH_MAX_RAD: f64 = 0.05;
-/// Ratio of neighbouring plays of the profile (10 % apart: a basin of the error over the play
-/// is wider than that wherever contact switching shows in the data).
+/// Ratio of neighbouring plays of the coarse profile (10 % apart): it finds the basins' region;
+/// each of the best is then refined on a grid of [`BACKLASH_FINE_STEPS`].
 pub const BACKLASH_GRID_RATIO: f64 = 1.1;
 /// The play's profile beside effects found before is also taken from the declared j_drive and
 /// c_short when theirs moved by more than this (ln): 1 %, far beyond what a profile point
@@ -451,6 +451,10 @@ pub const BACKLASH_GRID_RATIO: f64 = 1.1;
 pub const PROFILE_BENT_LN: f64 = 0.01;
 /// The profile's best points (in distinct basins) refined by the full fit.
 pub const BACKLASH_REFINED: usize = 2;
+/// Steps of the fine grid across one coarse step of the play's profile, either side of a
+/// basin (1 % steps: the error over the play of a rattling rig changes within a few per cent,
+/// and a fit cannot climb out of a wrong basin).
+pub const BACKLASH_FINE_STEPS: usize = 10;
 
 /// Fastest rate the friction's slope T_c/(v_s J) may have, 1/s: what RK4 steps of 0.25 ms
 /// (`Powertrain::rk4_steps_s`: h·rate ≤ 0.5) resolve, four per millisecond.
@@ -525,12 +529,6 @@ impl Fit {
     /// This fit as a step of the selection's path.
     fn step(&self) -> PathStep {
         PathStep { effects: self.effects.iter().map(|c| label(*c)).collect(), error: self.error(), score: self.score }
-    }
-
-    /// This fit's first `len` effects (their parameters as fitted; cost and score unknown).
-    fn truncated(&self, len: usize) -> Fit {
-        let own: usize = self.effects[..len].iter().map(|c| c.own_len()).sum();
-        Fit { effects: self.effects[..len].to_vec(), x: self.x[..2 + own].to_vec(), cost: f64::NAN, score: f64::NAN }
     }
 
     /// This fit with its effects (and their parameters) in `order` (indices of its effects).
@@ -697,9 +695,38 @@ pub fn diagnose(
                 .collect()
         };
         best.dedup();
-        let fits = super::on_two_workers(best.len(), &|k| {
-            fit_with(effects.clone(), grid[best[k]].0.clone(), SCREEN_ITERATIONS)
-        });
+        let mut chosen: Vec<Vec<f64>> = best.iter().map(|&i| grid[i].0.clone()).collect();
+        if c == Candidate::Backlash {
+            // each basin refined on a grid ten times finer across a coarse step either side:
+            // the basins are narrower than the coarse step (the error over a play of a rattling
+            // rig changes within a few per cent), and the fit cannot climb out of a wrong one
+            let fine: Vec<(usize, Vec<f64>)> = chosen
+                .iter()
+                .enumerate()
+                .flat_map(|(m, x)| {
+                    (-(BACKLASH_FINE_STEPS as i32)..=BACKLASH_FINE_STEPS as i32).filter(|&j| j != 0).map(move |j| {
+                        let mut x = x.clone();
+                        let last = x.len() - 1;
+                        x[last] += j as f64 * BACKLASH_GRID_RATIO.ln() / BACKLASH_FINE_STEPS as f64;
+                        (m, x)
+                    })
+                })
+                .collect();
+            let costs = super::on_two_workers(fine.len(), &|i| {
+                f(&fine[i].1).map_or(f64::INFINITY, |r| r.iter().map(|v| v * v).sum::<f64>())
+            });
+            for (m, x) in chosen.iter_mut().enumerate() {
+                let mut lowest = best.get(m).map_or(f64::INFINITY, |&i| grid[i].1);
+                for ((owner, candidate), cost) in fine.iter().zip(&costs) {
+                    if *owner == m && *cost < lowest {
+                        lowest = *cost;
+                        *x = candidate.clone();
+                    }
+                }
+            }
+        }
+        let fits =
+            super::on_two_workers(chosen.len(), &|k| fit_with(effects.clone(), chosen[k].clone(), SCREEN_ITERATIONS));
         fits.into_iter().min_by(|a, b| a.cost.total_cmp(&b.cost)).unwrap_or(Fit {
             effects,
             x: Vec::new(),
@@ -850,13 +877,11 @@ pub fn diagnose(
     }
     // the swap step: each kept effect replaced by the candidates that can imitate it
     // ([`Candidate::alternatives`]: forward selection may have taken a dead time for a lag
-    // before the other effects were there to tell them apart). The selection is replayed
-    // from where the effect joined: the alternative in its place, then the effects found after
-    // it added again in their order, each from its own starts (they may have been bent to
-    // make up for the wrong one). Only near-ties are replayed: an alternative that the effect
-    // beat clearly beside the same effects in the selection (lower score and 10 % less error)
-    // is not. A swap that lowers the score is kept, then the effects are checked by leaving
-    // each out again.
+    // before the other effects were there to tell them apart). The alternative is fitted in
+    // its place beside the other effects at their values (from its own starts, all parameters
+    // re-fitted). Only near-ties are tried: an alternative that the effect beat clearly beside
+    // the same effects in the selection (lower score and 10 % less error) is not. A swap that
+    // lowers the score is kept, then the effects are checked by leaving each out again.
     let near_tie = |fit: &Fit, i: usize, a: Candidate| -> bool {
         let screened = |c: Candidate| {
             tried.iter().find(|f| f.effects.len() == i + 1 && f.effects[..i] == fit.effects[..i] && f.effects[i] == c)
@@ -866,18 +891,11 @@ pub fn diagnose(
             _ => true,
         }
     };
-    let replay = |fit: &Fit, i: usize, a: Candidate| -> Fit {
-        let mut f = if i == 0 {
-            first_round.iter().find(|f| f.effects == [a]).cloned().unwrap_or_else(|| extend(&none, a))
-        } else {
-            extend(&fit.truncated(i), a)
-        };
-        for &r in &fit.effects[i + 1..] {
-            if f.cost.is_finite() {
-                f = extend(&f, r);
-            }
-        }
-        if f.cost.is_finite() {
+    let swap = |fit: &Fit, i: usize, a: Candidate| -> Fit {
+        let f = extend(&without(fit, i), a);
+        // polished only where it is a near-tie of the model it would replace (within the 10 %
+        // that "beats" asks of the error), as the selection polishes only its winner
+        if f.cost.is_finite() && 0.9 * f.error() <= fit.error() {
             polish(f)
         } else {
             f
@@ -895,7 +913,7 @@ pub fn diagnose(
                     && near_tie(&current, i, a)
             })
             .collect();
-        let swapped: Vec<Fit> = super::on_two_workers(trials.len(), &|t| replay(&current, trials[t].0, trials[t].1));
+        let swapped: Vec<Fit> = super::on_two_workers(trials.len(), &|t| swap(&current, trials[t].0, trials[t].1));
         let best = swapped
             .into_iter()
             .filter(|f| f.cost.is_finite() && f.plausible() && f.score < current.score)
@@ -954,7 +972,15 @@ pub fn diagnose(
         }
         order.extend((0..current.effects.len()).filter(|k| !order.contains(k)).collect::<Vec<_>>());
         current = current.reordered(&order);
-        std::iter::once(none.step()).chain(nested.iter().map(|f| f.step())).collect()
+        // each step's effects named in the answer's order
+        let rank = |c: &Candidate| current.effects.iter().position(|e| e == c);
+        std::iter::once(none.step())
+            .chain(nested.iter().map(|f| {
+                let mut effects = f.effects.clone();
+                effects.sort_by_key(rank);
+                PathStep { effects: effects.iter().map(|c| label(*c)).collect(), ..f.step() }
+            }))
+            .collect()
     };
 
     // the first round's table: every candidate beside the declared parameters
