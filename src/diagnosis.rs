@@ -205,7 +205,11 @@ fn torsional(file: &Path, progress: &(dyn Fn(&str) + Sync)) -> anyhow::Result<Di
             .iter()
             .map(|e| {
                 let at = e.at.as_ref().map(|a| format!(" at {a}")).unwrap_or_default();
-                format!("{}{at} {:.4}", e.effect, e.error_without)
+                if e.error_without.is_finite() {
+                    format!("{}{at} {:.4}", e.effect, e.error_without)
+                } else {
+                    format!("{}{at} (the model without it cannot be simulated)", e.effect)
+                }
             })
             .collect();
         notes.push(format!("error with each effect left out (the others re-fitted): {}", needed.join(", ")));
