@@ -378,9 +378,12 @@ pub fn diagnose(rec: DriveRecord, progress: &(dyn Fn(&str) + Sync)) -> Result<Dr
         twist_rms,
         rate,
     };
-    let sim0 = problem
-        .simulate(m0)
-        .ok_or_else(|| IdentError::Data("the declared model cannot be simulated (check its parameters)".into()))?;
+    let simulate_declared = || {
+        problem
+            .simulate(m0)
+            .ok_or_else(|| IdentError::Data("the declared model cannot be simulated (check its parameters)".into()))
+    };
+    let sim0 = simulate_declared()?;
     let r0 = problem.residual_of(&sim0);
     let error_before = r0.iter().map(|v| v * v).sum::<f64>().sqrt();
     let nres = r0.len();
@@ -517,9 +520,7 @@ pub fn diagnose(rec: DriveRecord, progress: &(dyn Fn(&str) + Sync)) -> Result<Dr
     }
     let (chosen, model, rho) = scored[best].clone();
     let structured_residual = rho.abs() > 0.5 && chosen.error_after > 0.02;
-    let before = problem
-        .simulate(m0)
-        .ok_or_else(|| IdentError::Data("the declared model cannot be simulated (check its parameters)".into()))?;
+    let before = simulate_declared()?;
     let after = problem.simulate(&model).unwrap_or_else(|| before.clone());
     let traces = DriveTraces {
         time_s: (0..len).map(|k| k as f64 * dt).collect(),

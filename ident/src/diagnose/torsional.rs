@@ -544,6 +544,13 @@ impl Fit {
         Fit { effects: order.iter().map(|&k| self.effects[k]).collect(), x, ..self.clone() }
     }
 
+    /// This fit without its `i`-th effect (its parameters dropped, the others as fitted; cost
+    /// and score unknown).
+    fn without(&self, i: usize) -> Fit {
+        let order: Vec<usize> = (0..self.effects.len()).filter(|&k| k != i).collect();
+        Fit { cost: f64::NAN, score: f64::NAN, ..self.reordered(&order) }
+    }
+
     /// Whether this fit beats `other` clearly: a lower score and 10 % less error.
     fn beats(&self, other: &Fit) -> bool {
         self.score < other.score && self.error() < 0.9 * other.error()
@@ -716,7 +723,7 @@ pub fn diagnose(
                 f(&fine[i].1).map_or(f64::INFINITY, |r| r.iter().map(|v| v * v).sum::<f64>())
             });
             for (m, x) in chosen.iter_mut().enumerate() {
-                let mut lowest = best.get(m).map_or(f64::INFINITY, |&i| grid[i].1);
+                let mut lowest = grid[best[m]].1;
                 for ((owner, candidate), cost) in fine.iter().zip(&costs) {
                     if *owner == m && *cost < lowest {
                         lowest = *cost;
@@ -784,31 +791,21 @@ pub fn diagnose(
             .min_by(|a, b| a.score.total_cmp(&b.score))
             .cloned()
     };
-    // `fit` without its `i`-th effect (its parameters dropped, the others as fitted)
-    let without = |fit: &Fit, i: usize| -> Fit {
-        let mut effects = fit.effects.clone();
-        effects.remove(i);
-        let mut x = fit.x[..2].to_vec();
-        let mut at = 2;
-        for (k, c) in fit.effects.iter().enumerate() {
-            if k != i {
-                x.extend_from_slice(&fit.x[at..at + c.own_len()]);
-            }
-            at += c.own_len();
-        }
-        Fit { effects, x, cost: f64::NAN, score: f64::NAN }
-    };
     // each kept effect checked by leaving it out: one that the others do not need clearly
     // (the full model does not beat the model without it) goes, the least needed first.
     // Returns the models on the way and, for the model it ends at, each model without one of
     // its effects (re-fitted; none for a single effect).
+    // `fit` without each of its effects in turn, re-fitted from its values
+    let each_left_out = |fit: &Fit| -> Vec<Fit> {
+        super::on_two_workers(fit.effects.len(), &|i| {
+            let w = fit.without(i);
+            fit_with(w.effects, w.x, LM_ITERATIONS)
+        })
+    };
     let leave_out = |mut current: Fit| -> (Vec<Fit>, Vec<Fit>) {
         let mut steps = Vec::new();
         while current.effects.len() >= 2 {
-            let candidates: Vec<Fit> = (0..current.effects.len()).map(|i| without(&current, i)).collect();
-            let refitted = super::on_two_workers(candidates.len(), &|i| {
-                fit_with(candidates[i].effects.clone(), candidates[i].x.clone(), LM_ITERATIONS)
-            });
+            let refitted = each_left_out(&current);
             let weakest = refitted
                 .iter()
                 .filter(|w| w.cost.is_finite() && w.plausible() && !current.beats(w))
@@ -887,12 +884,12 @@ pub fn diagnose(
             tried.iter().find(|f| f.effects.len() == i + 1 && f.effects[..i] == fit.effects[..i] && f.effects[i] == c)
         };
         match (screened(fit.effects[i]), screened(a)) {
-            (Some(chosen), Some(other)) => a == fit.effects[i] || !chosen.beats(other),
+            (Some(chosen), Some(other)) => !chosen.beats(other),
             _ => true,
         }
     };
     let swap = |fit: &Fit, i: usize, a: Candidate| -> Fit {
-        let f = extend(&without(fit, i), a);
+        let f = extend(&fit.without(i), a);
         // polished only where it is a near-tie of the model it would replace (within the 10 %
         // that "beats" asks of the error), as the selection polishes only its winner
         if f.cost.is_finite() && 0.9 * f.error() <= fit.error() {
@@ -949,12 +946,7 @@ pub fn diagnose(
         let mut nested = vec![current.clone()];
         nested.extend(lowest(&leaving_out));
         while nested.len() > 1 && nested.last().is_some_and(|f| f.effects.len() > 1) {
-            let big = nested.last().expect("not empty").clone();
-            let smaller: Vec<Fit> = (0..big.effects.len()).map(|i| without(&big, i)).collect();
-            let refitted = super::on_two_workers(smaller.len(), &|i| {
-                fit_with(smaller[i].effects.clone(), smaller[i].x.clone(), LM_ITERATIONS)
-            });
-            match lowest(&refitted) {
+            match lowest(&each_left_out(nested.last().expect("not empty"))) {
                 Some(f) => nested.push(f),
                 None => break,
             }
