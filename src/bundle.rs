@@ -747,6 +747,7 @@ pub fn load_drive_test(file: &Path) -> Result<DriveTestBundle, BundleError> {
     let line = plant::Line { domain: raw.domain, bodies: raw.model.bodies, couplings: raw.model.couplings };
     line.validate().map_err(|e| error(file, None, e.to_string()))?;
     let n = line.bodies.len();
+    let nc = line.couplings.len();
     let body = |r: &BodyRef, key: &str| -> Result<usize, BundleError> {
         match r {
             BodyRef::Name(name) => line.body(name).ok_or_else(|| {
@@ -786,12 +787,12 @@ pub fn load_drive_test(file: &Path) -> Result<DriveTestBundle, BundleError> {
             }
         };
         let at = match (quantity, &o.body, o.coupling) {
-            (plant::Quantity::CouplingForce, None, Some(c)) if (1..n as i64).contains(&c) => c as usize - 1,
+            (plant::Quantity::CouplingForce, None, Some(c)) if (1..=nc as i64).contains(&c) => c as usize - 1,
             (plant::Quantity::CouplingForce, None, Some(c)) => {
                 return Err(error(
                     file,
                     None,
-                    format!("`{}` = {c}: expected a coupling from 1 to {}", key("coupling"), n - 1),
+                    format!("`{}` = {c}: expected a coupling from 1 to {nc}", key("coupling")),
                 ))
             }
             (plant::Quantity::CouplingForce, _, _) => {

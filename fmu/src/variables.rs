@@ -513,7 +513,12 @@ impl Table {
             );
         }
         for (i, name) in m.coupling_force_names().into_iter().enumerate() {
-            let description = format!("force (torque) in coupling {} ({}-{})", i + 1, bodies[i], bodies[i + 1]);
+            let c = &m.line.couplings[i];
+            let description = match (&c.elongation, &c.name) {
+                (None, _) => format!("force (torque) in coupling {} ({}-{})", i + 1, bodies[i], bodies[i + 1]),
+                (Some(_), Some(name)) => format!("force (torque) in coupling {} ({name})", i + 1),
+                (Some(_), None) => format!("force (torque) in coupling {}", i + 1),
+            };
             push(name, Causality::Output, Slot::Torque(i), f, description, Constraint::Finite);
         }
         for (j, name) in m.input_names().into_iter().enumerate() {

@@ -22,7 +22,7 @@ fn geared(effects: Vec<Effect>) -> DriveModel {
         line: Line {
             domain: Domain::Rotational,
             bodies: vec![body("motor", 0.002, 1e-4), body("load", 0.05, 4e-3)],
-            couplings: vec![Coupling { stiffness: 2000.0, damping: 0.3, ratio: 4.0 }],
+            couplings: vec![Coupling::new(2000.0, 0.3, 4.0)],
         },
         inputs: vec![0],
         effects,

@@ -185,7 +185,7 @@ impl DriveModel {
                 Effect::CoulombFriction { body, friction, smoothing_speed } => {
                     (body, n, vec![friction, smoothing_speed])
                 }
-                Effect::Backlash { coupling, backlash } => (coupling, n - 1, vec![backlash]),
+                Effect::Backlash { coupling, backlash } => (coupling, self.line.couplings.len(), vec![backlash]),
                 Effect::TimeDelay { input, delay_s } => (input, self.inputs.len(), vec![delay_s]),
                 Effect::ActuatorLag { input, time_constant_s } => (input, self.inputs.len(), vec![time_constant_s]),
             };
@@ -215,6 +215,47 @@ impl DriveModel {
             }
         }
         Ok(())
+    }
+
+    /// A linear mechanical model with a diagonal inertia matrix (the three-mass strand, a chain
+    /// from a rig file, a line) as a rotational drive model without effects: one body per
+    /// coordinate (its name, inertia and drag), one coupling per spring with the spring's
+    /// elongation, and the torques on the coordinates `inputs`.
+    pub fn from_mechanical(m: &crate::mechanical::MechanicalModel, inputs: Vec<usize>) -> Result<DriveModel> {
+        let n = m.dofs();
+        let off_diagonal =
+            (0..n).flat_map(|i| (0..n).map(move |j| (i, j))).any(|(i, j)| i != j && m.inertia[(i, j)] != 0.0);
+        if off_diagonal {
+            return Err(PlantError::Invalid(
+                "the mechanical model couples its coordinates through the inertia matrix: a drive model's bodies \
+                 each have their own inertia"
+                    .into(),
+            ));
+        }
+        let label = |s: &str| s.chars().map(|c| if c.is_ascii_alphanumeric() { c } else { '_' }).collect::<String>();
+        let bodies = (0..n)
+            .map(|i| crate::line::LineBody {
+                name: m.dof_names[i].clone(),
+                inertia: m.inertia[(i, i)],
+                drag: m.drag[i],
+            })
+            .collect();
+        let couplings = m
+            .springs
+            .iter()
+            .map(|s| crate::line::Coupling {
+                name: Some(label(&s.name)),
+                elongation: Some(s.elongation.iter().copied().collect()),
+                ..crate::line::Coupling::new(s.stiffness, s.damping, 1.0)
+            })
+            .collect();
+        let d = DriveModel {
+            line: Line { domain: crate::line::Domain::Rotational, bodies, couplings },
+            inputs,
+            effects: vec![],
+        };
+        d.validate()?;
+        Ok(d)
     }
 
     /// True when friction or backlash make the right-hand side nonlinear.
@@ -275,10 +316,17 @@ impl DriveModel {
         out
     }
 
-    /// Coupling force names: `T_coupling_<i>` (rotational) or `F_coupling_<i>`, 1-based.
+    /// Coupling force names: `T_<name>` (rotational) or `F_<name>`, the name `coupling_<i>`
+    /// (1-based) unless the coupling has its own.
     pub fn coupling_force_names(&self) -> Vec<String> {
         let f = if self.line.domain == crate::line::Domain::Rotational { "T" } else { "F" };
-        (1..self.line.bodies.len()).map(|i| format!("{f}_coupling_{i}")).collect()
+        self.coupling_labels().iter().map(|c| format!("{f}_{c}")).collect()
+    }
+
+    /// Each coupling's name, `coupling_<i>` (1-based) unless it has its own.
+    pub fn coupling_labels(&self) -> Vec<String> {
+        let c = &self.line.couplings;
+        c.iter().enumerate().map(|(i, c)| c.name.clone().unwrap_or_else(|| format!("coupling_{}", i + 1))).collect()
     }
 
     /// Every parameter of the model as one list: the bodies' inertias and drags, the
@@ -301,23 +349,31 @@ impl DriveModel {
             out.push(p(format!("{l}.drag"), D::Damping, format!("viscous drag of {} to ground", b.name), b.drag, true));
         }
         for (i, c) in self.line.couplings.iter().enumerate() {
-            let (a, b) = (&self.line.bodies[i].name, &self.line.bodies[i + 1].name);
             let k = i + 1;
+            let (a, b) = match (&c.elongation, &c.name) {
+                (None, _) => (self.line.bodies[i].name.as_str(), self.line.bodies[i + 1].name.as_str()),
+                (Some(_), Some(name)) => (name.as_str(), ""),
+                (Some(_), None) => ("", ""),
+            };
+            let what = if c.elongation.is_some() { format!("of coupling {k} {a}") } else { format!("{a}-{b}") };
+            let what = what.trim_end();
             out.push(p(
                 format!("coupling_{k}.stiffness"),
                 D::Stiffness,
-                format!("stiffness {a}-{b}"),
+                format!("stiffness {what}"),
                 c.stiffness,
                 false,
             ));
-            out.push(p(format!("coupling_{k}.damping"), D::Damping, format!("damping {a}-{b}"), c.damping, true));
-            out.push(p(
-                format!("coupling_{k}.ratio"),
-                D::Ratio,
-                format!("gear ratio, speed of {a} per speed of {b}"),
-                c.ratio,
-                false,
-            ));
+            out.push(p(format!("coupling_{k}.damping"), D::Damping, format!("damping {what}"), c.damping, true));
+            if c.elongation.is_none() {
+                out.push(p(
+                    format!("coupling_{k}.ratio"),
+                    D::Ratio,
+                    format!("gear ratio, speed of {a} per speed of {b}"),
+                    c.ratio,
+                    false,
+                ));
+            }
         }
         for e in &self.effects {
             match *e {
@@ -375,7 +431,9 @@ impl DriveModel {
         for c in &mut m.line.couplings {
             c.stiffness = next();
             c.damping = next();
-            c.ratio = next();
+            if c.elongation.is_none() {
+                c.ratio = next();
+            }
         }
         for e in &mut m.effects {
             match e {
@@ -414,11 +472,10 @@ impl DriveModel {
             c[(i, n + i)] = 1.0;
         }
         for (i, k) in self.line.couplings.iter().enumerate() {
-            let inv_r = 1.0 / k.ratio;
-            c[(n + i, i)] = k.stiffness * inv_r;
-            c[(n + i, i + 1)] = -k.stiffness;
-            c[(n + i, n + i)] = k.damping * inv_r;
-            c[(n + i, n + i + 1)] = -k.damping;
+            for (j, e) in k.terms(i) {
+                c[(n + i, j)] = k.stiffness * e;
+                c[(n + i, n + j)] = k.damping * e;
+            }
         }
         let mut output_names: Vec<String> = names[n..2 * n].to_vec();
         output_names.extend(self.coupling_force_names());
@@ -434,9 +491,11 @@ impl DriveModel {
     }
 
     /// Position in [`DriveModel::parameter_list`] of input `input`'s dead time, if it has one:
-    /// after the bodies' (2 each) and the couplings' (3 each) parameters, the effects' in order.
+    /// after the bodies' (2 each) and the couplings' (3 each, 2 with an elongation) parameters,
+    /// the effects' in order.
     pub fn delay_parameter(&self, input: usize) -> Option<usize> {
-        let mut at = 2 * self.line.bodies.len() + 3 * self.line.couplings.len();
+        let couplings: usize = self.line.couplings.iter().map(|c| if c.elongation.is_some() { 2 } else { 3 }).sum();
+        let mut at = 2 * self.line.bodies.len() + couplings;
         for e in &self.effects {
             if let Effect::TimeDelay { input: j, .. } = *e {
                 if j == input {
@@ -487,8 +546,10 @@ pub struct Dynamics {
     n: usize,
     inv_j: Vec<f64>,
     drag: Vec<f64>,
-    /// (stiffness, damping, 1/ratio, half play or 0) per coupling.
-    couplings: Vec<(f64, f64, f64, f64)>,
+    /// Stiffness, damping, half play (0: none) and twist coefficients of each coupling.
+    couplings: Vec<Spring>,
+    /// The twists' coefficients (body, coefficient), `Spring::terms` ranges into it.
+    terms: Vec<(usize, f64)>,
     /// (friction, smoothing speed) per body (0: none).
     friction: Vec<(f64, f64)>,
     /// Per input: body, dead time, lag time constant (0: none), lag state index.
@@ -511,15 +572,26 @@ impl Dynamics {
     pub fn new(m: &DriveModel) -> Result<Dynamics> {
         m.validate()?;
         let n = m.line.bodies.len();
-        let mut couplings: Vec<(f64, f64, f64, f64)> =
-            m.line.couplings.iter().map(|c| (c.stiffness, c.damping, 1.0 / c.ratio, 0.0)).collect();
+        let mut terms = Vec::new();
+        let mut couplings: Vec<Spring> = m
+            .line
+            .couplings
+            .iter()
+            .enumerate()
+            .map(|(i, c)| {
+                let start = terms.len();
+                terms.extend(c.terms(i));
+                let gear = c.elongation.is_none().then(|| 1.0 / c.ratio);
+                Spring { c: c.stiffness, d: c.damping, half: 0.0, terms: (start, terms.len()), gear }
+            })
+            .collect();
         let mut friction = vec![(0.0, 1.0); n];
         let mut inputs: Vec<(usize, f64, f64, usize)> = m.inputs.iter().map(|&b| (b, 0.0, 0.0, 0)).collect();
         let mut nstates = 2 * n;
         for e in &m.effects {
             match *e {
                 Effect::CoulombFriction { body, friction: f, smoothing_speed } => friction[body] = (f, smoothing_speed),
-                Effect::Backlash { coupling, backlash } => couplings[coupling].3 = 0.5 * backlash,
+                Effect::Backlash { coupling, backlash } => couplings[coupling].half = 0.5 * backlash,
                 Effect::TimeDelay { input, delay_s } => inputs[input].1 = delay_s,
                 Effect::ActuatorLag { input, time_constant_s } => {
                     inputs[input].2 = time_constant_s;
@@ -533,6 +605,7 @@ impl Dynamics {
             inv_j: m.line.bodies.iter().map(|b| 1.0 / b.inertia).collect(),
             drag: m.line.bodies.iter().map(|b| b.drag).collect(),
             couplings,
+            terms,
             friction,
             inputs,
             nstates,
@@ -563,7 +636,7 @@ impl Dynamics {
         if !coarse.is_finite() {
             coarse = friction_step;
         }
-        let backlash = self.couplings.iter().any(|c| c.3 > 0.0);
+        let backlash = self.couplings.iter().any(|c| c.half > 0.0);
         self.fine_s = if backlash { coarse / FINE_PER_COARSE } else { coarse }.min(friction_step);
         for i in bodies() {
             let (fc, vs) = self.friction[i];
@@ -589,10 +662,10 @@ impl Dynamics {
         let n = self.n;
         let mut key: u64 = 0;
         let mut mix = |class: u64| key = (key ^ class).wrapping_mul(0x9E37_79B9_7F4A_7C15).wrapping_add(1);
-        for (i, &(_, _, inv_r, half)) in self.couplings.iter().enumerate() {
-            if half > 0.0 {
-                let twist = x[i] * inv_r - x[i + 1];
-                mix(u64::from(twist > half) + 2 * u64::from(twist < -half));
+        for s in &self.couplings {
+            if s.half > 0.0 {
+                let twist = self.twist(s, x).0;
+                mix(u64::from(twist > s.half) + 2 * u64::from(twist < -s.half));
             }
         }
         for (i, &band) in self.friction_band.iter().enumerate() {
@@ -622,10 +695,17 @@ impl Dynamics {
         for (&(body, _, tau, z), &u) in self.inputs.iter().zip(u) {
             f[body] += if tau > 0.0 { x[z] } else { u };
         }
-        for (i, &(c, d, inv_r, half)) in self.couplings.iter().enumerate() {
-            let t = coupling_force(c, d, half, q[i] * inv_r - q[i + 1], v[i] * inv_r - v[i + 1]);
-            f[i + 1] += t;
-            f[i] -= t * inv_r;
+        for s in &self.couplings {
+            let terms = &self.terms[s.terms.0..s.terms.1];
+            let (mut twist, mut rate) = (0.0, 0.0);
+            for &(j, e) in terms {
+                twist += e * q[j];
+                rate += e * v[j];
+            }
+            let t = coupling_force(s.c, s.d, s.half, twist, rate);
+            for &(j, e) in terms {
+                f[j] -= e * t;
+            }
         }
         for (fi, ij) in f.iter_mut().zip(&self.inv_j) {
             *fi *= ij;
@@ -639,9 +719,21 @@ impl Dynamics {
 
     /// A and B of the contact piece without friction.
     pub fn linear(&self) -> (DMatrix<f64>, DMatrix<f64>) {
+        self.linear_piece(true)
+    }
+
+    /// A and B without friction, every coupling with play in contact (`contact`) or inside
+    /// its play, where it carries nothing.
+    pub fn linear_piece(&self, contact: bool) -> (DMatrix<f64>, DMatrix<f64>) {
         let (ns, m) = (self.nstates, self.inputs.len());
+        let open = |s: &Spring| !contact && s.half > 0.0;
         let linear = Dynamics {
-            couplings: self.couplings.iter().map(|&(c, d, r, _)| (c, d, r, 0.0)).collect(),
+            couplings: self
+                .couplings
+                .iter()
+                .map(|s| if open(s) { Spring { c: 0.0, d: 0.0, half: 0.0, ..*s } } else { Spring { half: 0.0, ..*s } })
+                .collect(),
+            terms: self.terms.clone(),
             friction: vec![(0.0, 1.0); self.n],
             friction_band: vec![0.0; self.n],
             inv_j: self.inv_j.clone(),
@@ -679,6 +771,80 @@ impl Dynamics {
         self.nstates
     }
 
+    /// Twist of coupling `s` and its rate at state `x`.
+    #[inline]
+    fn twist(&self, s: &Spring, x: &[f64]) -> (f64, f64) {
+        let n = self.n;
+        let (mut twist, mut rate) = (0.0, 0.0);
+        for &(j, e) in &self.terms[s.terms.0..s.terms.1] {
+            twist += e * x[j];
+            rate += e * x[n + j];
+        }
+        (twist, rate)
+    }
+
+    /// Twist of coupling `k` at state `x`, and whether it is beyond its play (always, without
+    /// play).
+    pub fn coupling_twist(&self, k: usize, x: &[f64]) -> (f64, bool) {
+        let s = &self.couplings[k];
+        let twist = self.twist(s, x).0;
+        (twist, s.half <= 0.0 || twist.abs() > s.half)
+    }
+
+    /// The state derivative the plays add beyond their positive edges to the contact piece
+    /// ([`Dynamics::linear`]): in contact there a coupling's force c (eᵀq − b/2) + d eᵀq̇ is the
+    /// engaged one less c b/2, a force e_j c b/2 on body j (below the negative edge its
+    /// negative). Exact for plays that all engage at once.
+    pub fn play_offset(&self) -> Vec<f64> {
+        let n = self.n;
+        let mut e = vec![0.0; self.nstates];
+        for s in self.couplings.iter().filter(|s| s.half > 0.0) {
+            for &(j, c) in &self.terms[s.terms.0..s.terms.1] {
+                e[n + j] += c * s.c * s.half * self.inv_j[j];
+            }
+        }
+        e
+    }
+
+    /// The friction's contribution to ∂v̇_i/∂v_i at state `x`: (speed's state index, slope
+    /// −F_c v_s²/((v² + v_s²)^{3/2} J_i)) for each body with friction.
+    pub fn friction_slopes(&self, x: &[f64]) -> Vec<(usize, f64)> {
+        let n = self.n;
+        let mut out = Vec::new();
+        for (i, &(fc, vs)) in self.friction.iter().enumerate() {
+            if fc > 0.0 {
+                let v = x[n + i];
+                out.push((n + i, -fc * vs * vs / (v * v + vs * vs).powf(1.5) * self.inv_j[i]));
+            }
+        }
+        out
+    }
+
+    /// Half-width of body `i`'s steep friction band, m/s or rad/s (0: none).
+    pub fn friction_band(&self, i: usize) -> f64 {
+        self.friction_band[i]
+    }
+
+    /// Integrates with the RK4 steps `coarse_s` within a smooth piece and `fine_s` across pieces
+    /// instead of [`Dynamics::rk4_steps_s`]'s rule (a rig that steps as its record is sampled);
+    /// the friction's steep bands follow the coarse step.
+    pub fn with_steps(mut self, coarse_s: f64, fine_s: f64) -> Dynamics {
+        self.coarse_s = coarse_s;
+        self.fine_s = fine_s;
+        for i in 0..self.n {
+            let (fc, vs) = self.friction[i];
+            if fc > 0.0 {
+                self.friction_band[i] = crate::integrate::friction_band(coarse_s, fc, vs, 1.0 / self.inv_j[i]);
+            }
+        }
+        self
+    }
+
+    /// Fastest rate of the linear part, max |λ(A)|, 1/s.
+    pub fn fastest_rate(&self) -> f64 {
+        self.linear_rate()
+    }
+
     /// Number of inputs.
     pub fn ninputs(&self) -> usize {
         self.inputs.len()
@@ -699,9 +865,13 @@ impl Dynamics {
     pub fn initial_state(&self, speed: f64, inputs: &[f64]) -> Vec<f64> {
         let n = self.n;
         let mut x = vec![0.0; self.nstates];
-        x[n] = speed;
-        for (i, &(_, _, inv_r, _)) in self.couplings.iter().enumerate() {
-            x[n + i + 1] = x[n + i] * inv_r;
+        x[n..2 * n].fill(speed);
+        // through the gear stages between neighbours; a coupling with an elongation leaves its
+        // bodies at the common speed
+        for (i, s) in self.couplings.iter().enumerate() {
+            if let Some(inv_r) = s.gear {
+                x[n + i + 1] = x[n + i] * inv_r;
+            }
         }
         for (k, &(_, _, tau, z)) in self.inputs.iter().enumerate() {
             if tau > 0.0 {
@@ -718,8 +888,9 @@ impl Dynamics {
             (Quantity::Position, i) => x[i],
             (Quantity::Speed, i) => x[n + i],
             (Quantity::CouplingForce, i) => {
-                let (c, d, inv_r, half) = self.couplings[i];
-                coupling_force(c, d, half, x[i] * inv_r - x[i + 1], x[n + i] * inv_r - x[n + i + 1])
+                let s = &self.couplings[i];
+                let (twist, rate) = self.twist(s, x);
+                coupling_force(s.c, s.d, s.half, twist, rate)
             }
         }
     }
@@ -740,7 +911,7 @@ impl Dynamics {
             return Err(PlantError::Invalid("inputs of different lengths or a bad sample time".into()));
         }
         for &(q, i) in outputs {
-            let count = if q == Quantity::CouplingForce { n - 1 } else { n };
+            let count = if q == Quantity::CouplingForce { self.couplings.len() } else { n };
             if i >= count {
                 return Err(PlantError::Invalid(format!("output {q:?} of element {} is outside the line", i + 1)));
             }
@@ -862,6 +1033,18 @@ impl PiecewiseSmooth for HeldInputs<'_> {
     }
 }
 
+/// A coupling as the right-hand side steps it.
+#[derive(Debug, Clone, Copy)]
+struct Spring {
+    c: f64,
+    d: f64,
+    half: f64,
+    /// Range of its coefficients in `Dynamics::terms`.
+    terms: (usize, usize),
+    /// 1/ratio of a coupling between neighbours (None: an elongation of its own).
+    gear: Option<f64>,
+}
+
 /// Force of a coupling with play: the spring acts on the twist beyond ± half the play, the
 /// damper only in contact.
 fn coupling_force(c: f64, d: f64, half: f64, twist: f64, rate: f64) -> f64 {
@@ -902,11 +1085,34 @@ mod tests {
                 LineBody { name: "hub".into(), inertia: 0.0004, drag: 0.0 },
                 LineBody { name: "load".into(), inertia: 0.05, drag: 0.004 },
             ],
-            couplings: vec![
-                Coupling { stiffness: 800.0, damping: 0.02, ratio: 1.0 },
-                Coupling { stiffness: 20000.0, damping: 0.5, ratio: 4.0 },
-            ],
+            couplings: vec![Coupling::new(800.0, 0.02, 1.0), Coupling::new(20000.0, 0.5, 4.0)],
         }
+    }
+
+    /// The three-mass strand (eqs. (14), (18)) and the paper's full chain (Table A1, 22 bodies)
+    /// as drive models: their linearisation — the one right-hand side's, probed state by state —
+    /// equals the mechanical models' J⁻¹C and J⁻¹D, and the chain's frequencies the chain's
+    /// modes (to 1e-9: round-off of two assemblies of the same matrices).
+    #[test]
+    fn the_strand_and_a_chain_are_drive_models() {
+        let rig = crate::paper::damped_params();
+        let strand = rig.three_mass(crate::rig::Variant::V1).unwrap();
+        let chain = crate::chain::Chain::from_bodies(&crate::paper::table_a1()).unwrap().mechanical();
+        for (m, inputs) in [(strand, vec![0, 1, 2]), (chain, vec![0])] {
+            let d = DriveModel::from_mechanical(&m, inputs.clone()).unwrap();
+            let (a, b) = d.linearisation().unwrap();
+            let ss = m.state_space(&[crate::mechanical::Output::Speeds]).unwrap();
+            let scale = ss.a.abs().max();
+            assert!((&a - &ss.a).abs().max() <= 1e-9 * scale, "A differs");
+            assert!((&b - ss.b.select_columns(&inputs)).abs().max() <= 1e-9 * ss.b.abs().max(), "B differs");
+            let f = d.line.model().unwrap().modes().unwrap().frequencies_hz;
+            let g = m.modes().unwrap().frequencies_hz;
+            for (x, y) in f.iter().zip(&g) {
+                assert!((x - y).abs() <= 1e-9 * g.last().unwrap(), "{f:?} vs {g:?}");
+            }
+        }
+        let side_gears = rig.open_differential_with_side_gears(crate::rig::Variant::V1, 0.002).unwrap();
+        assert!(DriveModel::from_mechanical(&side_gears, vec![1]).unwrap_err().to_string().contains("inertia matrix"));
     }
 
     /// The controller's state space equals the mechanical model's (`Line::state_space`, built
@@ -1035,7 +1241,7 @@ mod tests {
                     LineBody { name: "a".into(), inertia: m1, drag: 0.0 },
                     LineBody { name: "b".into(), inertia: m2, drag: 0.0 },
                 ],
-                couplings: vec![Coupling { stiffness: 1e4, damping: 0.0, ratio: 1.0 }],
+                couplings: vec![Coupling::new(1e4, 0.0, 1.0)],
             },
             inputs: vec![0],
             effects: vec![Effect::Backlash { coupling: 0, backlash: b }],

@@ -6,8 +6,10 @@
 use nalgebra::DMatrix;
 use serde::{Deserialize, Serialize};
 
+use crate::drive::{DriveModel, Dynamics, Effect};
 use crate::error::{non_negative, PlantError, Result};
 use crate::integrate::{AffineStep, PiecewiseRk4, PiecewiseSmooth};
+use crate::line::{Coupling, Domain, Line, LineBody, Quantity};
 use crate::rig::{RigParams, Variant};
 use crate::statespace::StateSpace;
 
@@ -114,121 +116,158 @@ impl DriveEffects {
 pub const BACKLASH_STEP_S: f64 = 1.25e-4;
 
 /// The open-differential powertrain (section 2.4) with effects, driven by the load-machine and
-/// drive torques [M_m2, M_drive, M_m3]. Coordinates: φ_m2, φ_drive (the cage), φ_m3 and, with a
-/// compliance, φ_motor; then their speeds; then, with a lag, the lagged drive torque. The side
-/// shafts act through the generalised twist s = aᵀq, a = [−1, 2, −1] on (m2, cage, m3), as two
-/// springs in series (eq. (A1)); the drive torque acts on the motor (the cage when rigid).
+/// drive torques [M_m2, M_drive, M_m3]: the paper rig's view of its [`DriveModel`]
+/// ([`DriveModel::paper_rig`]), whose [`Dynamics`] it integrates — one right-hand side, one
+/// linearisation per piece with every other drivetrain. Coordinates: φ_m2, φ_drive (the cage),
+/// φ_m3 and, with a compliance, φ_motor; then their speeds; then, with a lag, the lagged drive
+/// torque. The side shafts act through the generalised twist s = aᵀq, a = [−1, 2, −1] on (m2,
+/// cage, m3), as two springs in series (eq. (A1)); the drive torque acts on the motor (the cage
+/// when rigid).
 #[derive(Debug, Clone)]
 pub struct Powertrain {
-    inertia: Vec<f64>,
-    /// Stiffness and damping besides the side shafts (the compliance), and the drag, row-major.
-    k0: Vec<f64>,
-    d0: Vec<f64>,
-    a: Vec<f64>,
+    model: DriveModel,
+    dynamics: Dynamics,
+    /// Stiffness of the side shafts in series on s, Nm/rad (eq. (A1)).
     c_s: f64,
-    d_s: f64,
-    /// Damping of each shaft's torque per unit twist rate (short, long): d_k times its share of
-    /// the twist, as `RigParams::open_differential` builds the spring torques.
-    d_shaft: [f64; 2],
-    /// Non-zero entries (i, j, k0_ij, d0_ij) of k0 and d0.
-    couplings: Vec<(usize, usize, f64, f64)>,
     input_dof: usize,
-    /// 1/J per coordinate, and whether any machine has friction (the right-hand side's hot path).
-    inv_inertia: Vec<f64>,
-    friction: bool,
-    /// RK4 steps within a piece and across pieces, s; half-widths of the friction's steep bands
-    /// [M2, drive, M3], rad/s.
+    /// RK4 steps within a piece and across pieces, s.
     coarse_s: f64,
     fine_s: f64,
-    friction_band: [f64; 3],
     /// The effects.
     pub effects: DriveEffects,
+}
+
+impl DriveModel {
+    /// The paper's rig in `variant` with `effects` as a drive model: bodies `m2`, `drive` (the
+    /// differential's cage), `m3` and, with a compliance, `motor` (the drive's inertia split,
+    /// `compliance_motor_fraction` of it on the motor); couplings `short_side_shaft` and
+    /// `long_side_shaft` on the open differential's twist s = 2φ_drive − φ_m2 − φ_m3, each on its
+    /// share of it (eq. (A1): c_r/(c_l + c_r) s and c_l/(c_l + c_r) s, so the pair's stiffness on
+    /// s is c_l c_r/(c_l + c_r)), and `drive_compliance` on φ_motor − φ_drive with the shafts'
+    /// stiffness-proportional damping; inputs M_m2, the drive torque (on the motor when
+    /// compliant), M_m3. The effects: the dead time and lag of the drive torque, the play on
+    /// both shafts so that they open together at |s| = `backlash_rad`, the machines' friction.
+    pub fn paper_rig(rig: &RigParams, variant: Variant, effects: &DriveEffects) -> Result<DriveModel> {
+        effects.validate()?;
+        let e = rig.effective(variant)?;
+        let (cl, cr) = (e.c_left, e.c_right);
+        let (share_l, share_r) = (cr / (cl + cr), cl / (cl + cr));
+        let compliant = effects.compliance_stiffness_nm_per_rad > 0.0;
+        let body = |name: &str, inertia: f64, drag: f64| LineBody { name: name.into(), inertia, drag };
+        let f = effects.compliance_motor_fraction;
+        let mut bodies = vec![
+            body("m2", e.j_m2, e.load_drag),
+            body("drive", if compliant { (1.0 - f) * e.j_drive } else { e.j_drive }, 0.0),
+            body("m3", e.j_m3, e.load_drag),
+        ];
+        let n = if compliant { 4 } else { 3 };
+        let shaft = |name: &str, share: f64, c: f64, d: f64| {
+            let mut el: Vec<f64> = [-1.0, 2.0, -1.0].iter().map(|a| a * share).collect();
+            el.resize(n, 0.0);
+            Coupling { name: Some(name.into()), elongation: Some(el), ..Coupling::new(c, d, 1.0) }
+        };
+        let mut couplings =
+            vec![shaft("short_side_shaft", share_l, cl, e.d_left), shaft("long_side_shaft", share_r, cr, e.d_right)];
+        if compliant {
+            bodies.push(body("motor", f * e.j_drive, 0.0));
+            // The compliance gets the side shafts' stiffness-proportional damping, d = (d_s/c_s) k
+            // (the generic damping of section 4.3): an undamped internal mode would be a
+            // resonance no measurement shows.
+            let c_s = cl * share_l;
+            let d_s = e.d_left * share_l.powi(2) + e.d_right * share_r.powi(2);
+            let k = effects.compliance_stiffness_nm_per_rad;
+            couplings.push(Coupling {
+                name: Some("drive_compliance".into()),
+                elongation: Some(vec![0.0, -1.0, 0.0, 1.0]),
+                ..Coupling::new(k, d_s / c_s * k, 1.0)
+            });
+        }
+        let drive = if compliant { 3 } else { 1 };
+        let mut list = Vec::new();
+        if effects.time_delay_s > 0.0 {
+            list.push(Effect::TimeDelay { input: 1, delay_s: effects.time_delay_s });
+        }
+        if effects.actuator_lag_s > 0.0 {
+            list.push(Effect::ActuatorLag { input: 1, time_constant_s: effects.actuator_lag_s });
+        }
+        if effects.backlash_rad > 0.0 {
+            for (k, share) in [share_l, share_r].into_iter().enumerate() {
+                list.push(Effect::Backlash { coupling: k, backlash: 2.0 * share * effects.backlash_rad });
+            }
+        }
+        for (&b, &friction) in [0, drive, 2].iter().zip(&effects.coulomb_friction_nm) {
+            if friction > 0.0 {
+                list.push(Effect::CoulombFriction {
+                    body: b,
+                    friction,
+                    smoothing_speed: effects.friction_smoothing_radps,
+                });
+            }
+        }
+        let m = DriveModel {
+            line: Line { domain: Domain::Rotational, bodies, couplings },
+            inputs: vec![0, drive, 2],
+            effects: list,
+        };
+        m.validate()?;
+        Ok(m)
+    }
 }
 
 impl Powertrain {
     /// The powertrain of `rig` in `variant` with `effects`.
     pub fn new(rig: &RigParams, variant: Variant, effects: &DriveEffects) -> Result<Self> {
-        effects.validate()?;
+        let model = DriveModel::paper_rig(rig, variant, effects)?;
         let e = rig.effective(variant)?;
-        let (cl, cr) = (e.c_left, e.c_right);
-        let c_s = cl * cr / (cl + cr);
-        // Damping of the series pair as open_differential builds it: each shaft's damping
-        // acts on its share of the twist.
-        let (share_l, share_r) = (cr / (cl + cr), cl / (cl + cr));
-        let d_s = e.d_left * share_l.powi(2) + e.d_right * share_r.powi(2);
-        let compliant = effects.compliance_stiffness_nm_per_rad > 0.0;
-        let n = if compliant { 4 } else { 3 };
-        let mut inertia = vec![e.j_m2, e.j_drive, e.j_m3];
-        let mut k0 = vec![0.0; n * n];
-        let mut d0 = vec![0.0; n * n];
-        d0[0] = e.load_drag;
-        d0[2 * n + 2] = e.load_drag;
-        let mut a = vec![0.0; n];
-        a[..3].copy_from_slice(&[-1.0, 2.0, -1.0]);
-        let input_dof = if compliant {
-            let f = effects.compliance_motor_fraction;
-            inertia = vec![e.j_m2, (1.0 - f) * e.j_drive, e.j_m3, f * e.j_drive];
-            // The compliance gets the side shafts' stiffness-proportional damping, d = (d_s/c_s) k
-            // (the generic damping of section 4.3): an undamped internal mode would be a
-            // resonance no measurement shows.
-            let k = effects.compliance_stiffness_nm_per_rad;
-            let d = d_s / c_s * k;
-            for (m, v) in [(&mut k0, k), (&mut d0, d)] {
-                m[n + 1] += v;
-                m[3 * n + 3] += v;
-                m[n + 3] -= v;
-                m[3 * n + 1] -= v;
-            }
-            3
-        } else {
-            1
-        };
-        let d_shaft = [e.d_left * share_l, e.d_right * share_r];
-        let couplings =
-            (0..n * n).filter(|&m| k0[m] != 0.0 || d0[m] != 0.0).map(|m| (m / n, m % n, k0[m], d0[m])).collect();
-        let inv_inertia = inertia.iter().map(|j| 1.0 / j).collect();
-        let friction = effects.coulomb_friction_nm.iter().any(|&f| f > 0.0);
-        let mut p = Powertrain {
-            inertia,
-            k0,
-            d0,
-            a,
-            c_s,
-            d_s,
-            d_shaft,
-            couplings,
-            input_dof,
-            inv_inertia,
-            friction,
-            coarse_s: 8.0 * BACKLASH_STEP_S,
-            fine_s: BACKLASH_STEP_S,
-            friction_band: [0.0; 3],
-            effects: *effects,
-        };
+        let c_s = e.c_left * e.c_right / (e.c_left + e.c_right);
+        let mut dynamics = Dynamics::new(&model)?;
+        let input_dof = model.inputs[1];
+        let (mut coarse_s, mut fine_s) = (8.0 * BACKLASH_STEP_S, BACKLASH_STEP_S);
         if effects.is_nonlinear() {
-            p.steps_and_bands();
+            // within a smooth piece h·rate ≤ 0.5 of the linear part's fastest rate, at most the
+            // 1 ms sample; across pieces BACKLASH_STEP_S with backlash and h·rate ≤ 0.5 of the
+            // friction's slopes T_c/(v_s J)
+            let coarse =
+                (crate::drive::RK4_STEP_TIMES_RATE / dynamics.fastest_rate()).clamp(1e-9, 8.0 * BACKLASH_STEP_S);
+            let mut fine = if effects.backlash_rad > 0.0 { BACKLASH_STEP_S.min(coarse) } else { coarse };
+            let v = effects.friction_smoothing_radps;
+            for (&b, &tc) in [0, input_dof, 2].iter().zip(&effects.coulomb_friction_nm) {
+                if tc > 0.0 {
+                    let j = model.line.bodies[b].inertia;
+                    fine = fine.min((crate::drive::RK4_STEP_TIMES_RATE * v * j / tc).max(1e-9));
+                }
+            }
+            dynamics = dynamics.with_steps(coarse, fine);
+            (coarse_s, fine_s) = (coarse, fine);
         }
-        Ok(p)
+        Ok(Powertrain { model, dynamics, c_s, input_dof, coarse_s, fine_s, effects: *effects })
+    }
+
+    /// The rig as a drive model ([`DriveModel::paper_rig`]).
+    pub fn model(&self) -> &DriveModel {
+        &self.model
+    }
+
+    /// The dynamics it integrates.
+    pub fn dynamics(&self) -> &Dynamics {
+        &self.dynamics
     }
 
     /// Degrees of freedom: 3, or 4 with a compliance (φ_motor last).
     pub fn dofs(&self) -> usize {
-        self.inertia.len()
+        self.model.line.bodies.len()
     }
 
     /// Number of states.
     pub fn nstates(&self) -> usize {
-        2 * self.dofs() + usize::from(self.effects.actuator_lag_s > 0.0)
+        self.dynamics.nstates()
     }
 
-    /// Names of the states, in order.
+    /// Names of the states, in order (the drive model's; the lagged torque is the drive's).
     pub fn state_names(&self) -> Vec<String> {
-        let n = self.dofs();
-        let mut names: Vec<String> =
-            ["phi_m2", "phi_drive", "phi_m3", "phi_motor"][..n].iter().map(|s| s.to_string()).collect();
-        names.extend(["w_m2", "w_drive", "w_m3", "w_motor"][..n].iter().map(|s| s.to_string()));
-        if self.nstates() > 2 * n {
-            names.push("M_drive_lagged".into());
+        let mut names = self.model.state_names();
+        if self.nstates() > 2 * self.dofs() {
+            names[2 * self.dofs()] = "M_drive_lagged".into();
         }
         names
     }
@@ -237,35 +276,15 @@ impl Powertrain {
     /// [T_short, T_long], the dead time left out: (A, B, C). `contact`: the shafts engaged
     /// (backlash closed, eq. (A1)); false: inside the play, where they carry nothing.
     pub fn linear(&self, contact: bool) -> (DMatrix<f64>, DMatrix<f64>, DMatrix<f64>) {
-        let n = self.dofs();
-        let ns = self.nstates();
-        let on = if contact { 1.0 } else { 0.0 };
-        let mut a = DMatrix::zeros(ns, ns);
-        let mut b = DMatrix::zeros(ns, 3);
-        for i in 0..n {
-            a[(i, n + i)] = 1.0;
-            for j in 0..n {
-                let k = self.k0[i * n + j] + on * self.c_s * self.a[i] * self.a[j];
-                let d = self.d0[i * n + j] + on * self.d_s * self.a[i] * self.a[j];
-                a[(n + i, j)] = -k / self.inertia[i];
-                a[(n + i, n + j)] = -d / self.inertia[i];
-            }
-        }
-        b[(n, 0)] = 1.0 / self.inertia[0];
-        b[(n + 2, 2)] = 1.0 / self.inertia[2];
-        if self.effects.actuator_lag_s > 0.0 {
-            let tau = self.effects.actuator_lag_s;
-            a[(n + self.input_dof, 2 * n)] = 1.0 / self.inertia[self.input_dof];
-            a[(2 * n, 2 * n)] = -1.0 / tau;
-            b[(2 * n, 1)] = 1.0 / tau;
-        } else {
-            b[(n + self.input_dof, 1)] = 1.0 / self.inertia[self.input_dof];
-        }
+        let (n, ns) = (self.dofs(), self.nstates());
+        let (a, b) = self.dynamics.linear_piece(contact);
         let mut c = DMatrix::zeros(2, ns);
-        for (k, &d) in self.d_shaft.iter().enumerate() {
-            for i in 0..n {
-                c[(k, i)] = on * self.c_s * self.a[i];
-                c[(k, n + i)] = on * d * self.a[i];
+        if contact || self.effects.backlash_rad == 0.0 {
+            for (k, shaft) in self.model.line.couplings[..2].iter().enumerate() {
+                for (j, e) in shaft.terms(k) {
+                    c[(k, j)] = shaft.stiffness * e;
+                    c[(k, n + j)] = shaft.damping * e;
+                }
             }
         }
         (a, b, c)
@@ -337,10 +356,13 @@ impl Powertrain {
     /// Natural frequencies of the undamped linear part, Hz, ascending (the compliance adds
     /// one above the shuffle).
     pub fn frequencies_hz(&self) -> Vec<f64> {
-        let n = self.dofs();
-        let s = DMatrix::from_fn(n, n, |i, j| {
-            (self.k0[i * n + j] + self.c_s * self.a[i] * self.a[j]) / (self.inertia[i] * self.inertia[j]).sqrt()
-        });
+        let m = match self.model.line.model() {
+            Ok(m) => m,
+            Err(_) => return Vec::new(),
+        };
+        let k = m.stiffness_matrix();
+        let j = m.inertia.diagonal();
+        let s = DMatrix::from_fn(k.nrows(), k.ncols(), |r, c| k[(r, c)] / (j[r] * j[c]).sqrt());
         let mut f: Vec<f64> =
             s.symmetric_eigenvalues().iter().map(|&l| l.max(0.0).sqrt() / (2.0 * std::f64::consts::PI)).collect();
         f.sort_by(|a, b| a.total_cmp(b));
@@ -431,87 +453,21 @@ impl Powertrain {
         x
     }
 
-    /// Twist s = aᵀq and its rate.
-    fn twist(&self, x: &[f64]) -> (f64, f64) {
-        let n = self.dofs();
-        let (mut s, mut sdot) = (0.0, 0.0);
-        for i in 0..n {
-            s += self.a[i] * x[i];
-            sdot += self.a[i] * x[n + i];
-        }
-        (s, sdot)
-    }
-
     /// Whether the side shafts are engaged (the twist beyond the play; always without backlash).
     pub fn in_contact(&self, x: &[f64]) -> bool {
-        self.beyond_play(self.twist(x).0).is_some()
-    }
-
-    /// Elastic twist beyond the dead zone of half-width b (each shaft's total play b/2 on
-    /// either side, two in series); `None` inside it, where the shafts carry nothing.
-    fn beyond_play(&self, s: f64) -> Option<f64> {
-        let b = self.effects.backlash_rad;
-        if s > b {
-            Some(s - b)
-        } else if s < -b {
-            Some(s + b)
-        } else if b == 0.0 {
-            Some(s)
-        } else {
-            None
-        }
+        self.dynamics.coupling_twist(0, x).1
     }
 
     /// Side-shaft torques [T_short, T_long] of state `x`: stiffness on the twist beyond the
     /// play, damping only in contact.
     pub fn shaft_torques(&self, x: &[f64]) -> [f64; 2] {
-        let (s, sdot) = self.twist(x);
-        match self.beyond_play(s) {
-            Some(e) => {
-                let e = self.c_s * e;
-                [e + self.d_shaft[0] * sdot, e + self.d_shaft[1] * sdot]
-            }
-            None => [0.0; 2],
-        }
+        [0, 1].map(|k| self.dynamics.output(x, (Quantity::CouplingForce, k)))
     }
 
     /// ẋ for the torques [M_m2, M_drive, M_m3] (the drive torque already delayed).
+    #[inline]
     pub fn derivative(&self, x: &[f64], torques: [f64; 3], dx: &mut [f64]) {
-        let n = self.dofs();
-        let (q, w) = x.split_at(n);
-        let (s, sdot) = self.twist(x);
-        // generalised shaft force of the series pair
-        let t = self.beyond_play(s).map_or(0.0, |e| self.c_s * e + self.d_s * sdot);
-        let lagged = self.effects.actuator_lag_s > 0.0;
-        let drive = if lagged { x[2 * n] } else { torques[1] };
-        let mut f = [0.0; 4];
-        for i in 0..n {
-            dx[i] = w[i];
-            f[i] = -self.a[i] * t;
-        }
-        // the few couplings besides the shafts: drag, and the compliance
-        for &(i, j, k, d) in &self.couplings {
-            f[i] -= k * q[j] + d * w[j];
-        }
-        f[0] += torques[0];
-        f[2] += torques[2];
-        f[self.input_dof] += drive;
-        // Coulomb friction of the machines, smoothed: T_c w/√(w² + v_s²)
-        if self.friction {
-            let vs2 = self.effects.friction_smoothing_radps.powi(2);
-            for (k, &tc) in self.effects.coulomb_friction_nm.iter().enumerate() {
-                if tc > 0.0 {
-                    let i = self.friction_dof(k);
-                    f[i] -= tc * w[i] / (w[i] * w[i] + vs2).sqrt();
-                }
-            }
-        }
-        for i in 0..n {
-            dx[n + i] = f[i] * self.inv_inertia[i];
-        }
-        if lagged {
-            dx[2 * n] = (torques[1] - x[2 * n]) / self.effects.actuator_lag_s;
-        }
+        self.dynamics.rhs(x, &torques, dx);
     }
 
     /// The RK4 steps of the nonlinear model (coarse, fine), s, in the diagnosis and in the FMU
@@ -523,38 +479,21 @@ impl Powertrain {
         (self.coarse_s, self.fine_s)
     }
 
-    fn steps_and_bands(&mut self) {
-        let linear = self.linear(true).0.complex_eigenvalues().iter().map(|l| l.norm()).fold(0.0, f64::max);
-        let coarse = (crate::drive::RK4_STEP_TIMES_RATE / linear).clamp(1e-9, 8.0 * BACKLASH_STEP_S);
-        let mut fine = if self.effects.backlash_rad > 0.0 { BACKLASH_STEP_S.min(coarse) } else { coarse };
-        let v = self.effects.friction_smoothing_radps;
-        for (k, &tc) in self.effects.coulomb_friction_nm.iter().enumerate() {
-            if tc > 0.0 {
-                let j = self.inertia[self.friction_dof(k)];
-                fine = fine.min((crate::drive::RK4_STEP_TIMES_RATE * v * j / tc).max(1e-9));
-                self.friction_band[k] = crate::integrate::friction_band(coarse, tc, v, j);
-            }
-        }
-        self.coarse_s = coarse;
-        self.fine_s = fine;
-    }
-
     /// The smooth piece state `x` lies in: the side shafts in contact on either side or inside
     /// the play, and each machine with friction clear of its steep band on either side or in it.
     pub fn piece(&self, x: &[f64]) -> u64 {
         let mut key = 0;
         if self.effects.backlash_rad > 0.0 {
-            let (s, _) = self.twist(x);
-            let b = self.effects.backlash_rad;
-            key = u64::from(s > b) + 2 * u64::from(s < -b);
+            let (s, engaged) = self.dynamics.coupling_twist(0, x);
+            key = u64::from(engaged && s > 0.0) + 2 * u64::from(engaged && s < 0.0);
         }
-        if self.friction {
-            let n = self.dofs();
-            for (k, &band) in self.friction_band.iter().enumerate() {
-                if band > 0.0 {
-                    let w = x[n + self.friction_dof(k)];
-                    key = 4 * key + u64::from(w > band) + 2 * u64::from(w < -band);
-                }
+        let n = self.dofs();
+        for k in 0..3 {
+            let i = self.friction_dof(k);
+            let band = self.dynamics.friction_band(i);
+            if band > 0.0 {
+                let w = x[n + i];
+                key = 4 * key + u64::from(w > band) + 2 * u64::from(w < -band);
             }
         }
         key
@@ -576,17 +515,7 @@ impl Powertrain {
     /// The friction's contribution to ∂ẇ_i/∂w_i at state `x`: (speed's state index, slope)
     /// for each machine with friction, −T_c v_s²/((w² + v_s²)^{3/2} J_i).
     pub fn friction_slopes(&self, x: &[f64]) -> Vec<(usize, f64)> {
-        let n = self.dofs();
-        let vs2 = self.effects.friction_smoothing_radps.powi(2);
-        let mut v = Vec::new();
-        for (k, &tc) in self.effects.coulomb_friction_nm.iter().enumerate() {
-            if tc > 0.0 {
-                let i = self.friction_dof(k);
-                let w = x[n + i];
-                v.push((n + i, -tc * vs2 / (w * w + vs2).powf(1.5) / self.inertia[i]));
-            }
-        }
-        v
+        self.dynamics.friction_slopes(x)
     }
 
     fn simulate_rk4(&self, u: &[f64], dt_s: f64, mut x: Vec<f64>) -> (Vec<f64>, Vec<f64>) {
@@ -606,18 +535,13 @@ impl Powertrain {
     /// derivative: in contact there the shafts' force c_s (s − b) + d_s ṡ is the engaged model's
     /// less c_s b, a force a_i c_s b on each coordinate (below the negative edge its negative).
     pub fn play_offset(&self) -> Vec<f64> {
-        let n = self.dofs();
-        let mut e = vec![0.0; self.nstates()];
-        for i in 0..n {
-            e[n + i] = self.a[i] * self.c_s * self.effects.backlash_rad / self.inertia[i];
-        }
-        e
+        self.dynamics.play_offset()
     }
 
     /// Whether the only nonlinearity is the play (no friction): its pieces are linear and
     /// are stepped exactly ([`PieceMaps`]).
     pub fn pieces_are_linear(&self) -> bool {
-        !self.friction && self.effects.backlash_rad > 0.0
+        self.effects.coulomb_friction_nm == [0.0; 3] && self.effects.backlash_rad > 0.0
     }
 
     /// The exact steps of `h` of the three linear pieces of a model whose only nonlinearity is
@@ -801,6 +725,97 @@ mod tests {
 
     fn rig() -> RigParams {
         crate::paper::damped_params()
+    }
+
+    /// The rig's right-hand side — the drive model's one [`Dynamics`] — against the open
+    /// differential written out by hand (eq. (A1): the side shafts in series on s = aᵀq,
+    /// a = [−1, 2, −1], stiffness c_l c_r/(c_l + c_r) beyond the play |s| > b, damping
+    /// d_l (c_r/(c_l+c_r))² + d_r (c_l/(c_l+c_r))²; the compliance between cage and motor; the
+    /// machines' friction T_c w/√(w² + v_s²); the lag τ ż = u − z), at states spread over
+    /// contact on either side and inside the play. Agreement to round-off (1e-12 of the
+    /// largest term).
+    #[test]
+    fn the_rig_right_hand_side_is_the_open_differential_by_hand() {
+        let rig = rig();
+        let effects = DriveEffects {
+            backlash_rad: 0.004,
+            actuator_lag_s: 0.003,
+            compliance_stiffness_nm_per_rad: 2500.0,
+            compliance_motor_fraction: 0.4,
+            coulomb_friction_nm: [0.7, 0.3, 1.1],
+            ..Default::default()
+        };
+        let p = Powertrain::new(&rig, Variant::V1, &effects).unwrap();
+        let e = rig.effective(Variant::V1).unwrap();
+        let (cl, cr) = (e.c_left, e.c_right);
+        let c_s = cl * cr / (cl + cr);
+        let d_s = e.d_left * (cr / (cl + cr)).powi(2) + e.d_right * (cl / (cl + cr)).powi(2);
+        let (k, f) = (effects.compliance_stiffness_nm_per_rad, effects.compliance_motor_fraction);
+        let d_k = d_s / c_s * k;
+        let j = [e.j_m2, (1.0 - f) * e.j_drive, e.j_m3, f * e.j_drive];
+        let a = [-1.0, 2.0, -1.0, 0.0];
+        let b = effects.backlash_rad;
+        let vs = effects.friction_smoothing_radps;
+        let u = [4.0, 35.0, -6.0];
+        let mut dx = vec![0.0; 9];
+        for (case, s_target) in [0.011, -0.009, 0.0015, -0.0031, 0.0].iter().enumerate() {
+            // angles and speeds spread, the cage placed so that s = s_target
+            let mut x: Vec<f64> = (0..9).map(|i| 0.01 * ((i * 7 + case * 3) % 5) as f64 - 0.02).collect();
+            x[1] = (s_target + x[0] + x[2]) / 2.0;
+            let s: f64 = (0..4).map(|i| a[i] * x[i]).sum();
+            let sdot: f64 = (0..4).map(|i| a[i] * x[4 + i]).sum();
+            let t = if s > b {
+                c_s * (s - b) + d_s * sdot
+            } else if s < -b {
+                c_s * (s + b) + d_s * sdot
+            } else {
+                0.0
+            };
+            let compliance = k * (x[3] - x[1]) + d_k * (x[7] - x[5]);
+            let friction = |tc: f64, w: f64| tc * w / (w * w + vs * vs).sqrt();
+            let force = [
+                -a[0] * t + u[0] - e.load_drag * x[4] - friction(0.7, x[4]),
+                -a[1] * t + compliance,
+                -a[2] * t + u[2] - e.load_drag * x[6] - friction(1.1, x[6]),
+                -compliance + x[8] - friction(0.3, x[7]),
+            ];
+            let mut by_hand = x[4..8].to_vec();
+            by_hand.extend((0..4).map(|i| force[i] / j[i]));
+            by_hand.push((u[1] - x[8]) / effects.actuator_lag_s);
+            p.derivative(&x, u, &mut dx);
+            let scale = by_hand.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+            for i in 0..9 {
+                assert!(
+                    (dx[i] - by_hand[i]).abs() <= 1e-12 * scale,
+                    "s = {s_target}, state {i}: {} vs {}",
+                    dx[i],
+                    by_hand[i]
+                );
+            }
+            let torques = p.shaft_torques(&x);
+            let t_short = if t == 0.0 { 0.0 } else { t - d_s * sdot + e.d_left * cr / (cl + cr) * sdot };
+            assert!((torques[0] - t_short).abs() <= 1e-12 * c_s, "{} vs {t_short}", torques[0]);
+            assert_eq!(p.in_contact(&x), s.abs() > b);
+        }
+    }
+
+    /// The paper rig's drive model in V1–V4 has the shuffle frequency of the closed form
+    /// ω² = c_l c_r/(c_l + c_r) (1/J_m2 + 4/J_drive + 1/J_m3) (section 2.4) and two rigid modes.
+    #[test]
+    fn the_paper_rig_model_has_the_closed_form_shuffle() {
+        for variant in [Variant::V1, Variant::V2, Variant::V3, Variant::V4] {
+            let m = DriveModel::paper_rig(&rig(), variant, &DriveEffects::default()).unwrap();
+            let e = rig().effective(variant).unwrap();
+            let c_s = e.c_left * e.c_right / (e.c_left + e.c_right);
+            let w = (c_s * (1.0 / e.j_m2 + 4.0 / e.j_drive + 1.0 / e.j_m3)).sqrt();
+            let f = m.line.model().unwrap().modes().unwrap().frequencies_hz;
+            assert!(f[0].abs() < 1e-6 && f[1].abs() < 1e-6, "{f:?}");
+            assert!((f[2] - w / (2.0 * std::f64::consts::PI)).abs() < 1e-9 * f[2], "{variant}: {f:?} vs {w}");
+            let p = Powertrain::new(&rig(), variant, &DriveEffects::default()).unwrap();
+            assert!((p.frequencies_hz()[2] - f[2]).abs() < 1e-9 * f[2]);
+            assert_eq!(m.coupling_force_names(), ["T_short_side_shaft", "T_long_side_shaft"]);
+            assert_eq!(m.state_names(), ["phi_m2", "phi_drive", "phi_m3", "w_m2", "w_drive", "w_m3"]);
+        }
     }
 
     #[test]

@@ -60,7 +60,9 @@ pub struct LineBody {
     pub drag: f64,
 }
 
-/// The coupling of body i to body i+1.
+/// Coupling i: by default between body i and body i+1 (through a gear stage of `ratio`); with
+/// an `elongation`, a spring-damper on any linear combination of the bodies' coordinates — an
+/// open differential's side shafts act on 2φ_cage − φ_left − φ_right (eq. (A1)).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Coupling {
@@ -69,16 +71,40 @@ pub struct Coupling {
     /// Damping (Nm s/rad or N s/m).
     #[serde(default)]
     pub damping: f64,
-    /// Gear ratio: speed of body i = ratio · speed of body i+1 (1: no gear stage).
+    /// Gear ratio: speed of body i = ratio · speed of body i+1 (1: no gear stage; must be 1
+    /// with an `elongation`, which carries any ratio itself).
     #[serde(default = "one")]
     pub ratio: f64,
+    /// Name, the stem of its force's signal name (`T_<name>`/`F_<name>`); default `coupling_<i>`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub name: Option<String>,
+    /// The twist (elongation) as eᵀq, one coefficient per body (rad per rad, m per m); default
+    /// q_i / ratio − q_{i+1}. Its force T acts on body j as −e_j T.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub elongation: Option<Vec<f64>>,
+}
+
+impl Coupling {
+    /// A coupling between neighbours: stiffness, damping and gear ratio, unnamed.
+    pub fn new(stiffness: f64, damping: f64, ratio: f64) -> Coupling {
+        Coupling { stiffness, damping, ratio, name: None, elongation: None }
+    }
+
+    /// The twist's coefficients of coupling `i` as (body, coefficient), the zeros left out.
+    pub fn terms(&self, i: usize) -> Vec<(usize, f64)> {
+        match &self.elongation {
+            Some(e) => e.iter().enumerate().filter(|(_, c)| **c != 0.0).map(|(j, c)| (j, *c)).collect(),
+            None => vec![(i, 1.0 / self.ratio), (i + 1, -1.0)],
+        }
+    }
 }
 
 fn one() -> f64 {
     1.0
 }
 
-/// A line of bodies and the couplings between neighbours (`couplings.len() == bodies.len() − 1`).
+/// A line of bodies and the couplings between neighbours (`couplings.len() == bodies.len() − 1`
+/// when none has an explicit elongation).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Line {
     /// Rotational or translational.
@@ -97,7 +123,8 @@ impl Line {
         if self.bodies.is_empty() {
             return Err(PlantError::Invalid("`model.bodies` is empty: a line needs at least one body".into()));
         }
-        if self.couplings.len() + 1 != self.bodies.len() {
+        let general = self.couplings.iter().any(|c| c.elongation.is_some());
+        if !general && self.couplings.len() + 1 != self.bodies.len() {
             return Err(PlantError::Invalid(format!(
                 "`model.couplings` has {} entries for {} bodies: coupling i joins body i and i+1, so {} are expected",
                 self.couplings.len(),
@@ -127,6 +154,52 @@ impl Line {
                 c.ratio,
                 "(speed of body i per speed of body i+1)",
             )?;
+            let key = || format!("model.couplings[{}]", i + 1);
+            match &c.elongation {
+                None if i + 1 >= self.bodies.len() => {
+                    return Err(PlantError::Invalid(format!(
+                        "`{}` joins body {} and {}, but the line has {} bodies (give its `elongation` to couple other bodies)",
+                        key(),
+                        i + 1,
+                        i + 2,
+                        self.bodies.len()
+                    )));
+                }
+                None => {}
+                Some(e) => {
+                    if e.len() != self.bodies.len() {
+                        return Err(PlantError::Invalid(format!(
+                            "`{}.elongation` has {} coefficients: expected one per body, {}",
+                            key(),
+                            e.len(),
+                            self.bodies.len()
+                        )));
+                    }
+                    if !e.iter().all(|v| v.is_finite()) || e.iter().all(|&v| v == 0.0) {
+                        return Err(PlantError::Invalid(format!(
+                            "`{}.elongation` = {e:?}: expected finite coefficients, not all zero",
+                            key()
+                        )));
+                    }
+                    if c.ratio != 1.0 {
+                        return Err(PlantError::Invalid(format!(
+                            "`{}.ratio` = {}: a coupling with an `elongation` carries its ratios in the coefficients; \
+                             expected 1 (or no ratio)",
+                            key(),
+                            c.ratio
+                        )));
+                    }
+                }
+            }
+            if let Some(name) = &c.name {
+                let ok = !name.is_empty() && name.chars().all(|ch| ch.is_ascii_alphanumeric() || ch == '_');
+                if !ok {
+                    return Err(PlantError::Invalid(format!(
+                        "`{}.name` = \"{name}\": expected letters, digits and `_` (it names a signal)",
+                        key()
+                    )));
+                }
+            }
         }
         Ok(())
     }
@@ -136,8 +209,8 @@ impl Line {
         self.bodies.iter().position(|b| b.name == name)
     }
 
-    /// The line as a mechanical model: diagonal inertia, one spring per coupling with
-    /// elongation q_i / r − q_{i+1}, drag on each body.
+    /// The line as a mechanical model: diagonal inertia, one spring per coupling with its
+    /// elongation (q_i / r − q_{i+1} between neighbours), drag on each body.
     pub fn model(&self) -> Result<MechanicalModel> {
         self.validate()?;
         let n = self.bodies.len();
@@ -147,10 +220,11 @@ impl Line {
             .enumerate()
             .map(|(i, c)| {
                 let mut e = DVector::zeros(n);
-                e[i] = 1.0 / c.ratio;
-                e[i + 1] = -1.0;
+                for (j, v) in c.terms(i) {
+                    e[j] = v;
+                }
                 Spring {
-                    name: format!("coupling {}", i + 1),
+                    name: c.name.as_ref().map_or_else(|| format!("coupling {}", i + 1), |s| s.replace('_', " ")),
                     elongation: e,
                     stiffness: c.stiffness,
                     damping: c.damping,
@@ -177,7 +251,7 @@ impl Line {
             let (offset, count) = match q {
                 Quantity::Position => (0, n),
                 Quantity::Speed => (n, n),
-                Quantity::CouplingForce => (2 * n, n - 1),
+                Quantity::CouplingForce => (2 * n, self.couplings.len()),
             };
             if i >= count {
                 return Err(PlantError::Invalid(format!("output {q:?} of position {} is outside the line", i + 1)));
@@ -218,10 +292,7 @@ mod tests {
         let line = Line {
             domain: Domain::Rotational,
             bodies: vec![body("motor", jm), body("hub", jh), body("load", jl)],
-            couplings: vec![
-                Coupling { stiffness: c1, damping: 0.0, ratio: 1.0 },
-                Coupling { stiffness: c2, damping: 0.0, ratio: r },
-            ],
+            couplings: vec![Coupling::new(c1, 0.0, 1.0), Coupling::new(c2, 0.0, r)],
         };
         let f = line.model().unwrap().modes().unwrap().frequencies_hz;
         // by hand: the load seen from the hub side in hub radians q_l' = r q_l: kinetic energy
@@ -265,7 +336,7 @@ mod tests {
         let mut line = Line {
             domain: Domain::Rotational,
             bodies: vec![body("a", 1.0), body("b", 1.0)],
-            couplings: vec![Coupling { stiffness: 1.0, damping: 0.0, ratio: 1.0 }],
+            couplings: vec![Coupling::new(1.0, 0.0, 1.0)],
         };
         line.couplings[0].ratio = 0.0;
         assert!(line.validate().unwrap_err().to_string().contains("model.couplings[1].ratio"));

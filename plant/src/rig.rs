@@ -218,14 +218,14 @@ impl RigParams {
     /// c_l/(c_l + c_r) aᵀq, so C = c_l c_r/(c_l + c_r) a aᵀ — eq. (A1) — and the damping matrix
     /// follows the same way. Modes: rigid body and the outputs' antiphase motion at 0 Hz, and
     /// the shuffle at ω² = c_l c_r/(c_l + c_r) (1/J_m2 + 4/J_drive + 1/J_m3).
+    ///
+    /// Built from the rig's one drive model ([`crate::drive::DriveModel::paper_rig`], no effects),
+    /// the model the diagnosis, the FMU and the MPC integrate.
     pub fn open_differential(&self, variant: Variant) -> Result<MechanicalModel> {
-        let e = self.effective(variant)?;
-        let (cl, cr) = (e.c_left, e.c_right);
-        let springs = vec![
-            spring("short side shaft", [-1.0, 2.0, -1.0].map(|a| a * cr / (cl + cr)), cl, e.d_left),
-            spring("long side shaft", [-1.0, 2.0, -1.0].map(|a| a * cl / (cl + cr)), cr, e.d_right),
-        ];
-        Ok(three_dof(&e, springs))
+        let model = crate::drive::DriveModel::paper_rig(self, variant, &crate::effects::DriveEffects::default())?;
+        let mut m = model.line.model()?;
+        m.layout = Some(Layout { m2: 0, drive: Some(1), m3: 2, short_shaft: (0, 1), long_shaft: (1, 2) });
+        Ok(m)
     }
 
     /// The open differential with its side gears' inertia `j_side` each: eq. (28) with

@@ -17,10 +17,7 @@ pub fn declared() -> DriveModel {
                 LineBody { name: "hub".into(), inertia: 0.01, drag: 0.0 },
                 LineBody { name: "load".into(), inertia: 0.3, drag: 0.01 },
             ],
-            couplings: vec![
-                Coupling { stiffness: 400.0, damping: 0.2, ratio: 1.0 },
-                Coupling { stiffness: 3000.0, damping: 0.5, ratio: 4.0 },
-            ],
+            couplings: vec![Coupling::new(400.0, 0.2, 1.0), Coupling::new(3000.0, 0.5, 4.0)],
         },
         inputs: vec![0],
         effects: vec![],

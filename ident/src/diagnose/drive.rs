@@ -140,7 +140,7 @@ struct Problem<'a> {
 
 impl Problem<'_> {
     fn nbase(&self) -> usize {
-        2 * self.rec.model.line.bodies.len() - 1
+        self.rec.model.line.bodies.len() + self.rec.model.line.couplings.len()
     }
 
     /// The model of candidate `c` at parameters `x` (base scales in log, then the extras).
@@ -237,7 +237,7 @@ impl Problem<'_> {
         };
         match c {
             Candidate::None => vec![vec![]],
-            Candidate::Damping => vec![vec![0.0; 2 * n - 1]],
+            Candidate::Damping => vec![vec![0.0; n + self.rec.model.line.couplings.len()]],
             Candidate::CoulombFriction(_) => grid(0.01, 1.0, 8),
             // the play's basin: a profile over five decades of the declared model's elastic
             // twist (a play can be far wider than the twist the spring takes)
@@ -327,7 +327,8 @@ pub fn diagnose(rec: DriveRecord, progress: &(dyn Fn(&str) + Sync)) -> Result<Dr
 
     // scales of the extras from the declared model's own motion
     let all_speeds: Vec<(Quantity, usize)> = (0..n).map(|b| (Quantity::Speed, b)).collect();
-    let all_twists: Vec<(Quantity, usize)> = (0..n - 1).map(|c| (Quantity::CouplingForce, c)).collect();
+    let nc = m0.line.couplings.len();
+    let all_twists: Vec<(Quantity, usize)> = (0..nc).map(|c| (Quantity::CouplingForce, c)).collect();
     let declared_motion = m0
         .simulate(rec.inputs, dt, initial_speed, &[all_speeds, all_twists].concat())
         .map_err(|e| IdentError::Data(format!("the declared model cannot be simulated: {e}")))?;
@@ -345,9 +346,9 @@ pub fn diagnose(rec: DriveRecord, progress: &(dyn Fn(&str) + Sync)) -> Result<Dr
             if c.damping > 0.0 {
                 c.damping
             } else {
-                // 1 % of critical for the two neighbours seen from the coupling's load side
-                let r2 = c.ratio * c.ratio;
-                let j = 1.0 / (1.0 / (m0.line.bodies[i].inertia * r2) + 1.0 / m0.line.bodies[i + 1].inertia);
+                // 1 % of critical for the inertia the coupling's twist sees, 1/Σ e_j²/J_j (two
+                // neighbours through a gear: seen from the load side)
+                let j = 1.0 / c.terms(i).iter().map(|&(b, e)| e * e / m0.line.bodies[b].inertia).sum::<f64>();
                 0.02 * (c.stiffness * j).sqrt()
             }
         })
@@ -401,7 +402,7 @@ pub fn diagnose(rec: DriveRecord, progress: &(dyn Fn(&str) + Sync)) -> Result<Dr
             cands.push(Candidate::CoulombFriction(b));
         }
     }
-    for c in 0..n - 1 {
+    for c in 0..nc {
         // play shows where the coupling's force crosses zero
         let f = &declared_motion[n + c];
         if problem.twist_rms[c] > 0.0 && f.iter().any(|&v| v > 0.0) && f.iter().any(|&v| v < 0.0) {
