@@ -278,7 +278,8 @@ impl Problem<'_> {
 
 /// Speed of body `b` per speed of body 0 (the gear stages between them).
 fn gear_to(m: &DriveModel, b: usize) -> f64 {
-    m.line.couplings[..b].iter().map(|c| 1.0 / c.ratio).product()
+    // the gear stages between neighbours before it (a coupling with an elongation has ratio 1)
+    m.line.couplings.iter().take(b).map(|c| 1.0 / c.ratio).product()
 }
 
 /// Diagnoses `rec`. `progress` is told each candidate's name as it finishes.
