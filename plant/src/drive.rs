@@ -695,7 +695,14 @@ impl Dynamics {
         for (&(body, _, tau, z), &u) in self.inputs.iter().zip(u) {
             f[body] += if tau > 0.0 { x[z] } else { u };
         }
-        for s in &self.couplings {
+        for (i, s) in self.couplings.iter().enumerate() {
+            if let Some(inv_r) = s.gear {
+                // between neighbours (the hot path of a line): q_i / r − q_{i+1}
+                let t = coupling_force(s.c, s.d, s.half, q[i] * inv_r - q[i + 1], v[i] * inv_r - v[i + 1]);
+                f[i + 1] += t;
+                f[i] -= t * inv_r;
+                continue;
+            }
             let terms = &self.terms[s.terms.0..s.terms.1];
             let (mut twist, mut rate) = (0.0, 0.0);
             for &(j, e) in terms {
