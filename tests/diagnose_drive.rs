@@ -107,6 +107,22 @@ fn simulate(truth: Truth, u: &[f64]) -> [Vec<f64>; 3] {
     out
 }
 
+/// Writes `data.csv` in `dir`: time, the input `u` and the outputs `y`, each with white noise of
+/// 1 % of its RMS (seeded).
+fn write_record(dir: &std::path::Path, header: &str, u: &[f64], y: &[Vec<f64>], seed: u64) {
+    let mut rng = StdRng::seed_from_u64(seed);
+    let mut csv = format!("{header}\n");
+    let sd: Vec<f64> = y.iter().map(|s| 0.01 * (s.iter().map(|v| v * v).sum::<f64>() / N as f64).sqrt()).collect();
+    for k in 0..N {
+        csv += &format!("{:.4},{:.9e}", k as f64 * DT, u[k]);
+        for (s, sd) in y.iter().zip(&sd) {
+            csv += &format!(",{:.9e}", s[k] + Normal::new(0.0, *sd).unwrap().sample(&mut rng));
+        }
+        csv.push('\n');
+    }
+    std::fs::write(dir.join("data.csv"), csv).unwrap();
+}
+
 /// Writes the bundle (declared model: the line without the truth's effect, shaft damping
 /// `declared_d`) and runs `rigtwin diagnose --json`.
 fn diagnose(case: &str, truth: Truth, declared_d: f64, seed: u64) -> serde_json::Value {
@@ -121,18 +137,8 @@ fn diagnose(case: &str, truth: Truth, declared_d: f64, seed: u64) -> serde_json:
         excitation(seed, 40.0, 0.12)
     };
     let y = simulate(truth, &u);
-    let mut rng = StdRng::seed_from_u64(seed + 100);
     let dir = common::scratch("diagnose_drive", case);
-    let mut csv = String::from("time_s,torque_Nm,speed_motor_radps,speed_load_radps,torque_shaft_Nm\n");
-    let sd: Vec<f64> = y.iter().map(|s| 0.01 * (s.iter().map(|v| v * v).sum::<f64>() / N as f64).sqrt()).collect();
-    for k in 0..N {
-        csv += &format!("{:.4},{:.9e}", k as f64 * DT, u[k]);
-        for (s, sd) in y.iter().zip(&sd) {
-            csv += &format!(",{:.9e}", s[k] + Normal::new(0.0, *sd).unwrap().sample(&mut rng));
-        }
-        csv.push('\n');
-    }
-    std::fs::write(dir.join("data.csv"), csv).unwrap();
+    write_record(&dir, "time_s,torque_Nm,speed_motor_radps,speed_load_radps,torque_shaft_Nm", &u, &y, seed + 100);
     let torque_output = "[[outputs]]\ncolumn = \"torque_shaft_Nm\"\ncoupling = 1\nquantity = \"coupling_torque\"\n";
     let toml = format!(
         "kind = \"drive_test\"\ndata = \"data.csv\"\ndomain = \"rotational\"\n[model]\nbodies = [\n  {{ name = \"motor\", inertia = {J1}, drag = {DRAG1} }},\n  {{ name = \"load\", inertia = {J2}, drag = {DRAG2} }},\n]\ncouplings = [{{ stiffness = {C}, damping = {declared_d} }}]\n[[inputs]]\ncolumn = \"torque_Nm\"\nbody = \"motor\"\n[[outputs]]\ncolumn = \"speed_motor_radps\"\nbody = \"motor\"\nquantity = \"speed\"\n[[outputs]]\ncolumn = \"speed_load_radps\"\nbody = 2\nquantity = \"speed\"\n{torque_output}"
@@ -451,18 +457,9 @@ fn an_open_differential_with_a_dead_time() {
             x = std::array::from_fn(|i| x[i] + h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]));
         }
     }
-    let mut rng = StdRng::seed_from_u64(111);
     let dir = common::scratch("diagnose_drive", "open_differential");
-    let mut csv = String::from("time_s,torque_drive_Nm,speed_m2_radps,speed_m3_radps,torque_short_shaft_Nm\n");
-    let sd: Vec<f64> = y.iter().map(|s| 0.01 * (s.iter().map(|v| v * v).sum::<f64>() / N as f64).sqrt()).collect();
-    for k in 0..N {
-        csv += &format!("{:.4},{:.9e}", k as f64 * DT, u[k]);
-        for (s, sd) in y.iter().zip(&sd) {
-            csv += &format!(",{:.9e}", s[k] + Normal::new(0.0, *sd).unwrap().sample(&mut rng));
-        }
-        csv.push('\n');
-    }
-    std::fs::write(dir.join("data.csv"), csv).unwrap();
+    let header = "time_s,torque_drive_Nm,speed_m2_radps,speed_m3_radps,torque_short_shaft_Nm";
+    write_record(&dir, header, &u, &y, 111);
     let el = |share: f64| format!("[{}, {}, {}]", -share, 2.0 * share, -share);
     let toml = format!(
         "kind = \"drive_test\"\ndata = \"data.csv\"\ndomain = \"rotational\"\n[model]\nbodies = [\n  {{ name = \"m2\", inertia = {j2}, drag = {drag} }},\n  {{ name = \"drive\", inertia = {jd} }},\n  {{ name = \"m3\", inertia = {j3}, drag = {drag} }},\n]\ncouplings = [\n  {{ name = \"short_side_shaft\", stiffness = {cl}, damping = {dl}, elongation = {} }},\n  {{ name = \"long_side_shaft\", stiffness = {cr}, damping = {dr}, elongation = {} }},\n]\n[[inputs]]\ncolumn = \"torque_drive_Nm\"\nbody = \"drive\"\n[[outputs]]\ncolumn = \"speed_m2_radps\"\nbody = \"m2\"\nquantity = \"speed\"\n[[outputs]]\ncolumn = \"speed_m3_radps\"\nbody = \"m3\"\nquantity = \"speed\"\n[[outputs]]\ncolumn = \"torque_short_shaft_Nm\"\ncoupling = 1\nquantity = \"coupling_torque\"\n",
