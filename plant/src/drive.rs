@@ -548,10 +548,6 @@ pub struct Dynamics {
     drag: Vec<f64>,
     /// Stiffness, damping, half play (0: none) and twist coefficients of each coupling.
     couplings: Vec<Spring>,
-    /// What the right-hand side steps: the couplings, those on parallel twists that open
-    /// together merged into one (an open differential's two side shafts: one spring on the
-    /// differential's twist, as eq. (A1) writes them).
-    springs: Vec<Spring>,
     /// The twists' coefficients (body, coefficient), `Spring::terms` ranges into it.
     terms: Vec<(usize, f64)>,
     /// (friction, smoothing speed) per body (0: none).
@@ -586,7 +582,7 @@ impl Dynamics {
                 let start = terms.len();
                 terms.extend(c.terms(i));
                 let gear = c.elongation.is_none().then(|| 1.0 / c.ratio);
-                Spring { c: c.stiffness, d: c.damping, half: 0.0, terms: (start, terms.len()), gear, at: i }
+                Spring { c: c.stiffness, d: c.damping, half: 0.0, terms: (start, terms.len()), gear }
             })
             .collect();
         let mut friction = vec![(0.0, 1.0); n];
@@ -608,7 +604,6 @@ impl Dynamics {
             n,
             inv_j: m.line.bodies.iter().map(|b| 1.0 / b.inertia).collect(),
             drag: m.line.bodies.iter().map(|b| b.drag).collect(),
-            springs: merged(&couplings, &terms),
             couplings,
             terms,
             friction,
@@ -667,7 +662,7 @@ impl Dynamics {
         let n = self.n;
         let mut key: u64 = 0;
         let mut mix = |class: u64| key = (key ^ class).wrapping_mul(0x9E37_79B9_7F4A_7C15).wrapping_add(1);
-        for s in &self.springs {
+        for s in &self.couplings {
             if s.half > 0.0 {
                 let twist = self.twist(s, x).0;
                 mix(u64::from(twist > s.half) + 2 * u64::from(twist < -s.half));
@@ -700,10 +695,9 @@ impl Dynamics {
         for (&(body, _, tau, z), &u) in self.inputs.iter().zip(u) {
             f[body] += if tau > 0.0 { x[z] } else { u };
         }
-        for s in &self.springs {
+        for (i, s) in self.couplings.iter().enumerate() {
             if let Some(inv_r) = s.gear {
                 // between neighbours (the hot path of a line): q_i / r − q_{i+1}
-                let i = s.at;
                 let t = coupling_force(s.c, s.d, s.half, q[i] * inv_r - q[i + 1], v[i] * inv_r - v[i + 1]);
                 f[i + 1] += t;
                 f[i] -= t * inv_r;
@@ -740,14 +734,12 @@ impl Dynamics {
     pub fn linear_piece(&self, contact: bool) -> (DMatrix<f64>, DMatrix<f64>) {
         let (ns, m) = (self.nstates, self.inputs.len());
         let open = |s: &Spring| !contact && s.half > 0.0;
-        let couplings: Vec<Spring> = self
-            .couplings
-            .iter()
-            .map(|s| if open(s) { Spring { c: 0.0, d: 0.0, half: 0.0, ..*s } } else { Spring { half: 0.0, ..*s } })
-            .collect();
         let linear = Dynamics {
-            springs: merged(&couplings, &self.terms),
-            couplings,
+            couplings: self
+                .couplings
+                .iter()
+                .map(|s| if open(s) { Spring { c: 0.0, d: 0.0, half: 0.0, ..*s } } else { Spring { half: 0.0, ..*s } })
+                .collect(),
             terms: self.terms.clone(),
             friction: vec![(0.0, 1.0); self.n],
             friction_band: vec![0.0; self.n],
@@ -1058,39 +1050,6 @@ struct Spring {
     terms: (usize, usize),
     /// 1/ratio of a coupling between neighbours (None: an elongation of its own).
     gear: Option<f64>,
-    /// Its position among the couplings (between neighbours: its first body).
-    at: usize,
-}
-
-/// The couplings as the right-hand side steps them: a coupling whose twist is α times an
-/// earlier one's (same bodies, coefficients α e to 1e-12) and whose play opens at the same
-/// twist (half play α times the other's, or both none) adds α² c and α² d to that one — exact,
-/// since −e T₁ − α e T₂ = −e (c₁ + α² c₂)(eᵀq ∓ b₁) for both in contact, and both are.
-fn merged(couplings: &[Spring], terms: &[(usize, f64)]) -> Vec<Spring> {
-    let mut out: Vec<Spring> = Vec::with_capacity(couplings.len());
-    for s in couplings {
-        let ts = &terms[s.terms.0..s.terms.1];
-        let parallel = |o: &Spring| -> Option<f64> {
-            let os = &terms[o.terms.0..o.terms.1];
-            if s.gear.is_some() || o.gear.is_some() || os.len() != ts.len() || os.is_empty() {
-                return None;
-            }
-            let alpha = ts[0].1 / os[0].1;
-            let same = os.iter().zip(ts).all(|(a, b)| a.0 == b.0 && (b.1 - alpha * a.1).abs() <= 1e-12 * b.1.abs());
-            let plays = (o.half == 0.0 && s.half == 0.0)
-                || (o.half > 0.0 && (s.half - alpha.abs() * o.half).abs() <= 1e-9 * s.half);
-            (same && plays && alpha.is_finite() && alpha != 0.0).then_some(alpha)
-        };
-        match out.iter().position(|o| parallel(o).is_some()) {
-            Some(k) => {
-                let alpha = parallel(&out[k]).unwrap_or(0.0);
-                out[k].c += alpha * alpha * s.c;
-                out[k].d += alpha * alpha * s.d;
-            }
-            None => out.push(*s),
-        }
-    }
-    out
 }
 
 /// Force of a coupling with play: the spring acts on the twist beyond ± half the play, the
