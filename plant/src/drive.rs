@@ -471,12 +471,7 @@ impl DriveModel {
         for i in 0..n {
             c[(i, n + i)] = 1.0;
         }
-        for (i, k) in self.line.couplings.iter().enumerate() {
-            for (j, e) in k.terms(i) {
-                c[(n + i, j)] = k.stiffness * e;
-                c[(n + i, n + j)] = k.damping * e;
-            }
-        }
+        c.view_mut((n, 0), (nc, ns)).copy_from(&self.coupling_forces(ns));
         let mut output_names: Vec<String> = names[n..2 * n].to_vec();
         output_names.extend(self.coupling_force_names());
         Ok(crate::statespace::StateSpace {
@@ -488,6 +483,19 @@ impl DriveModel {
             input_names: self.input_names(),
             output_names,
         })
+    }
+
+    /// The couplings' forces in contact as rows over `nstates` states: c·eᵀq + d·eᵀq̇.
+    pub fn coupling_forces(&self, nstates: usize) -> DMatrix<f64> {
+        let n = self.line.bodies.len();
+        let mut c = DMatrix::zeros(self.line.couplings.len(), nstates);
+        for (i, k) in self.line.couplings.iter().enumerate() {
+            for (j, e) in k.terms(i) {
+                c[(i, j)] = k.stiffness * e;
+                c[(i, n + j)] = k.damping * e;
+            }
+        }
+        c
     }
 
     /// Position in [`DriveModel::parameter_list`] of input `input`'s dead time, if it has one:

@@ -276,17 +276,13 @@ impl Powertrain {
     /// [T_short, T_long], the dead time left out: (A, B, C). `contact`: the shafts engaged
     /// (backlash closed, eq. (A1)); false: inside the play, where they carry nothing.
     pub fn linear(&self, contact: bool) -> (DMatrix<f64>, DMatrix<f64>, DMatrix<f64>) {
-        let (n, ns) = (self.dofs(), self.nstates());
+        let ns = self.nstates();
         let (a, b) = self.dynamics.linear_piece(contact);
-        let mut c = DMatrix::zeros(2, ns);
-        if contact || self.effects.backlash_rad == 0.0 {
-            for (k, shaft) in self.model.line.couplings[..2].iter().enumerate() {
-                for (j, e) in shaft.terms(k) {
-                    c[(k, j)] = shaft.stiffness * e;
-                    c[(k, n + j)] = shaft.damping * e;
-                }
-            }
-        }
+        let c = if contact || self.effects.backlash_rad == 0.0 {
+            self.model.coupling_forces(ns).rows(0, 2).into_owned()
+        } else {
+            DMatrix::zeros(2, ns)
+        };
         (a, b, c)
     }
 
