@@ -348,4 +348,36 @@ mod tests {
         line.couplings.clear();
         assert!(line.validate().unwrap_err().to_string().contains("1 are expected"));
     }
+
+    /// A coupling with an elongation: one finite coefficient per body, not all zero, no ratio,
+    /// a name that can name a signal; each error names the key.
+    #[test]
+    fn bad_elongations_name_the_key() {
+        let mut line = Line {
+            domain: Domain::Rotational,
+            bodies: vec![body("a", 1.0), body("b", 1.0), body("c", 1.0)],
+            couplings: vec![
+                Coupling { elongation: Some(vec![-1.0, 2.0, -1.0]), ..Coupling::new(1.0, 0.0, 1.0) },
+                Coupling::new(1.0, 0.0, 1.0),
+            ],
+        };
+        assert!(line.validate().is_ok());
+        let err = |line: &Line| line.validate().unwrap_err().to_string();
+        line.couplings[0].elongation = Some(vec![1.0, -1.0]);
+        assert!(err(&line).contains("model.couplings[1].elongation") && err(&line).contains("3"), "{}", err(&line));
+        line.couplings[0].elongation = Some(vec![0.0, f64::NAN, 1.0]);
+        assert!(err(&line).contains("finite"), "{}", err(&line));
+        line.couplings[0].elongation = Some(vec![0.0; 3]);
+        assert!(err(&line).contains("not all zero"), "{}", err(&line));
+        line.couplings[0].elongation = Some(vec![-1.0, 2.0, -1.0]);
+        line.couplings[0].ratio = 4.0;
+        assert!(err(&line).contains("model.couplings[1].ratio"), "{}", err(&line));
+        line.couplings[0].ratio = 1.0;
+        line.couplings[0].name = Some("short shaft".into());
+        assert!(err(&line).contains("model.couplings[1].name"), "{}", err(&line));
+        // a coupling between neighbours past the last body
+        line.couplings[0].name = None;
+        line.couplings.push(Coupling::new(1.0, 0.0, 1.0));
+        assert!(err(&line).contains("model.couplings[3]"), "{}", err(&line));
+    }
 }
