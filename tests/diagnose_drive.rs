@@ -67,14 +67,6 @@ fn simulate(truth: Truth, u: &[f64]) -> [Vec<f64>; 3] {
             0.0
         }
     };
-    let input_at = |t: f64| -> f64 {
-        let k = ((t - truth.delay_s) / DT + 1e-9).floor();
-        if k < 0.0 {
-            u[0]
-        } else {
-            u[(k as usize).min(u.len() - 1)]
-        }
-    };
     let f = |x: &[f64; 5], m: f64| -> [f64; 5] {
         let t = shaft(x[0] - x[1], x[2] - x[3]);
         let drive = if truth.lag_s > 0.0 { x[4] } else { m };
@@ -94,17 +86,47 @@ fn simulate(truth: Truth, u: &[f64]) -> [Vec<f64>; 3] {
         out[1].push(x[3]);
         out[2].push(shaft(x[0] - x[1], x[2] - x[3]));
         for s in 0..sub {
-            let t = k as f64 * DT + s as f64 * h;
-            let m = input_at(t + 1e-12);
-            let k1 = f(&x, m);
-            let add = |a: &[f64; 5], b: &[f64; 5], c: f64| -> [f64; 5] { std::array::from_fn(|i| a[i] + c * b[i]) };
-            let k2 = f(&add(&x, &k1, 0.5 * h), m);
-            let k3 = f(&add(&x, &k2, 0.5 * h), m);
-            let k4 = f(&add(&x, &k3, h), m);
-            x = std::array::from_fn(|i| x[i] + h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]));
+            let m = held(u, truth.delay_s, k as f64 * DT + s as f64 * h);
+            x = rk4(&x, h, |x| f(x, m));
         }
     }
     out
+}
+
+/// The sampled input `u`, held over each sample and delayed by `delay_s`, at time `t` (resolved
+/// on the integrator's sub-step grid; the first sample before the start).
+fn held(u: &[f64], delay_s: f64, t: f64) -> f64 {
+    let k = ((t + 1e-12 - delay_s) / DT + 1e-9).floor();
+    if k < 0.0 {
+        u[0]
+    } else {
+        u[(k as usize).min(u.len() - 1)]
+    }
+}
+
+/// One classical RK4 step of `h` for ẋ = f(x).
+fn rk4<const S: usize>(x: &[f64; S], h: f64, f: impl Fn(&[f64; S]) -> [f64; S]) -> [f64; S] {
+    let add = |a: &[f64; S], b: &[f64; S], c: f64| -> [f64; S] { std::array::from_fn(|i| a[i] + c * b[i]) };
+    let k1 = f(x);
+    let k2 = f(&add(x, &k1, 0.5 * h));
+    let k3 = f(&add(x, &k2, 0.5 * h));
+    let k4 = f(&add(x, &k3, h));
+    std::array::from_fn(|i| x[i] + h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]))
+}
+
+/// Runs `rigtwin diagnose b.toml --json d.json` and the `extra` arguments in `dir` (an earlier
+/// d.json removed first) and returns the JSON.
+fn run_diagnose(dir: &std::path::Path, extra: &[&str], case: &str) -> serde_json::Value {
+    let json = dir.join("d.json");
+    let _ = std::fs::remove_file(&json);
+    let out = Command::new(env!("CARGO_BIN_EXE_rigtwin"))
+        .args(["diagnose", "b.toml", "--json", "d.json"])
+        .args(extra)
+        .current_dir(dir)
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{case}: {}", String::from_utf8_lossy(&out.stderr));
+    serde_json::from_str(&std::fs::read_to_string(json).unwrap()).unwrap()
 }
 
 /// Writes `data.csv` in `dir`: time, the input `u` and the outputs `y`, each with white noise of
@@ -144,15 +166,7 @@ fn diagnose(case: &str, truth: Truth, declared_d: f64, seed: u64) -> serde_json:
         "kind = \"drive_test\"\ndata = \"data.csv\"\ndomain = \"rotational\"\n[model]\nbodies = [\n  {{ name = \"motor\", inertia = {J1}, drag = {DRAG1} }},\n  {{ name = \"load\", inertia = {J2}, drag = {DRAG2} }},\n]\ncouplings = [{{ stiffness = {C}, damping = {declared_d} }}]\n[[inputs]]\ncolumn = \"torque_Nm\"\nbody = \"motor\"\n[[outputs]]\ncolumn = \"speed_motor_radps\"\nbody = \"motor\"\nquantity = \"speed\"\n[[outputs]]\ncolumn = \"speed_load_radps\"\nbody = 2\nquantity = \"speed\"\n{torque_output}"
     );
     std::fs::write(dir.join("b.toml"), toml).unwrap();
-    let json = dir.join("d.json");
-    let _ = std::fs::remove_file(&json);
-    let out = Command::new(env!("CARGO_BIN_EXE_rigtwin"))
-        .args(["diagnose", "b.toml", "--json", "d.json"])
-        .current_dir(&dir)
-        .output()
-        .unwrap();
-    assert!(out.status.success(), "{case}: {}", String::from_utf8_lossy(&out.stderr));
-    let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(json).unwrap()).unwrap();
+    let v = run_diagnose(&dir, &[], case);
     eprintln!(
         "{case}: truth {truth:?} → {} at {} {}, error {:.4} → {:.4}",
         v["effect"],
@@ -433,14 +447,6 @@ fn an_open_differential_with_a_dead_time() {
         let t = c_s * s + d_s * sd;
         [x[3], x[4], x[5], (t - drag * x[3]) / j2, (m - 2.0 * t) / jd, (t - drag * x[5]) / j3]
     };
-    let input_at = |t: f64| {
-        let k = ((t - delay) / DT + 1e-9).floor();
-        if k < 0.0 {
-            u[0]
-        } else {
-            u[(k as usize).min(N - 1)]
-        }
-    };
     let mut x = [0.0; 6];
     let mut y = [Vec::with_capacity(N), Vec::with_capacity(N), Vec::with_capacity(N)];
     for k in 0..N {
@@ -448,13 +454,8 @@ fn an_open_differential_with_a_dead_time() {
         y[1].push(x[5]);
         y[2].push(c_s * (2.0 * x[1] - x[0] - x[2]) + d_s * (2.0 * x[4] - x[3] - x[5]));
         for s in 0..sub {
-            let m = input_at(k as f64 * DT + s as f64 * h + 1e-12);
-            let add = |a: &[f64; 6], b: &[f64; 6], c: f64| -> [f64; 6] { std::array::from_fn(|i| a[i] + c * b[i]) };
-            let k1 = f(&x, m);
-            let k2 = f(&add(&x, &k1, 0.5 * h), m);
-            let k3 = f(&add(&x, &k2, 0.5 * h), m);
-            let k4 = f(&add(&x, &k3, h), m);
-            x = std::array::from_fn(|i| x[i] + h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]));
+            let m = held(&u, delay, k as f64 * DT + s as f64 * h);
+            x = rk4(&x, h, |x| f(x, m));
         }
     }
     let dir = common::scratch("diagnose_drive", "open_differential");
@@ -467,17 +468,9 @@ fn an_open_differential_with_a_dead_time() {
         el(sr)
     );
     std::fs::write(dir.join("b.toml"), toml).unwrap();
-    for f in ["d.json", "m.toml"] {
-        let _ = std::fs::remove_file(dir.join(f));
-    }
+    let _ = std::fs::remove_file(dir.join("m.toml"));
     let _ = std::fs::remove_dir_all(dir.join("fmus"));
-    let out = Command::new(env!("CARGO_BIN_EXE_rigtwin"))
-        .args(["diagnose", "b.toml", "--json", "d.json", "--write-model", "m.toml"])
-        .current_dir(&dir)
-        .output()
-        .unwrap();
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
-    let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(dir.join("d.json")).unwrap()).unwrap();
+    let v = run_diagnose(&dir, &["--write-model", "m.toml"], "open differential");
     eprintln!(
         "open differential: {} at {} {}, error {} → {}",
         v["effect"], v["at"], v["parameters"], v["error_before"], v["error_after"]
