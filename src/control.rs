@@ -721,12 +721,10 @@ pub fn drive_report(
     let mut prediction = Vec::new();
     for e in &model.effects {
         match e {
-            plant::Effect::TimeDelay { .. } => {
+            plant::Effect::TimeDelay(_) => {
                 prediction.push(format!("{} at {}: input-delay states", e.name(), e.element(model)))
             }
-            plant::Effect::ActuatorLag { .. } => {
-                prediction.push(format!("{} at {}: a state", e.name(), e.element(model)))
-            }
+            plant::Effect::ActuatorLag(_) => prediction.push(format!("{} at {}: a state", e.name(), e.element(model))),
             _ => prediction.push(format!(
                 "{} at {} is NOT in the prediction: it stays linear (in contact, without friction)",
                 e.name(),

@@ -481,7 +481,7 @@ fn drive(file: &Path, progress: &(dyn Fn(&str) + Sync)) -> anyhow::Result<Diagno
     let d = ident::diagnose::drive::diagnose(rec, progress).map_err(|e| anyhow::anyhow!("{}: {e}", file.display()))?;
     let mut notes = fit_notes(&d.effect, "the declared inertias and stiffnesses", d.structured_residual, d.error_after);
     for e in &d.model.effects {
-        if let plant::Effect::CoulombFriction { smoothing_speed, .. } = e {
+        if let plant::Effect::CoulombFriction(plant::CoulombFriction { smoothing_speed, .. }) = e {
             notes.push(format!(
                 "Coulomb friction is smoothed as F_c·v/√(v² + v_s²) with v_s = {smoothing_speed:.3e} (1 % of the body's RMS speed in the declared model, or wider where the friction would be faster than the mechanics)"
             ));

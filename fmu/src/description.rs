@@ -120,7 +120,7 @@ fn drive_description(m: &plant::DriveModel) -> (String, bool) {
     } else {
         "; linear, exact zero-order-hold co-simulation step"
     };
-    let delayed = m.effects.iter().any(|e| matches!(e, plant::Effect::TimeDelay { .. }));
+    let delayed = m.effects.iter().any(|e| matches!(e, plant::Effect::TimeDelay(_)));
     (desc, delayed)
 }
 

@@ -5,7 +5,7 @@
 use rigtwin_fmu::instance::{Instance, Interface, Logger, Status};
 use rigtwin_fmu::FmuParams;
 
-use plant::{Coupling, Domain, DriveModel, Effect, Line, LineBody};
+use plant::{CoulombFriction, Coupling, Domain, DriveModel, Effect, Line, LineBody, TimeDelay};
 
 struct Quiet;
 impl Logger for Quiet {
@@ -104,7 +104,7 @@ fn a_dead_time_delays_the_input_exactly_and_survives_a_saved_state() {
     let m = DriveModel {
         line: Line { domain: Domain::Translational, bodies: vec![body("cart", 2.0, 0.0)], couplings: vec![] },
         inputs: vec![0],
-        effects: vec![Effect::TimeDelay { input: 0, delay_s: 2.5e-3 }],
+        effects: vec![Effect::TimeDelay(TimeDelay { input: 0, delay_s: 2.5e-3 })],
     };
     let mut i = instance(m);
     let (u, v) = (vr(&i, "F_cart"), vr(&i, "v_cart"));
@@ -143,7 +143,11 @@ fn a_dead_time_delays_the_input_exactly_and_survives_a_saved_state() {
 
 #[test]
 fn parameters_are_settable_and_refused_by_name() {
-    let mut i = instance(geared(vec![Effect::CoulombFriction { body: 1, friction: 0.2, smoothing_speed: 0.01 }]));
+    let mut i = instance(geared(vec![Effect::CoulombFriction(CoulombFriction {
+        body: 1,
+        friction: 0.2,
+        smoothing_speed: 0.01,
+    })]));
     let j = vr(&i, "load.inertia");
     let e = i.set_f64(&[j], &[-1.0]).unwrap_err();
     assert!(e.message.contains("load.inertia") && e.message.contains("> 0"), "{}", e.message);

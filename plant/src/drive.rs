@@ -19,6 +19,9 @@ use crate::integrate::{PiecewiseRk4, PiecewiseSmooth};
 use crate::line::{Line, Quantity};
 use crate::statespace::zoh;
 
+mod effect;
+pub use effect::{ActuatorLag, Backlash, CoulombFriction, Effect, EffectModel, EffectParameter, Element, TimeDelay};
+
 /// Most RK4 steps per sample within a smooth piece (the fine sub-steps across pieces may be
 /// [`FINE_PER_COARSE`] times as many): a model stiffer than this at the record's sample rate is
 /// refused instead of being integrated for minutes.
@@ -27,102 +30,6 @@ pub const MAX_SUBSTEPS: usize = 2000;
 /// RK4 sub-step bound: h·|λ|max ≤ this (RK4 is stable to 2.8 on both axes; 0.5 keeps the
 /// amplitude error of the fastest mode per sub-step below 1e-4).
 pub const RK4_STEP_TIMES_RATE: f64 = 0.5;
-
-/// An effect attached to an element of the line (indices 0-based).
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(tag = "effect", rename_all = "snake_case")]
-pub enum Effect {
-    /// Coulomb friction at a body: F = friction · q̇/√(q̇² + smoothing_speed²) against its
-    /// motion (71 % of the friction at the smoothing speed, 97 % at 4×, 99.5 % at 10×).
-    CoulombFriction {
-        /// The body.
-        body: usize,
-        /// Friction force (torque), N (Nm).
-        friction: f64,
-        /// Smoothing speed v_s, m/s (rad/s).
-        smoothing_speed: f64,
-    },
-    /// Play in a coupling: no force while |twist| < backlash/2, the spring and damper act on
-    /// the twist beyond it (total play `backlash`).
-    Backlash {
-        /// The coupling.
-        coupling: usize,
-        /// Total play, m (rad) of the coupling's twist.
-        backlash: f64,
-    },
-    /// The input reaches the body `delay_s` later than recorded.
-    TimeDelay {
-        /// The input (position among the model's inputs).
-        input: usize,
-        /// Dead time, s.
-        delay_s: f64,
-    },
-    /// The force on the body follows the recorded input through τ ż = u − z.
-    ActuatorLag {
-        /// The input.
-        input: usize,
-        /// Time constant τ, s.
-        time_constant_s: f64,
-    },
-}
-
-impl Effect {
-    /// The vocabulary name.
-    pub fn name(&self) -> &'static str {
-        match self {
-            Effect::CoulombFriction { .. } => "coulomb_friction",
-            Effect::Backlash { .. } => "backlash",
-            Effect::TimeDelay { .. } => "time_delay",
-            Effect::ActuatorLag { .. } => "actuator_lag",
-        }
-    }
-
-    /// Where it acts, in words ("body load", "coupling 2", "input 1"; positions 1-based).
-    pub fn element(&self, model: &DriveModel) -> String {
-        match *self {
-            Effect::CoulombFriction { body, .. } => {
-                format!("body {}", model.line.bodies.get(body).map_or("?", |b| b.name.as_str()))
-            }
-            Effect::Backlash { coupling, .. } => format!("coupling {}", coupling + 1),
-            Effect::TimeDelay { input, .. } | Effect::ActuatorLag { input, .. } => format!("input {}", input + 1),
-        }
-    }
-
-    /// The index of the element it acts on (body, coupling or input, 0-based) and the key that
-    /// names that element in a model file (`body`, `coupling`, `input`).
-    pub fn element_index(&self) -> (usize, &'static str) {
-        match *self {
-            Effect::CoulombFriction { body, .. } => (body, "body"),
-            Effect::Backlash { coupling, .. } => (coupling, "coupling"),
-            Effect::TimeDelay { input, .. } | Effect::ActuatorLag { input, .. } => (input, "input"),
-        }
-    }
-
-    /// The same effect at element `index` (of the same kind: body, coupling or input).
-    pub fn at_index(mut self, index: usize) -> Effect {
-        match &mut self {
-            Effect::CoulombFriction { body: i, .. }
-            | Effect::Backlash { coupling: i, .. }
-            | Effect::TimeDelay { input: i, .. }
-            | Effect::ActuatorLag { input: i, .. } => *i = index,
-        }
-        self
-    }
-
-    /// Its parameters, SI, keyed with their units in the line's domain.
-    pub fn parameters(&self, model: &DriveModel) -> Vec<(String, f64)> {
-        let rotational = model.line.domain == crate::line::Domain::Rotational;
-        let (force, coordinate, speed) = if rotational { ("Nm", "rad", "radps") } else { ("N", "m", "mps") };
-        match *self {
-            Effect::CoulombFriction { friction, smoothing_speed, .. } => {
-                vec![(format!("friction_{force}"), friction), (format!("smoothing_speed_{speed}"), smoothing_speed)]
-            }
-            Effect::Backlash { backlash, .. } => vec![(format!("backlash_{coordinate}"), backlash)],
-            Effect::TimeDelay { delay_s, .. } => vec![("delay_s".into(), delay_s)],
-            Effect::ActuatorLag { time_constant_s, .. } => vec![("time_constant_s".into(), time_constant_s)],
-        }
-    }
-}
 
 /// What a parameter measures; its unit follows from the line's domain.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -181,28 +88,26 @@ impl DriveModel {
             return Err(PlantError::Invalid(format!("an input acts on body {} of a line of {n}", b + 1)));
         }
         for (i, e) in self.effects.iter().enumerate() {
-            let (index, count, values): (usize, usize, Vec<f64>) = match *e {
-                Effect::CoulombFriction { body, friction, smoothing_speed } => {
-                    (body, n, vec![friction, smoothing_speed])
-                }
-                Effect::Backlash { coupling, backlash } => (coupling, self.line.couplings.len(), vec![backlash]),
-                Effect::TimeDelay { input, delay_s } => (input, self.inputs.len(), vec![delay_s]),
-                Effect::ActuatorLag { input, time_constant_s } => (input, self.inputs.len(), vec![time_constant_s]),
-            };
-            if index >= count {
+            let at = e.at();
+            let count = at.count(self);
+            if at.index() >= count {
                 return Err(PlantError::Invalid(format!(
                     "effects[{}] ({}) acts on element {} of {count}",
                     i + 1,
                     e.name(),
-                    index + 1
+                    at.index() + 1
                 )));
             }
-            if let Some(v) = values.iter().find(|v| !(v.is_finite() && **v > 0.0)) {
-                return Err(PlantError::Invalid(format!(
-                    "effects[{}] ({}): parameter {v}: expected a positive, finite value",
-                    i + 1,
-                    e.name()
-                )));
+            // every effect parameter is bounded to positive, finite values
+            for (p, v) in e.parameter_kinds().iter().zip(e.values()) {
+                if !(v.is_finite() && v > 0.0) {
+                    return Err(PlantError::Invalid(format!(
+                        "effects[{}] ({}): {} {v}: expected a positive, finite value",
+                        i + 1,
+                        e.name(),
+                        p.name
+                    )));
+                }
             }
             let same = |o: &Effect| o.name() == e.name() && o.element(self) == e.element(self);
             if self.effects[..i].iter().any(same) {
@@ -260,12 +165,12 @@ impl DriveModel {
 
     /// True when friction or backlash make the right-hand side nonlinear.
     pub fn is_nonlinear(&self) -> bool {
-        self.effects.iter().any(|e| matches!(e, Effect::CoulombFriction { .. } | Effect::Backlash { .. }))
+        self.effects.iter().any(Effect::is_nonlinear)
     }
 
     /// Number of states: angles (positions), speeds and one per lagged input.
     pub fn nstates(&self) -> usize {
-        2 * self.line.bodies.len() + self.effects.iter().filter(|e| matches!(e, Effect::ActuatorLag { .. })).count()
+        2 * self.line.bodies.len() + self.effects.iter().map(|e| e.state_names(self).len()).sum::<usize>()
     }
 
     /// The bodies' names as identifiers (letters, digits, `_`; not starting with a digit), the
@@ -293,11 +198,8 @@ impl DriveModel {
         let labels = self.body_labels();
         let mut s: Vec<String> = labels.iter().map(|b| format!("{q}_{b}")).collect();
         s.extend(labels.iter().map(|b| format!("{v}_{b}")));
-        let inputs = self.input_names();
         for e in &self.effects {
-            if let Effect::ActuatorLag { input, .. } = e {
-                s.push(format!("{}_lagged", inputs[*input]));
-            }
+            s.extend(e.state_names(self));
         }
         s
     }
@@ -335,7 +237,6 @@ impl DriveModel {
     pub fn parameter_list(&self) -> Vec<Parameter> {
         use Dimension as D;
         let labels = self.body_labels();
-        let inputs = self.input_names();
         let p = |name: String, dimension, description: String, value, zero_allowed| Parameter {
             name,
             dimension,
@@ -376,39 +277,9 @@ impl DriveModel {
             }
         }
         for e in &self.effects {
-            match *e {
-                Effect::CoulombFriction { body, friction, smoothing_speed } => {
-                    let l = &labels[body];
-                    out.push(p(format!("{l}.friction"), D::Force, format!("Coulomb friction at {l}"), friction, false));
-                    out.push(p(
-                        format!("{l}.friction_smoothing_speed"),
-                        D::Speed,
-                        format!("speed of the friction's smoothing F v/sqrt(v^2 + v_s^2) at {l}"),
-                        smoothing_speed,
-                        false,
-                    ));
-                }
-                Effect::Backlash { coupling, backlash } => out.push(p(
-                    format!("coupling_{}.backlash", coupling + 1),
-                    D::Coordinate,
-                    format!("total play of coupling {}", coupling + 1),
-                    backlash,
-                    false,
-                )),
-                Effect::TimeDelay { input, delay_s } => out.push(p(
-                    format!("{}.delay", inputs[input]),
-                    D::Time,
-                    format!("dead time of input {}", inputs[input]),
-                    delay_s,
-                    false,
-                )),
-                Effect::ActuatorLag { input, time_constant_s } => out.push(p(
-                    format!("{}.time_constant", inputs[input]),
-                    D::Time,
-                    format!("first-order lag of input {}", inputs[input]),
-                    time_constant_s,
-                    false,
-                )),
+            let (label, phrase) = (e.at().label(self), e.at().phrase(self));
+            for (k, v) in e.parameter_kinds().iter().zip(e.values()) {
+                out.push(p(format!("{label}.{}", k.name), k.dimension, format!("{} {phrase}", k.what), v, false));
             }
         }
         out
@@ -436,15 +307,8 @@ impl DriveModel {
             }
         }
         for e in &mut m.effects {
-            match e {
-                Effect::CoulombFriction { friction, smoothing_speed, .. } => {
-                    *friction = next();
-                    *smoothing_speed = next();
-                }
-                Effect::Backlash { backlash, .. } => *backlash = next(),
-                Effect::TimeDelay { delay_s, .. } => *delay_s = next(),
-                Effect::ActuatorLag { time_constant_s, .. } => *time_constant_s = next(),
-            }
+            let v: Vec<f64> = e.parameter_kinds().iter().map(|_| next()).collect();
+            e.set_values(&v);
         }
         m.validate()?;
         Ok(m)
@@ -505,12 +369,12 @@ impl DriveModel {
         let couplings: usize = self.line.couplings.iter().map(|c| if c.elongation.is_some() { 2 } else { 3 }).sum();
         let mut at = 2 * self.line.bodies.len() + couplings;
         for e in &self.effects {
-            if let Effect::TimeDelay { input: j, .. } = *e {
+            if let Effect::TimeDelay(TimeDelay { input: j, .. }) = *e {
                 if j == input {
                     return Some(at);
                 }
             }
-            at += e.parameters(self).len();
+            at += e.parameter_kinds().len();
         }
         None
     }
@@ -519,7 +383,7 @@ impl DriveModel {
     pub fn input_delays_s(&self) -> Vec<f64> {
         let mut d = vec![0.0; self.inputs.len()];
         for e in &self.effects {
-            if let Effect::TimeDelay { input, delay_s } = *e {
+            if let Effect::TimeDelay(TimeDelay { input, delay_s }) = *e {
                 d[input] = delay_s;
             }
         }
@@ -569,6 +433,8 @@ pub struct Dynamics {
     fine_s: f64,
     /// Half-width of each body's steep friction band, m/s or rad/s (0: none).
     friction_band: Vec<f64>,
+    /// The model's effects (each linearises its own slot).
+    effects: Vec<Effect>,
 }
 
 /// Fine sub-steps per coarse step where a step crosses a coupling's play (as
@@ -581,7 +447,7 @@ impl Dynamics {
         m.validate()?;
         let n = m.line.bodies.len();
         let mut terms = Vec::new();
-        let mut couplings: Vec<Spring> = m
+        let couplings: Vec<Spring> = m
             .line
             .couplings
             .iter()
@@ -593,35 +459,25 @@ impl Dynamics {
                 Spring { c: c.stiffness, d: c.damping, half: 0.0, terms: (start, terms.len()), gear }
             })
             .collect();
-        let mut friction = vec![(0.0, 1.0); n];
-        let mut inputs: Vec<(usize, f64, f64, usize)> = m.inputs.iter().map(|&b| (b, 0.0, 0.0, 0)).collect();
-        let mut nstates = 2 * n;
-        for e in &m.effects {
-            match *e {
-                Effect::CoulombFriction { body, friction: f, smoothing_speed } => friction[body] = (f, smoothing_speed),
-                Effect::Backlash { coupling, backlash } => couplings[coupling].half = 0.5 * backlash,
-                Effect::TimeDelay { input, delay_s } => inputs[input].1 = delay_s,
-                Effect::ActuatorLag { input, time_constant_s } => {
-                    inputs[input].2 = time_constant_s;
-                    inputs[input].3 = nstates;
-                    nstates += 1;
-                }
-            }
-        }
         let mut d = Dynamics {
             n,
             inv_j: m.line.bodies.iter().map(|b| 1.0 / b.inertia).collect(),
             drag: m.line.bodies.iter().map(|b| b.drag).collect(),
             couplings,
             terms,
-            friction,
-            inputs,
-            nstates,
+            friction: vec![(0.0, 1.0); n],
+            inputs: m.inputs.iter().map(|&b| (b, 0.0, 0.0, 0)).collect(),
+            nstates: 2 * n,
             nonlinear: m.is_nonlinear(),
             coarse_s: f64::INFINITY,
             fine_s: f64::INFINITY,
             friction_band: vec![0.0; n],
+            effects: m.effects.clone(),
         };
+        // each effect fills its element's slot (friction, play, dead time, lag state)
+        for e in &m.effects {
+            e.enter(&mut d);
+        }
         if d.nonlinear {
             d.steps_and_bands();
         }
@@ -738,24 +594,13 @@ impl Dynamics {
     }
 
     /// A and B without friction, every coupling with play in contact (`contact`) or inside
-    /// its play, where it carries nothing.
+    /// its play, where it carries nothing: each effect's [`EffectModel::linearise`].
     pub fn linear_piece(&self, contact: bool) -> (DMatrix<f64>, DMatrix<f64>) {
         let (ns, m) = (self.nstates, self.inputs.len());
-        let open = |s: &Spring| !contact && s.half > 0.0;
-        let linear = Dynamics {
-            couplings: self
-                .couplings
-                .iter()
-                .map(|s| if open(s) { Spring { c: 0.0, d: 0.0, half: 0.0, ..*s } } else { Spring { half: 0.0, ..*s } })
-                .collect(),
-            terms: self.terms.clone(),
-            friction: vec![(0.0, 1.0); self.n],
-            friction_band: vec![0.0; self.n],
-            inv_j: self.inv_j.clone(),
-            drag: self.drag.clone(),
-            inputs: self.inputs.clone(),
-            ..*self
-        };
+        let mut linear = self.clone();
+        for e in &self.effects {
+            e.linearise(&mut linear, contact);
+        }
         let mut a = DMatrix::zeros(ns, ns);
         let mut b = DMatrix::zeros(ns, m);
         let mut dx = vec![0.0; ns];
@@ -1138,7 +983,7 @@ mod tests {
         let model = DriveModel {
             line: line.clone(),
             inputs: vec![0],
-            effects: vec![Effect::TimeDelay { input: 0, delay_s: 0.003 }],
+            effects: vec![Effect::TimeDelay(TimeDelay { input: 0, delay_s: 0.003 })],
         };
         let ss = model.control_state_space().unwrap();
         let outputs = [
@@ -1165,9 +1010,9 @@ mod tests {
             line: gear_line(),
             inputs: vec![0, 2],
             effects: vec![
-                Effect::CoulombFriction { body: 2, friction: 0.2, smoothing_speed: 0.05 },
-                Effect::ActuatorLag { input: 0, time_constant_s: 0.004 },
-                Effect::TimeDelay { input: 1, delay_s: 0.007 },
+                Effect::CoulombFriction(CoulombFriction { body: 2, friction: 0.2, smoothing_speed: 0.05 }),
+                Effect::ActuatorLag(ActuatorLag { input: 0, time_constant_s: 0.004 }),
+                Effect::TimeDelay(TimeDelay { input: 1, delay_s: 0.007 }),
             ],
         };
         let list = model.parameter_list();
@@ -1202,7 +1047,7 @@ mod tests {
     fn a_fractional_dead_time_shifts_the_response_exactly() {
         let (m, dt, tau) = (2.0, 1e-3, 2.4e-3);
         let mut model = mass(m, 0.0);
-        model.effects.push(Effect::TimeDelay { input: 0, delay_s: tau });
+        model.effects.push(Effect::TimeDelay(TimeDelay { input: 0, delay_s: tau }));
         let mut u = vec![1.0; 50];
         u[0] = 0.0; // held before the start: the step is at t = dt
         let y = model.simulate(&[u], dt, 0.0, &[(Quantity::Speed, 0)]).unwrap();
@@ -1217,7 +1062,7 @@ mod tests {
     fn an_actuator_lag_is_the_first_order_law() {
         let (m, dt, tau) = (3.0, 1e-3, 0.02);
         let mut model = mass(m, 0.0);
-        model.effects.push(Effect::ActuatorLag { input: 0, time_constant_s: tau });
+        model.effects.push(Effect::ActuatorLag(ActuatorLag { input: 0, time_constant_s: tau }));
         let mut u = vec![1.0; 200];
         u[0] = 0.0;
         let y = model.simulate(&[u], dt, 0.0, &[(Quantity::Speed, 0)]).unwrap();
@@ -1234,7 +1079,7 @@ mod tests {
     fn coulomb_friction_takes_its_force_off_the_drive() {
         let (m, f, fc, vs, dt) = (5.0, 10.0, 4.0, 1e-3, 1e-3);
         let mut model = mass(m, 0.0);
-        model.effects.push(Effect::CoulombFriction { body: 0, friction: fc, smoothing_speed: vs });
+        model.effects.push(Effect::CoulombFriction(CoulombFriction { body: 0, friction: fc, smoothing_speed: vs }));
         let y = model.simulate(&[vec![f; 1001]], dt, 0.0, &[(Quantity::Speed, 0)]).unwrap();
         let v_end = y[0][1000];
         let exact = (f - fc) / m * 1.0;
@@ -1259,7 +1104,7 @@ mod tests {
                 couplings: vec![Coupling::new(1e4, 0.0, 1.0)],
             },
             inputs: vec![0],
-            effects: vec![Effect::Backlash { coupling: 0, backlash: b }],
+            effects: vec![Effect::Backlash(Backlash { coupling: 0, backlash: b })],
         };
         let y = model.simulate(&[vec![f; 2000]], dt, 0.0, &[(Quantity::Position, 0), (Quantity::Position, 1)]).unwrap();
         let tc = (b * m1 / f).sqrt();
@@ -1276,16 +1121,16 @@ mod tests {
     #[test]
     fn bad_effects_are_named() {
         let mut model = mass(1.0, 0.0);
-        model.effects.push(Effect::Backlash { coupling: 0, backlash: 0.1 });
+        model.effects.push(Effect::Backlash(Backlash { coupling: 0, backlash: 0.1 }));
         assert!(model.validate().unwrap_err().to_string().contains("effects[1] (backlash)"));
-        model.effects[0] = Effect::TimeDelay { input: 0, delay_s: -1.0 };
+        model.effects[0] = Effect::TimeDelay(TimeDelay { input: 0, delay_s: -1.0 });
         assert!(model.validate().unwrap_err().to_string().contains("positive"));
-        model.effects[0] = Effect::TimeDelay { input: 0, delay_s: 1e-3 };
-        model.effects.push(Effect::TimeDelay { input: 0, delay_s: 2e-3 });
+        model.effects[0] = Effect::TimeDelay(TimeDelay { input: 0, delay_s: 1e-3 });
+        model.effects.push(Effect::TimeDelay(TimeDelay { input: 0, delay_s: 2e-3 }));
         assert!(model.validate().unwrap_err().to_string().contains("twice"));
         // friction smoothed far below what the sample rate can resolve: refused, not ground out
         let mut model = mass(1.0, 0.0);
-        model.effects.push(Effect::CoulombFriction { body: 0, friction: 1e3, smoothing_speed: 1e-12 });
+        model.effects.push(Effect::CoulombFriction(CoulombFriction { body: 0, friction: 1e3, smoothing_speed: 1e-12 }));
         let e = model.simulate(&[vec![1.0; 10]], 1e-3, 0.0, &[(Quantity::Speed, 0)]).unwrap_err();
         assert!(e.to_string().contains("too stiff"), "{e}");
     }

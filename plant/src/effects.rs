@@ -6,7 +6,7 @@
 use nalgebra::DMatrix;
 use serde::{Deserialize, Serialize};
 
-use crate::drive::{DriveModel, Dynamics, Effect};
+use crate::drive::{ActuatorLag, Backlash, CoulombFriction, DriveModel, Dynamics, Effect, TimeDelay};
 use crate::error::{non_negative, PlantError, Result};
 use crate::integrate::{AffineStep, PiecewiseRk4, PiecewiseSmooth};
 use crate::line::{Coupling, Domain, Line, LineBody, Quantity};
@@ -185,23 +185,23 @@ impl DriveModel {
         let drive = if compliant { 3 } else { 1 };
         let mut list = Vec::new();
         if effects.time_delay_s > 0.0 {
-            list.push(Effect::TimeDelay { input: 1, delay_s: effects.time_delay_s });
+            list.push(Effect::TimeDelay(TimeDelay { input: 1, delay_s: effects.time_delay_s }));
         }
         if effects.actuator_lag_s > 0.0 {
-            list.push(Effect::ActuatorLag { input: 1, time_constant_s: effects.actuator_lag_s });
+            list.push(Effect::ActuatorLag(ActuatorLag { input: 1, time_constant_s: effects.actuator_lag_s }));
         }
         if effects.backlash_rad > 0.0 {
             for (k, share) in [share_l, share_r].into_iter().enumerate() {
-                list.push(Effect::Backlash { coupling: k, backlash: 2.0 * share * effects.backlash_rad });
+                list.push(Effect::Backlash(Backlash { coupling: k, backlash: 2.0 * share * effects.backlash_rad }));
             }
         }
         for (&b, &friction) in [0, drive, 2].iter().zip(&effects.coulomb_friction_nm) {
             if friction > 0.0 {
-                list.push(Effect::CoulombFriction {
+                list.push(Effect::CoulombFriction(CoulombFriction {
                     body: b,
                     friction,
                     smoothing_speed: effects.friction_smoothing_radps,
-                });
+                }));
             }
         }
         let m = DriveModel {

@@ -43,7 +43,10 @@ pub mod statespace;
 pub use bearing::{BearingModel, CoefficientTable, Coefficients, Support};
 pub use bending::{Beam, BeamSegment, Deflection};
 pub use chain::{Body, Chain};
-pub use drive::{Dimension, DriveModel, Dynamics, Effect, Parameter};
+pub use drive::{
+    ActuatorLag, Backlash, CoulombFriction, Dimension, DriveModel, Dynamics, Effect, EffectModel, Element, Parameter,
+    TimeDelay,
+};
 pub use error::{PlantError, Result};
 pub use line::{Coupling, Domain, Line, LineBody, Quantity};
 pub use mechanical::{Layout, MechanicalModel, Output, Spring};

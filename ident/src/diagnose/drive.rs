@@ -12,7 +12,7 @@
 
 use std::collections::BTreeMap;
 
-use plant::drive::{DriveModel, Effect};
+use plant::drive::{ActuatorLag, Backlash, CoulombFriction, DriveModel, TimeDelay};
 use plant::{Domain, Quantity};
 use serde::Serialize;
 
@@ -175,28 +175,28 @@ impl Problem<'_> {
                 // no sharper than the mechanics' fastest rate: the friction's slope
                 // F_c/(v_s J) must not set the integration step
                 let smoothing_speed = self.smoothing[b].max(friction / (m.line.bodies[b].inertia * self.rate));
-                m.effects.push(Effect::CoulombFriction { body: b, friction, smoothing_speed })
+                m.effects.push(CoulombFriction { body: b, friction, smoothing_speed }.into())
             }
             Candidate::Backlash(k) => {
                 let backlash = self.twist_rms[k] * extra[0].exp();
                 if backlash > 3000.0 * self.twist_rms[k] {
                     return None;
                 }
-                m.effects.push(Effect::Backlash { coupling: k, backlash })
+                m.effects.push(Backlash { coupling: k, backlash }.into())
             }
             Candidate::TimeDelay(j) => {
                 let delay_s = dt * extra[0].exp();
                 if delay_s > 0.1 * record_s {
                     return None;
                 }
-                m.effects.push(Effect::TimeDelay { input: j, delay_s })
+                m.effects.push(TimeDelay { input: j, delay_s }.into())
             }
             Candidate::ActuatorLag(j) => {
                 let time_constant_s = dt * extra[0].exp();
                 if time_constant_s > 0.1 * record_s {
                     return None;
                 }
-                m.effects.push(Effect::ActuatorLag { input: j, time_constant_s })
+                m.effects.push(ActuatorLag { input: j, time_constant_s }.into())
             }
         }
         Some(m)

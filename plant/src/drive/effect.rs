@@ -1,0 +1,426 @@
+//! The effects a drive model's elements carry: one type and one [`EffectModel`] implementation
+//! per effect — its name, the element it acts on, its parameters with their dimensions and
+//! bounds, how it enters the right-hand side ([`Dynamics`]) and its linearisation. [`Effect`]
+//! is the closed set a model file names (`effect = "backlash"`); adding an effect is one type
+//! with its implementation here, one variant and one line of [`each`] — and one candidate in
+//! the diagnosis.
+
+use serde::{Deserialize, Serialize};
+
+use super::{Dimension, DriveModel, Dynamics};
+
+/// The element an effect acts on (0-based).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Element {
+    /// A body (its Coulomb friction).
+    Body(usize),
+    /// A coupling (its play).
+    Coupling(usize),
+    /// An input (its dead time or lag).
+    Input(usize),
+}
+
+impl Element {
+    /// Its index among the elements of its kind.
+    pub fn index(self) -> usize {
+        match self {
+            Element::Body(i) | Element::Coupling(i) | Element::Input(i) => i,
+        }
+    }
+
+    /// The key that names an element of this kind in a model file.
+    pub fn key(self) -> &'static str {
+        match self {
+            Element::Body(_) => "body",
+            Element::Coupling(_) => "coupling",
+            Element::Input(_) => "input",
+        }
+    }
+
+    /// How many elements of this kind `model` has.
+    pub fn count(self, model: &DriveModel) -> usize {
+        match self {
+            Element::Body(_) => model.line.bodies.len(),
+            Element::Coupling(_) => model.line.couplings.len(),
+            Element::Input(_) => model.inputs.len(),
+        }
+    }
+
+    /// The stem of its parameters' names: the body's label, `coupling_<i>` (1-based), the
+    /// input's name.
+    pub fn label(self, model: &DriveModel) -> String {
+        let unknown = || "?".to_string();
+        match self {
+            Element::Body(i) => model.body_labels().get(i).cloned().unwrap_or_else(unknown),
+            Element::Coupling(i) => format!("coupling_{}", i + 1),
+            Element::Input(i) => model.input_names().get(i).cloned().unwrap_or_else(unknown),
+        }
+    }
+
+    /// After a parameter's description: "at motor", "of coupling 2", "of input M_motor".
+    pub fn phrase(self, model: &DriveModel) -> String {
+        match self {
+            Element::Body(_) => format!("at {}", self.label(model)),
+            Element::Coupling(_) => format!("of {}", self.words(model)),
+            Element::Input(_) => format!("of input {}", self.label(model)),
+        }
+    }
+
+    /// In words: "body load", "coupling 2", "input 1" (positions 1-based).
+    pub fn words(self, model: &DriveModel) -> String {
+        match self {
+            Element::Body(i) => format!("body {}", model.line.bodies.get(i).map_or("?", |b| b.name.as_str())),
+            Element::Coupling(i) => format!("coupling {}", i + 1),
+            Element::Input(i) => format!("input {}", i + 1),
+        }
+    }
+}
+
+/// One parameter of an effect. Every effect parameter is bounded to positive, finite values
+/// (an effect of size 0 is no effect: leave it out).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct EffectParameter {
+    /// Its name after the element's label in the parameter list (`<label>.<name>`).
+    pub name: &'static str,
+    /// Its key stem in reports, before the unit (`<key>_<unit>`).
+    pub key: &'static str,
+    /// What it measures.
+    pub dimension: Dimension,
+    /// In words, before "at <body>" / "of <coupling or input>".
+    pub what: &'static str,
+}
+
+/// What one effect is and does.
+pub trait EffectModel: Copy + Into<Effect> {
+    /// The vocabulary name (as in model files and reports).
+    const NAME: &'static str;
+    /// Its parameters, in the order of [`EffectModel::values`].
+    const PARAMETERS: &'static [EffectParameter];
+    /// Whether it makes the right-hand side nonlinear (integrated by RK4, not the exact ZOH).
+    const NONLINEAR: bool = false;
+
+    /// Where it acts.
+    fn element(&self) -> Element;
+    /// The same effect at element `index` of the same kind.
+    fn at_index(self, index: usize) -> Self;
+    /// Its parameter values, SI, in [`EffectModel::PARAMETERS`] order.
+    fn values(&self) -> Vec<f64>;
+    /// Sets its parameter values (as many as [`EffectModel::PARAMETERS`]).
+    fn set_values(&mut self, v: &[f64]);
+    /// Names of the states it adds, after the angles and speeds.
+    fn state_names(&self, _model: &DriveModel) -> Vec<String> {
+        Vec::new()
+    }
+    /// How it enters the right-hand side: fills its element's slot of the dynamics (called once
+    /// per effect, in the model's order, on dynamics without effects).
+    fn enter(&self, d: &mut Dynamics);
+    /// Its part of the linearisation of the piece where every play is in contact (`contact`)
+    /// or open: nothing for a linear effect.
+    fn linearise(&self, _d: &mut Dynamics, _contact: bool) {}
+}
+
+/// Coulomb friction at a body: F = friction · q̇/√(q̇² + smoothing_speed²) against its motion
+/// (71 % of the friction at the smoothing speed, 97 % at 4×, 99.5 % at 10×).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct CoulombFriction {
+    /// The body.
+    pub body: usize,
+    /// Friction force (torque), N (Nm).
+    pub friction: f64,
+    /// Smoothing speed v_s, m/s (rad/s).
+    pub smoothing_speed: f64,
+}
+
+impl EffectModel for CoulombFriction {
+    const NAME: &'static str = "coulomb_friction";
+    const PARAMETERS: &'static [EffectParameter] = &[
+        EffectParameter { name: "friction", key: "friction", dimension: Dimension::Force, what: "Coulomb friction" },
+        EffectParameter {
+            name: "friction_smoothing_speed",
+            key: "smoothing_speed",
+            dimension: Dimension::Speed,
+            what: "speed of the friction's smoothing F v/sqrt(v^2 + v_s^2)",
+        },
+    ];
+    const NONLINEAR: bool = true;
+
+    fn element(&self) -> Element {
+        Element::Body(self.body)
+    }
+    fn at_index(self, body: usize) -> Self {
+        CoulombFriction { body, ..self }
+    }
+    fn values(&self) -> Vec<f64> {
+        vec![self.friction, self.smoothing_speed]
+    }
+    fn set_values(&mut self, v: &[f64]) {
+        (self.friction, self.smoothing_speed) = (v[0], v[1]);
+    }
+    fn enter(&self, d: &mut Dynamics) {
+        d.friction[self.body] = (self.friction, self.smoothing_speed);
+    }
+    /// Left out: the linearisation is the motion clear of the friction's band.
+    fn linearise(&self, d: &mut Dynamics, _contact: bool) {
+        d.friction[self.body] = (0.0, 1.0);
+        d.friction_band[self.body] = 0.0;
+    }
+}
+
+/// Play in a coupling: no force while |twist| < backlash/2, the spring and damper act on the
+/// twist beyond it (total play `backlash`).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Backlash {
+    /// The coupling.
+    pub coupling: usize,
+    /// Total play, m (rad) of the coupling's twist.
+    pub backlash: f64,
+}
+
+impl EffectModel for Backlash {
+    const NAME: &'static str = "backlash";
+    const PARAMETERS: &'static [EffectParameter] =
+        &[EffectParameter { name: "backlash", key: "backlash", dimension: Dimension::Coordinate, what: "total play" }];
+    const NONLINEAR: bool = true;
+
+    fn element(&self) -> Element {
+        Element::Coupling(self.coupling)
+    }
+    fn at_index(self, coupling: usize) -> Self {
+        Backlash { coupling, ..self }
+    }
+    fn values(&self) -> Vec<f64> {
+        vec![self.backlash]
+    }
+    fn set_values(&mut self, v: &[f64]) {
+        self.backlash = v[0];
+    }
+    fn enter(&self, d: &mut Dynamics) {
+        d.couplings[self.coupling].half = 0.5 * self.backlash;
+    }
+    /// In contact: the coupling's spring and damper on the whole twist (the play's offset is
+    /// [`Dynamics::play_offset`]); open: no force.
+    fn linearise(&self, d: &mut Dynamics, contact: bool) {
+        let s = &mut d.couplings[self.coupling];
+        s.half = 0.0;
+        if !contact {
+            (s.c, s.d) = (0.0, 0.0);
+        }
+    }
+}
+
+/// The input reaches its body `delay_s` later than recorded.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct TimeDelay {
+    /// The input (position among the model's inputs).
+    pub input: usize,
+    /// Dead time, s.
+    pub delay_s: f64,
+}
+
+impl EffectModel for TimeDelay {
+    const NAME: &'static str = "time_delay";
+    const PARAMETERS: &'static [EffectParameter] =
+        &[EffectParameter { name: "delay", key: "delay", dimension: Dimension::Time, what: "dead time" }];
+
+    fn element(&self) -> Element {
+        Element::Input(self.input)
+    }
+    fn at_index(self, input: usize) -> Self {
+        TimeDelay { input, ..self }
+    }
+    fn values(&self) -> Vec<f64> {
+        vec![self.delay_s]
+    }
+    fn set_values(&mut self, v: &[f64]) {
+        self.delay_s = v[0];
+    }
+    /// The right-hand side sees the input after its dead time: the simulation shifts the held
+    /// sequence (whole samples and a fraction), the linearisation's input is the delayed one.
+    fn enter(&self, d: &mut Dynamics) {
+        d.inputs[self.input].1 = self.delay_s;
+    }
+}
+
+/// The force on the body follows the recorded input through τ ż = u − z.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct ActuatorLag {
+    /// The input.
+    pub input: usize,
+    /// Time constant τ, s.
+    pub time_constant_s: f64,
+}
+
+impl EffectModel for ActuatorLag {
+    const NAME: &'static str = "actuator_lag";
+    const PARAMETERS: &'static [EffectParameter] = &[EffectParameter {
+        name: "time_constant",
+        key: "time_constant",
+        dimension: Dimension::Time,
+        what: "first-order lag",
+    }];
+
+    fn element(&self) -> Element {
+        Element::Input(self.input)
+    }
+    fn at_index(self, input: usize) -> Self {
+        ActuatorLag { input, ..self }
+    }
+    fn values(&self) -> Vec<f64> {
+        vec![self.time_constant_s]
+    }
+    fn set_values(&mut self, v: &[f64]) {
+        self.time_constant_s = v[0];
+    }
+    fn state_names(&self, model: &DriveModel) -> Vec<String> {
+        vec![format!("{}_lagged", Element::Input(self.input).label(model))]
+    }
+    /// One state z after the angles and speeds; the body feels z instead of the input.
+    fn enter(&self, d: &mut Dynamics) {
+        let input = &mut d.inputs[self.input];
+        input.2 = self.time_constant_s;
+        input.3 = d.nstates;
+        d.nstates += 1;
+    }
+}
+
+/// An effect attached to an element of the line (indices 0-based): the closed set of
+/// [`EffectModel`]s a model file may name.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "effect", rename_all = "snake_case")]
+pub enum Effect {
+    /// [`CoulombFriction`].
+    CoulombFriction(CoulombFriction),
+    /// [`Backlash`].
+    Backlash(Backlash),
+    /// [`TimeDelay`].
+    TimeDelay(TimeDelay),
+    /// [`ActuatorLag`].
+    ActuatorLag(ActuatorLag),
+}
+
+/// `each!(effect, e => expr)`: `expr` with `e` bound to the effect's own type, for every variant.
+macro_rules! each {
+    ($effect:expr, $e:ident => $body:expr) => {
+        match $effect {
+            Effect::CoulombFriction($e) => $body,
+            Effect::Backlash($e) => $body,
+            Effect::TimeDelay($e) => $body,
+            Effect::ActuatorLag($e) => $body,
+        }
+    };
+}
+
+macro_rules! into_effect {
+    ($($t:ident),*) => {$(
+        impl From<$t> for Effect {
+            fn from(e: $t) -> Effect {
+                Effect::$t(e)
+            }
+        }
+    )*};
+}
+into_effect!(CoulombFriction, Backlash, TimeDelay, ActuatorLag);
+
+/// A parameter's unit as a key suffix in the line's domain (`Nm`, `radps`, …).
+fn unit_key(dimension: Dimension, rotational: bool) -> &'static str {
+    match (dimension, rotational) {
+        (Dimension::Inertia, true) => "kg_m2",
+        (Dimension::Inertia, false) => "kg",
+        (Dimension::Stiffness, true) => "Nm_per_rad",
+        (Dimension::Stiffness, false) => "N_per_m",
+        (Dimension::Damping, true) => "Nms_per_rad",
+        (Dimension::Damping, false) => "Ns_per_m",
+        (Dimension::Force, true) => "Nm",
+        (Dimension::Force, false) => "N",
+        (Dimension::Coordinate, true) => "rad",
+        (Dimension::Coordinate, false) => "m",
+        (Dimension::Speed, true) => "radps",
+        (Dimension::Speed, false) => "mps",
+        (Dimension::Time, _) => "s",
+        (Dimension::Ratio, _) => "1",
+    }
+}
+
+impl Effect {
+    /// The vocabulary name.
+    pub fn name(&self) -> &'static str {
+        fn name<E: EffectModel>(_: &E) -> &'static str {
+            E::NAME
+        }
+        each!(self, e => name(e))
+    }
+
+    /// Its parameters' descriptions.
+    pub fn parameter_kinds(&self) -> &'static [EffectParameter] {
+        fn kinds<E: EffectModel>(_: &E) -> &'static [EffectParameter] {
+            E::PARAMETERS
+        }
+        each!(self, e => kinds(e))
+    }
+
+    /// Whether it makes the right-hand side nonlinear.
+    pub fn is_nonlinear(&self) -> bool {
+        fn nonlinear<E: EffectModel>(_: &E) -> bool {
+            E::NONLINEAR
+        }
+        each!(self, e => nonlinear(e))
+    }
+
+    /// Where it acts.
+    pub fn at(&self) -> Element {
+        each!(self, e => e.element())
+    }
+
+    /// Where it acts, in words ("body load", "coupling 2", "input 1"; positions 1-based).
+    pub fn element(&self, model: &DriveModel) -> String {
+        self.at().words(model)
+    }
+
+    /// The index of the element it acts on (body, coupling or input, 0-based) and the key that
+    /// names that element in a model file (`body`, `coupling`, `input`).
+    pub fn element_index(&self) -> (usize, &'static str) {
+        let at = self.at();
+        (at.index(), at.key())
+    }
+
+    /// The same effect at element `index` (of the same kind: body, coupling or input).
+    pub fn at_index(self, index: usize) -> Effect {
+        each!(self, e => e.at_index(index).into())
+    }
+
+    /// Its parameter values, SI, in [`Effect::parameter_kinds`] order.
+    pub fn values(&self) -> Vec<f64> {
+        each!(self, e => e.values())
+    }
+
+    /// Sets its parameter values in [`Effect::parameter_kinds`] order.
+    pub fn set_values(&mut self, v: &[f64]) {
+        each!(self, e => e.set_values(v))
+    }
+
+    /// Names of the states it adds.
+    pub fn state_names(&self, model: &DriveModel) -> Vec<String> {
+        each!(self, e => e.state_names(model))
+    }
+
+    /// Its parameters, SI, keyed with their units in the line's domain (`friction_Nm`,
+    /// `backlash_m`, `delay_s`).
+    pub fn parameters(&self, model: &DriveModel) -> Vec<(String, f64)> {
+        let rotational = model.line.domain == crate::line::Domain::Rotational;
+        self.parameter_kinds()
+            .iter()
+            .zip(self.values())
+            .map(|(p, v)| (format!("{}_{}", p.key, unit_key(p.dimension, rotational)), v))
+            .collect()
+    }
+
+    /// Fills its slot of the dynamics.
+    pub(super) fn enter(&self, d: &mut Dynamics) {
+        each!(self, e => e.enter(d))
+    }
+
+    /// Its part of the linearisation.
+    pub(super) fn linearise(&self, d: &mut Dynamics, contact: bool) {
+        each!(self, e => e.linearise(d, contact))
+    }
+}
