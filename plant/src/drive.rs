@@ -645,9 +645,10 @@ impl Dynamics {
 
     /// Twist of coupling `k` at state `x`, and whether it is beyond its play (always, without
     /// play).
+    #[inline]
     pub fn coupling_twist(&self, k: usize, x: &[f64]) -> (f64, bool) {
         let s = &self.couplings[k];
-        let twist = self.twist(s, x).0;
+        let twist = self.terms[s.terms.0..s.terms.1].iter().map(|&(j, e)| e * x[j]).sum::<f64>();
         (twist, s.half <= 0.0 || twist.abs() > s.half)
     }
 
@@ -681,6 +682,7 @@ impl Dynamics {
     }
 
     /// Half-width of body `i`'s steep friction band, m/s or rad/s (0: none).
+    #[inline]
     pub fn friction_band(&self, i: usize) -> f64 {
         self.friction_band[i]
     }
