@@ -129,10 +129,12 @@ pub struct Powertrain {
     dynamics: Dynamics,
     /// Stiffness of the side shafts in series on s, Nm/rad (eq. (A1)).
     c_s: f64,
-    input_dof: usize,
     /// RK4 steps within a piece and across pieces, s.
     coarse_s: f64,
     fine_s: f64,
+    /// (speed's state index, half-width) of each machine's steep friction band, in the order
+    /// of [`DriveEffects::coulomb_friction_nm`]: the pieces [`Powertrain::piece`] tells apart.
+    bands: Vec<(usize, f64)>,
     /// The effects.
     pub effects: DriveEffects,
 }
@@ -240,7 +242,13 @@ impl Powertrain {
             dynamics = dynamics.with_steps(coarse, fine);
             (coarse_s, fine_s) = (coarse, fine);
         }
-        Ok(Powertrain { model, dynamics, c_s, input_dof, coarse_s, fine_s, effects: *effects })
+        let n = model.line.bodies.len();
+        let bands = [0, input_dof, 2]
+            .iter()
+            .map(|&i| (n + i, dynamics.friction_band(i)))
+            .filter(|&(_, band)| band > 0.0)
+            .collect();
+        Ok(Powertrain { model, dynamics, c_s, coarse_s, fine_s, bands, effects: *effects })
     }
 
     /// The rig as a drive model ([`DriveModel::paper_rig`]).
@@ -483,14 +491,9 @@ impl Powertrain {
             let (s, engaged) = self.dynamics.coupling_twist(0, x);
             key = u64::from(engaged && s > 0.0) + 2 * u64::from(engaged && s < 0.0);
         }
-        let n = self.dofs();
-        for k in 0..3 {
-            let i = self.friction_dof(k);
-            let band = self.dynamics.friction_band(i);
-            if band > 0.0 {
-                let w = x[n + i];
-                key = 4 * key + u64::from(w > band) + 2 * u64::from(w < -band);
-            }
+        for &(i, band) in &self.bands {
+            let w = x[i];
+            key = 4 * key + u64::from(w > band) + 2 * u64::from(w < -band);
         }
         key
     }
@@ -499,13 +502,6 @@ impl Powertrain {
     /// powertrain's, or a larger model's that embeds it).
     pub fn integrator(&self, nstates: usize) -> PiecewiseRk4 {
         PiecewiseRk4::new(nstates, self.coarse_s, self.fine_s)
-    }
-
-    /// The coordinate friction `k` of [`DriveEffects::coulomb_friction_nm`] acts on: M2, the
-    /// drive's input coordinate (its motor when compliant), M3.
-    #[inline]
-    fn friction_dof(&self, k: usize) -> usize {
-        [0, self.input_dof, 2][k]
     }
 
     /// The friction's contribution to ∂ẇ_i/∂w_i at state `x`: (speed's state index, slope)

@@ -192,32 +192,33 @@ fn rk4(
     check: Option<u64>,
 ) -> Option<u64> {
     let [_, k1, k2, k3, k4, tmp] = w;
-    let ns = x.len();
+    // tmp = x + c·k (the slices' lengths told once, so the loop carries no bounds checks)
+    fn stage(tmp: &mut [f64], x: &[f64], k: &[f64], c: f64) {
+        for ((t, xi), ki) in tmp.iter_mut().zip(x).zip(k) {
+            *t = xi + c * ki;
+        }
+    }
     let left = |sys: &mut _, y: &[f64]| check.is_some_and(|p| PiecewiseSmooth::piece(sys, y) != p);
     sys.rhs(x, k1);
-    for i in 0..ns {
-        tmp[i] = x[i] + 0.5 * h * k1[i];
-    }
+    stage(tmp, x, k1, 0.5 * h);
     if left(sys, tmp) {
         return None;
     }
     sys.rhs(tmp, k2);
-    for i in 0..ns {
-        tmp[i] = x[i] + 0.5 * h * k2[i];
-    }
+    stage(tmp, x, k2, 0.5 * h);
     if left(sys, tmp) {
         return None;
     }
     sys.rhs(tmp, k3);
-    for i in 0..ns {
-        tmp[i] = x[i] + h * k3[i];
-    }
+    stage(tmp, x, k3, h);
     if left(sys, tmp) {
         return None;
     }
     sys.rhs(tmp, k4);
-    for i in 0..ns {
-        x[i] += h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]);
+    let ns = x.len();
+    let (k1, k2, k3, k4) = (&k1[..ns], &k2[..ns], &k3[..ns], &k4[..ns]);
+    for (i, xi) in x.iter_mut().enumerate() {
+        *xi += h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]);
     }
     if left(sys, x) {
         return None;
