@@ -7,7 +7,7 @@ use nalgebra::{DMatrix, DVector};
 /// Returns the best x and its sum of squares. Stops after `max_iter` iterations or when a step
 /// gains less than `rel_tol` of the cost.
 pub fn minimise_to(
-    f: &dyn Fn(&[f64]) -> Option<Vec<f64>>,
+    f: &(dyn Fn(&[f64]) -> Option<Vec<f64>> + Sync),
     x0: &[f64],
     max_iter: usize,
     rel_tol: f64,
@@ -21,25 +21,23 @@ pub fn minimise_to(
         // Jacobian by forward differences, its columns kept in single precision (half the
         // memory of a long record; a forward difference is good to a few digits anyway), JᵀJ
         // and Jᵀr summed in double.
-        let mut columns: Vec<Vec<f32>> = Vec::with_capacity(p);
-        let mut ok = true;
-        for j in 0..p {
+        let column = |j: usize| -> Option<Vec<f32>> {
             // 0.1 % steps (log parameters): large enough to step over the roughness that
             // contact switching in the backlash model puts into the cost.
             let h = 1e-3 * x[j].abs().max(1.0);
             let mut xp = x.clone();
             xp[j] += h;
-            match f(&xp) {
-                Some(rp) => columns.push(rp.iter().zip(&r).map(|(a, b)| ((a - b) / h) as f32).collect()),
-                None => {
-                    ok = false;
-                    break;
-                }
-            }
-        }
-        if !ok {
-            break;
-        }
+            let rp = f(&xp)?;
+            Some(rp.iter().zip(&r).map(|(a, b)| ((a - b) / h) as f32).collect())
+        };
+        // on both cores where this fit is the only work (the declared model's re-fit, a
+        // single swap): the same columns, sooner
+        let columns: Option<Vec<Vec<f32>>> = if p >= 2 && !super::in_worker() {
+            super::on_two_workers(p, &column).into_iter().collect()
+        } else {
+            (0..p).map(column).collect()
+        };
+        let Some(columns) = columns else { break };
         let mut jtj = DMatrix::zeros(p, p);
         let mut g = DVector::zeros(p);
         for j in 0..p {

@@ -79,15 +79,32 @@ pub fn effective_count(n: usize, rho: f64) -> f64 {
     (n as f64 * (1.0 - rho) / (1.0 + rho)).max(10.0)
 }
 
+thread_local! {
+    /// Set on the worker threads of [`on_two_workers`].
+    static IN_WORKER: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
+}
+
+/// Whether this thread is one of [`on_two_workers`]' workers (both cores are then busy: a fit
+/// computes its Jacobian's columns in turn, not on further threads).
+pub(crate) fn in_worker() -> bool {
+    IN_WORKER.with(|w| w.get())
+}
+
 /// Runs `job(i)` for i in 0..count on two worker threads taking the indices in turn (this is a
 /// 2-core machine's worth of threads: memory then holds two fits' Jacobians and simulations,
 /// not one per candidate); the results in index order.
 pub(crate) fn on_two_workers<T: Send>(count: usize, job: &(dyn Fn(usize) -> T + Sync)) -> Vec<T> {
+    if count == 1 {
+        // one job: on this thread, whose fits may then share their Jacobians' columns
+        // between the two cores ([`in_worker`])
+        return vec![job(0)];
+    }
     let next = std::sync::atomic::AtomicUsize::new(0);
     let mut done: Vec<(usize, T)> = std::thread::scope(|scope| {
         let workers: Vec<_> = (0..2)
             .map(|_| {
                 scope.spawn(|| {
+                    IN_WORKER.with(|w| w.set(true));
                     let mut done = Vec::new();
                     loop {
                         let i = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
