@@ -30,9 +30,9 @@ pub fn minimise_to(
             let rp = f(&xp)?;
             Some(rp.iter().zip(&r).map(|(a, b)| ((a - b) / h) as f32).collect())
         };
-        // on both cores where this fit is the only work (the declared model's re-fit, a
-        // single swap): the same columns, sooner
-        let columns: Option<Vec<Vec<f32>>> = if p >= 2 && !super::in_worker() {
+        // on both cores where one is idle (this fit the only work, or the other worker out of
+        // jobs): the same columns, sooner
+        let columns: Option<Vec<Vec<f32>>> = if p >= 2 && super::spare_core() {
             super::on_two_workers(p, &column).into_iter().collect()
         } else {
             (0..p).map(column).collect()

@@ -79,15 +79,28 @@ pub fn effective_count(n: usize, rho: f64) -> f64 {
     (n as f64 * (1.0 - rho) / (1.0 + rho)).max(10.0)
 }
 
-thread_local! {
-    /// Set on the worker threads of [`on_two_workers`].
-    static IN_WORKER: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
+/// Worker threads of [`on_two_workers`] running jobs now, at every depth.
+static RUNNING: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+
+/// Whether a core is idle: fewer than two workers are running (none on the calling thread's
+/// own, when it is not a worker; one when the other worker has run out of jobs while this one
+/// still fits). A fit then computes its Jacobian's columns on two threads.
+pub(crate) fn spare_core() -> bool {
+    RUNNING.load(std::sync::atomic::Ordering::Relaxed) < 2
 }
 
-/// Whether this thread is one of [`on_two_workers`]' workers (both cores are then busy: a fit
-/// computes its Jacobian's columns in turn, not on further threads).
-pub(crate) fn in_worker() -> bool {
-    IN_WORKER.with(|w| w.get())
+/// Counts a worker as running while it lives (also when its job panics).
+struct Running;
+impl Running {
+    fn start() -> Running {
+        RUNNING.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        Running
+    }
+}
+impl Drop for Running {
+    fn drop(&mut self) {
+        RUNNING.fetch_sub(1, std::sync::atomic::Ordering::Relaxed);
+    }
 }
 
 /// Runs `job(i)` for i in 0..count on two worker threads taking the indices in turn (this is a
@@ -96,7 +109,7 @@ pub(crate) fn in_worker() -> bool {
 pub(crate) fn on_two_workers<T: Send>(count: usize, job: &(dyn Fn(usize) -> T + Sync)) -> Vec<T> {
     if count == 1 {
         // one job: on this thread, whose fits may then share their Jacobians' columns
-        // between the two cores ([`in_worker`])
+        // between the two cores ([`spare_core`])
         return vec![job(0)];
     }
     let next = std::sync::atomic::AtomicUsize::new(0);
@@ -104,7 +117,7 @@ pub(crate) fn on_two_workers<T: Send>(count: usize, job: &(dyn Fn(usize) -> T + 
         let workers: Vec<_> = (0..2)
             .map(|_| {
                 scope.spawn(|| {
-                    IN_WORKER.with(|w| w.set(true));
+                    let _running = Running::start();
                     let mut done = Vec::new();
                     loop {
                         let i = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);

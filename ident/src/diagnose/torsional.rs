@@ -669,9 +669,9 @@ pub fn diagnose(
         let points: Vec<Vec<f64>> =
             bases.iter().flat_map(|b| starts.iter().map(move |s| [b.as_slice(), s].concat())).collect();
         // a long grid (the play's profile) is shared by both workers: the cheap linear
-        // candidates are done long before it
+        // candidates are done long before it; a short one where a core is idle
         let cost_at = |i: usize| f(&points[i]).map_or(f64::INFINITY, |r| r.iter().map(|v| v * v).sum::<f64>());
-        let costs: Vec<f64> = if points.len() > 20 {
+        let costs: Vec<f64> = if points.len() > 20 || super::spare_core() {
             super::on_two_workers(points.len(), &cost_at)
         } else {
             (0..points.len()).map(cost_at).collect()
