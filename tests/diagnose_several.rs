@@ -509,8 +509,12 @@ fn held_out_a_dead_time_and_friction_at_the_load_machines_about_zero_torque() {
     each_effect_halves(&d);
 }
 
+/// No longer held out: it failed until session 12 (the look-ahead from the implausible damping,
+/// c_short × 0.36, reached damping + compliance only with c_short still bent, so a 0.14 s lag
+/// was kept at error 0.98), and session 12's pinned re-fit of an implausible candidate was made
+/// with it in view: 0.0400 for 0.04, 999.9 N m/rad and 0.600 for 1000 and 0.6, error 3.33 →
+/// 0.012. The second held-out set below was written after that.
 #[test]
-#[ignore = "open (issue 15), held out: the look-ahead from the implausible damping (c_short × 0.36) reaches damping + compliance at 0.051, still implausible (compliance 2300 N m/rad, share 0.25, for 1000 and 0.6), so a 0.14 s lag is kept at 0.98"]
 fn held_out_shaft_damping_missing_and_a_softer_compliance_about_20_nm() {
     let undamped = RigParams { d_short: 0.0, d_long: 0.0, ..declared() };
     let truth = Truth { zeta: Some(0.04), compliance: Some((1000.0, 0.6)), set_point_nm: 20.0, ..Default::default() };
@@ -519,6 +523,52 @@ fn held_out_shaft_damping_missing_and_a_softer_compliance_about_20_nm() {
     assert_eq!(found(&d), ["drive_compliance", "shaft_damping"]);
     within(param(&d, "shaft_damping", None, "damping_ratio"), 0.04, 0.2, "damping_ratio");
     within(param(&d, "drive_compliance", None, "stiffness_Nm_per_rad"), 1000.0, 0.2, "stiffness");
+    halved_each_step(&d);
+    each_effect_halves(&d);
+}
+
+// Held out, second set: written in session 12 after the pinned re-fit of an implausible
+// candidate (`extend` in `ident/src/diagnose/torsional.rs`) was settled, run once, not tuned on.
+
+#[test]
+fn held_out_2_shaft_damping_missing_and_a_stiffer_compliance_about_30_nm() {
+    let undamped = RigParams { d_short: 0.0, d_long: 0.0, ..declared() };
+    let truth = Truth { zeta: Some(0.05), compliance: Some((2000.0, 0.5)), set_point_nm: 30.0, ..Default::default() };
+    let d = run(&record(&undamped, truth, 61), &undamped);
+    print_params(&d);
+    assert_eq!(found(&d), ["drive_compliance", "shaft_damping"]);
+    within(param(&d, "shaft_damping", None, "damping_ratio"), 0.05, 0.2, "damping_ratio");
+    within(param(&d, "drive_compliance", None, "stiffness_Nm_per_rad"), 2000.0, 0.2, "stiffness");
+    halved_each_step(&d);
+    each_effect_halves(&d);
+}
+
+#[test]
+#[ignore = "open (issue 15), held out: play and friction at M2 found, but a third effect (shaft damping 0.033) beside them, the play 3.01 mrad for 2.5 (+20.5 %), friction 0.72 Nm for 0.8, error 0.51 → 0.097"]
+fn held_out_2_friction_at_m2_and_play_about_zero_torque() {
+    let truth = Truth { friction_nm: [0.8, 0.0, 0.0], backlash_rad: 0.0025, set_point_nm: 0.0, ..Default::default() };
+    let d = run(&record(&declared(), truth, 62), &declared());
+    print_params(&d);
+    assert_eq!(found(&d), ["backlash", "coulomb_friction at M2"]);
+    within(param(&d, "backlash", None, "backlash_rad"), 0.0025, 0.2, "backlash_rad");
+    within(param(&d, "coulomb_friction", Some("M2"), "friction_Nm"), 0.8, 0.2, "friction at M2");
+    each_effect_halves(&d);
+}
+
+#[test]
+fn held_out_2_a_dead_time_and_a_softer_compliance_under_a_multisine() {
+    let truth = Truth {
+        delay_s: 0.003,
+        compliance: Some((1200.0, 0.5)),
+        set_point_nm: 25.0,
+        multisine: true,
+        ..Default::default()
+    };
+    let d = run(&record(&declared(), truth, 63), &declared());
+    print_params(&d);
+    assert_eq!(found(&d), ["drive_compliance", "time_delay"]);
+    within(param(&d, "time_delay", None, "delay_s"), 0.003, 0.2, "delay_s");
+    within(param(&d, "drive_compliance", None, "stiffness_Nm_per_rad"), 1200.0, 0.2, "stiffness");
     halved_each_step(&d);
     each_effect_halves(&d);
 }
