@@ -52,6 +52,29 @@ pub enum Dimension {
     Ratio,
 }
 
+impl Dimension {
+    /// Its unit as a key suffix in reports and JSON, in a rotational (`rotational`) or
+    /// translational line: `kg_m2`/`kg`, `Nm_per_rad`/`N_per_m`, `Nm`/`N`, `radps`/`mps`, `s`…
+    pub fn key_unit(self, rotational: bool) -> &'static str {
+        match (self, rotational) {
+            (Dimension::Inertia, true) => "kg_m2",
+            (Dimension::Inertia, false) => "kg",
+            (Dimension::Stiffness, true) => "Nm_per_rad",
+            (Dimension::Stiffness, false) => "N_per_m",
+            (Dimension::Damping, true) => "Nms_per_rad",
+            (Dimension::Damping, false) => "Ns_per_m",
+            (Dimension::Force, true) => "Nm",
+            (Dimension::Force, false) => "N",
+            (Dimension::Coordinate, true) => "rad",
+            (Dimension::Coordinate, false) => "m",
+            (Dimension::Speed, true) => "radps",
+            (Dimension::Speed, false) => "mps",
+            (Dimension::Time, _) => "s",
+            (Dimension::Ratio, _) => "1",
+        }
+    }
+}
+
 /// One parameter of a [`DriveModel`]: what an FMU exposes and a fit moves.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Parameter {
@@ -528,7 +551,7 @@ impl Dynamics {
         let mut mix = |class: u64| key = (key ^ class).wrapping_mul(0x9E37_79B9_7F4A_7C15).wrapping_add(1);
         for s in &self.couplings {
             if s.half > 0.0 {
-                let twist = self.twist(s, x).0;
+                let twist = self.elastic_twist(s, x);
                 mix(u64::from(twist > s.half) + 2 * u64::from(twist < -s.half));
             }
         }
@@ -631,6 +654,12 @@ impl Dynamics {
         self.nstates
     }
 
+    /// Twist of coupling `s` at state `x` (without its rate: what the pieces are told by).
+    #[inline]
+    fn elastic_twist(&self, s: &Spring, x: &[f64]) -> f64 {
+        self.terms[s.terms.0..s.terms.1].iter().map(|&(j, e)| e * x[j]).sum()
+    }
+
     /// Twist of coupling `s` and its rate at state `x`.
     #[inline]
     fn twist(&self, s: &Spring, x: &[f64]) -> (f64, f64) {
@@ -648,7 +677,7 @@ impl Dynamics {
     #[inline]
     pub fn coupling_twist(&self, k: usize, x: &[f64]) -> (f64, bool) {
         let s = &self.couplings[k];
-        let twist = self.terms[s.terms.0..s.terms.1].iter().map(|&(j, e)| e * x[j]).sum::<f64>();
+        let twist = self.elastic_twist(s, x);
         (twist, s.half <= 0.0 || twist.abs() > s.half)
     }
 

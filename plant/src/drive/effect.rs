@@ -321,26 +321,6 @@ macro_rules! into_effect {
 }
 into_effect!(CoulombFriction, Backlash, TimeDelay, ActuatorLag);
 
-/// A parameter's unit as a key suffix in the line's domain (`Nm`, `radps`, …).
-fn unit_key(dimension: Dimension, rotational: bool) -> &'static str {
-    match (dimension, rotational) {
-        (Dimension::Inertia, true) => "kg_m2",
-        (Dimension::Inertia, false) => "kg",
-        (Dimension::Stiffness, true) => "Nm_per_rad",
-        (Dimension::Stiffness, false) => "N_per_m",
-        (Dimension::Damping, true) => "Nms_per_rad",
-        (Dimension::Damping, false) => "Ns_per_m",
-        (Dimension::Force, true) => "Nm",
-        (Dimension::Force, false) => "N",
-        (Dimension::Coordinate, true) => "rad",
-        (Dimension::Coordinate, false) => "m",
-        (Dimension::Speed, true) => "radps",
-        (Dimension::Speed, false) => "mps",
-        (Dimension::Time, _) => "s",
-        (Dimension::Ratio, _) => "1",
-    }
-}
-
 impl Effect {
     /// The vocabulary name.
     pub fn name(&self) -> &'static str {
@@ -410,7 +390,7 @@ impl Effect {
         self.parameter_kinds()
             .iter()
             .zip(self.values())
-            .map(|(p, v)| (format!("{}_{}", p.key, unit_key(p.dimension, rotational)), v))
+            .map(|(p, v)| (format!("{}_{}", p.key, p.dimension.key_unit(rotational)), v))
             .collect()
     }
 
