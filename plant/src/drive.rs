@@ -889,13 +889,15 @@ impl Dynamics {
                 worst.unwrap_or(f64::INFINITY)
             )));
         }
+        // each step starts in the piece the last one ended in (pieces do not depend on inputs)
+        let mut piece = None;
         for k in 0..len {
             for (yo, &o) in y.iter_mut().zip(outputs) {
                 yo.push(self.output(&x, o));
             }
             for &(phase, frac) in &pieces {
                 input_at(&mut u, k, phase);
-                rk.advance(&mut HeldInputs { d: self, u: &u }, &mut x, frac * dt);
+                piece = rk.advance_from(&mut HeldInputs { d: self, u: &u }, &mut x, frac * dt, piece).1;
             }
             if !x.iter().all(|v| v.is_finite()) {
                 return Err(PlantError::Numerical(format!("the simulation diverged at sample {k}")));

@@ -515,10 +515,13 @@ impl Powertrain {
         let mut rk = self.integrator(x.len());
         let maps = self.piece_maps(dt_s);
         let (mut w2, mut w3) = (Vec::with_capacity(u.len()), Vec::with_capacity(u.len()));
+        // each sample starts in the piece the last one ended in
+        let mut piece = None;
         for &uk in u {
             w2.push(x[n]);
             w3.push(x[n + 2]);
-            rk.advance(&mut Held { p: self, torques: [0.0, uk, 0.0], maps: maps.as_ref() }, &mut x, dt_s);
+            let held = &mut Held { p: self, torques: [0.0, uk, 0.0], maps: maps.as_ref() };
+            piece = rk.advance_from(held, &mut x, dt_s, piece).1;
         }
         (w2, w3)
     }

@@ -61,23 +61,37 @@ impl PiecewiseRk4 {
     /// Advances `x` over `h` seconds with the inputs held; the number of steps is bounded by
     /// [`PiecewiseRk4::counts`]. Returns the number of fine sub-steps taken.
     pub fn advance(&mut self, sys: &mut impl PiecewiseSmooth, x: &mut [f64], h: f64) -> usize {
+        self.advance_from(sys, x, h, None).0
+    }
+
+    /// [`PiecewiseRk4::advance`] where the caller may know the piece `x` lies in (`start`: the
+    /// end piece the last call returned, `x` unchanged since), saving its evaluation. Returns
+    /// the fine sub-steps taken and the piece of the end state (`None` where `h` has no step
+    /// counts and nothing was stepped).
+    pub fn advance_from(
+        &mut self,
+        sys: &mut impl PiecewiseSmooth,
+        x: &mut [f64],
+        h: f64,
+        start: Option<u64>,
+    ) -> (usize, Option<u64>) {
         if h != self.last.0 {
             self.last = (h, self.counts(h));
         }
-        let Some((coarse, fine)) = self.last.1 else { return 0 };
-        let piece = sys.piece(x);
+        let Some((coarse, fine)) = self.last.1 else { return (0, None) };
+        let piece = start.unwrap_or_else(|| sys.piece(x));
         let [.., end] = &mut self.work;
         if sys.exact(piece, x, h, end) {
             if sys.piece(end) == piece {
                 x.copy_from_slice(end);
-                return 0;
+                return (0, Some(piece));
             }
             // the piece was left: the whole interval in fine sub-steps
             let n = coarse * fine;
             for _ in 0..n {
                 rk4(sys, x, h / n as f64, &mut self.work, None);
             }
-            return n;
+            return (n, Some(sys.piece(x)));
         }
         let hc = h / coarse as f64;
         let mut taken = 0;
@@ -98,7 +112,7 @@ impl PiecewiseRk4 {
                 }
             }
         }
-        taken
+        (taken, Some(start_piece))
     }
 }
 
