@@ -482,8 +482,14 @@ fn held_out_a_shorter_lag_and_a_smaller_play_about_8_nm() {
     each_effect_halves(&d);
 }
 
+/// No longer held out: it failed until session 13 (both found, the play within 1 %, but the
+/// compliance at 1864 N m/rad for 2500, error 0.14: the shafts rattle, and rigtwin's model at the
+/// truth's parameters gives 0.020, with the stiffness 8 % off 0.22–0.38 — a notch that no start
+/// grid meets). Session 13's phase-free polish (a fit to the short-time spectra's magnitudes,
+/// which fall smoothly to the truth, as a start for the fit to the speeds) was made with it in
+/// view: 2421 N m/rad, 4.25 mrad, error 0.97 → 0.090. The third held-out set below was written
+/// after that.
 #[test]
-#[ignore = "open (issue 15), held out: both found, play 3.96 mrad for 4 (−1 %), but the compliance 1864 N m/rad (share 0.48) for 2500 (0.4), error 0.97 → 0.14. The shafts rattle chaotically: rigtwin's model at the truth's parameters gives 0.020, with the stiffness 8 % off (2300 or 2700) 0.38 and 0.22, with the play 2.5 % off 0.04–0.10: a notch in two parameters that no start grid meets (session 13, measured)"]
 fn held_out_a_stiffer_compliance_and_a_wider_play_about_3_nm() {
     let truth = Truth { backlash_rad: 0.004, compliance: Some((2500.0, 0.4)), set_point_nm: 3.0, ..Default::default() };
     let d = run(&record(&declared(), truth, 52), &declared());
@@ -543,8 +549,10 @@ fn held_out_2_shaft_damping_missing_and_a_stiffer_compliance_about_30_nm() {
     each_effect_halves(&d);
 }
 
+/// No longer held out: it added shaft damping as a third effect (play 3.01 mrad for 2.5, error
+/// 0.097) until session 13's phase-free polish, made with the case above in view and run on
+/// this one after: friction 0.764 Nm, play 2.74 mrad, error 0.51 → 0.075.
 #[test]
-#[ignore = "open (issue 15), held out: play and friction at M2 found, but a third effect (shaft damping 0.033) beside them, the play 3.01 mrad for 2.5 (+20.5 %), friction 0.72 Nm for 0.8, error 0.51 → 0.097"]
 fn held_out_2_friction_at_m2_and_play_about_zero_torque() {
     let truth = Truth { friction_nm: [0.8, 0.0, 0.0], backlash_rad: 0.0025, set_point_nm: 0.0, ..Default::default() };
     let d = run(&record(&declared(), truth, 62), &declared());

@@ -154,6 +154,49 @@ pub fn high_pass(x: &[f64], dt_s: f64, cutoff_hz: f64) -> Vec<f64> {
     buf.iter().map(|c| c.re / n as f64).collect()
 }
 
+/// Short-time spectral magnitudes: Hann-windowed frames of `window` samples every half window,
+/// the magnitudes of DFT lines 1 to `lines` of each. They keep a response's amplitude over time
+/// and frequency and drop its phase.
+#[derive(Clone)]
+pub struct Spectrogram {
+    fft: std::sync::Arc<dyn rustfft::Fft<f64>>,
+    hann: Vec<f64>,
+    lines: usize,
+}
+
+impl std::fmt::Debug for Spectrogram {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Spectrogram").field("window", &self.hann.len()).field("lines", &self.lines).finish()
+    }
+}
+
+impl Spectrogram {
+    /// Frames of `window` samples (at least 4), lines 1..=`lines` (at most half the window).
+    pub fn new(window: usize, lines: usize) -> Spectrogram {
+        let window = window.max(4);
+        let hann =
+            (0..window).map(|i| 0.5 - 0.5 * (2.0 * std::f64::consts::PI * i as f64 / window as f64).cos()).collect();
+        Spectrogram { fft: FftPlanner::new().plan_fft_forward(window), hann, lines: lines.clamp(1, window / 2) }
+    }
+
+    /// The magnitudes of every whole frame of `x`, frame by frame, appended to `out`.
+    pub fn magnitudes(&self, x: &[f64], out: &mut Vec<f64>) {
+        let window = self.hann.len();
+        let hop = window / 2;
+        let mut buf = vec![Complex64::new(0.0, 0.0); window];
+        let mut scratch = vec![Complex64::new(0.0, 0.0); self.fft.get_inplace_scratch_len()];
+        let mut start = 0;
+        while start + window <= x.len() {
+            for ((b, v), h) in buf.iter_mut().zip(&x[start..start + window]).zip(&self.hann) {
+                *b = Complex64::new(v * h, 0.0);
+            }
+            self.fft.process_with_scratch(&mut buf, &mut scratch);
+            out.extend(buf[1..=self.lines].iter().map(|c| c.norm()));
+            start += hop;
+        }
+    }
+}
+
 /// Power of `x` in `[f_lo, f_hi]` over time: Hann-windowed frames of `window` samples every
 /// `hop` samples; returns (frame centre times in s, band power).
 pub fn band_power_over_time(
