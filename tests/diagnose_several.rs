@@ -580,3 +580,61 @@ fn held_out_2_a_dead_time_and_a_softer_compliance_under_a_multisine() {
     halved_each_step(&d);
     each_effect_halves(&d);
 }
+
+// Held out, third set: written in session 13 after the phase-free polish was settled, run once,
+// not tuned on.
+
+#[test]
+fn held_out_3_play_and_a_dead_time_under_a_multisine_about_6_nm() {
+    let truth =
+        Truth { backlash_rad: 0.0035, delay_s: 0.003, set_point_nm: 6.0, multisine: true, ..Default::default() };
+    let d = run(&record(&declared(), truth, 71), &declared());
+    print_params(&d);
+    assert_eq!(found(&d), ["backlash", "time_delay"]);
+    within(param(&d, "backlash", None, "backlash_rad"), 0.0035, 0.2, "backlash_rad");
+    within(param(&d, "time_delay", None, "delay_s"), 0.003, 0.2, "delay_s");
+    halved_each_step(&d);
+    each_effect_halves(&d);
+}
+
+#[test]
+fn held_out_3_shaft_damping_missing_and_a_smaller_play_about_4_nm() {
+    let undamped = RigParams { d_short: 0.0, d_long: 0.0, ..declared() };
+    let truth = Truth { zeta: Some(0.025), backlash_rad: 0.002, set_point_nm: 4.0, ..Default::default() };
+    let d = run(&record(&undamped, truth, 72), &undamped);
+    print_params(&d);
+    assert_eq!(found(&d), ["backlash", "shaft_damping"]);
+    within(param(&d, "shaft_damping", None, "damping_ratio"), 0.025, 0.2, "damping_ratio");
+    within(param(&d, "backlash", None, "backlash_rad"), 0.002, 0.2, "backlash_rad");
+    halved_each_step(&d);
+    each_effect_halves(&d);
+}
+
+#[test]
+fn held_out_3_friction_at_m3_and_an_actuator_lag_about_zero_torque() {
+    let truth = Truth { friction_nm: [0.0, 0.0, 0.5], lag_s: 0.005, set_point_nm: 0.0, ..Default::default() };
+    let d = run(&record(&declared(), truth, 73), &declared());
+    print_params(&d);
+    assert_eq!(found(&d), ["actuator_lag", "coulomb_friction at M3"]);
+    within(param(&d, "coulomb_friction", Some("M3"), "friction_Nm"), 0.5, 0.2, "friction at M3");
+    within(param(&d, "actuator_lag", None, "time_constant_s"), 0.005, 0.2, "time_constant_s");
+    each_effect_halves(&d);
+}
+
+#[test]
+fn held_out_3_a_compliance_and_an_actuator_lag_under_a_multisine_about_35_nm() {
+    let truth = Truth {
+        compliance: Some((1800.0, 0.55)),
+        lag_s: 0.003,
+        set_point_nm: 35.0,
+        multisine: true,
+        ..Default::default()
+    };
+    let d = run(&record(&declared(), truth, 74), &declared());
+    print_params(&d);
+    assert_eq!(found(&d), ["actuator_lag", "drive_compliance"]);
+    within(param(&d, "drive_compliance", None, "stiffness_Nm_per_rad"), 1800.0, 0.2, "stiffness");
+    within(param(&d, "actuator_lag", None, "time_constant_s"), 0.003, 0.2, "time_constant_s");
+    halved_each_step(&d);
+    each_effect_halves(&d);
+}
