@@ -638,3 +638,119 @@ fn held_out_3_a_compliance_and_an_actuator_lag_under_a_multisine_about_35_nm() {
     halved_each_step(&d);
     each_effect_halves(&d);
 }
+
+/// One random pair of the vocabulary: the truth, the rig declared for it and what must be found
+/// (name as `found` gives it, the parameter's key, its true value).
+fn random_pair(rng: &mut StdRng) -> (Truth, RigParams, Vec<(String, &'static str, f64)>) {
+    let kinds = ["damping", "delay", "lag", "play", "compliance", "friction"];
+    let a = rng.random_range(0..6);
+    let mut b = rng.random_range(0..6);
+    while b == a {
+        b = rng.random_range(0..6);
+    }
+    let mut t = Truth { multisine: rng.random_bool(0.4), ..Default::default() };
+    let mut rig = declared();
+    let has = |k: &str| kinds[a] == k || kinds[b] == k;
+    // where both can show: friction about 0 Nm, play about a small set point, else anywhere
+    t.set_point_nm = if has("friction") {
+        0.0
+    } else if has("play") {
+        rng.random_range(2.0..10.0)
+    } else {
+        rng.random_range(10.0..40.0)
+    };
+    let mut expect = Vec::new();
+    for k in [kinds[a], kinds[b]] {
+        match k {
+            "damping" => {
+                let z = rng.random_range(0.02..0.06);
+                rig = RigParams { d_short: 0.0, d_long: 0.0, ..declared() };
+                t.zeta = Some(z);
+                expect.push(("shaft_damping".into(), "damping_ratio", z));
+            }
+            "delay" => {
+                t.delay_s = rng.random_range(0.002..0.008);
+                expect.push(("time_delay".into(), "delay_s", t.delay_s));
+            }
+            "lag" => {
+                t.lag_s = rng.random_range(0.002..0.008);
+                expect.push(("actuator_lag".into(), "time_constant_s", t.lag_s));
+            }
+            "play" => {
+                t.backlash_rad = rng.random_range(0.0015..0.005);
+                expect.push(("backlash".into(), "backlash_rad", t.backlash_rad));
+            }
+            "compliance" => {
+                let k = rng.random_range(1000.0..2500.0);
+                t.compliance = Some((k, rng.random_range(0.35..0.65)));
+                expect.push(("drive_compliance".into(), "stiffness_Nm_per_rad", k));
+            }
+            _ => {
+                let machine = rng.random_range(0..3);
+                let v = rng.random_range(0.5..1.5);
+                match machine {
+                    0 => {
+                        t.friction_nm = [v, 0.0, 0.0];
+                        expect.push(("coulomb_friction at M2".into(), "friction_Nm", v));
+                    }
+                    1 => {
+                        t.friction_nm = [0.0, 2.0 * v, 0.0];
+                        expect.push(("coulomb_friction at drive".into(), "friction_Nm", 2.0 * v));
+                    }
+                    _ => {
+                        t.friction_nm = [v, 0.0, v];
+                        expect.push(("coulomb_friction at M2 and M3".into(), "friction_M2_Nm", v));
+                    }
+                }
+            }
+        }
+    }
+    (t, rig, expect)
+}
+
+/// Twenty random pairs of the vocabulary (kinds, magnitudes, set points, sweep or multisine and
+/// seeds drawn by a seeded generator; written in session 13 after its algorithm was settled):
+/// a pair passes when exactly its two effects are found, each parameter within 20 %. Session 13
+/// measured 15 of 20 (the five that fail are printed with what they find: a play first taken
+/// 2.5 times too wide, which then hides the compliance; a third, spurious friction; a
+/// compliance and a damping traded against each other at the noise floor, 20–21 % off; a lag
+/// taken for a dead time beside play). The floor is one below that, so that losing two cases
+/// fails.
+#[test]
+fn random_pairs_of_the_vocabulary() {
+    let mut passed = 0;
+    let mut total = 0;
+    for seed in [1000, 2000] {
+        let mut rng = StdRng::seed_from_u64(seed);
+        for case in 0..10 {
+            let (t, rig, expect) = random_pair(&mut rng);
+            let record_seed = rng.random_range(100..10000);
+            let d = run(&record(&rig, t, record_seed), &rig);
+            let mut want: Vec<String> = expect.iter().map(|e| e.0.clone()).collect();
+            want.sort();
+            let mut pass = found(&d) == want;
+            let mut detail = String::new();
+            for (name, key, v) in &expect {
+                let (effect, at) = name.split_once(" at ").map_or((name.as_str(), None), |(n, a)| (n, Some(a)));
+                if let Some(e) = d.effects.iter().find(|e| e.effect == effect && e.at.as_deref() == at) {
+                    let p = e.parameters[*key];
+                    detail += &format!(" {name} {p:.4} for {v:.4};");
+                    pass &= (p - v).abs() <= 0.2 * v;
+                }
+            }
+            passed += usize::from(pass);
+            total += 1;
+            println!(
+                "{seed}/{case} {}: want {want:?}, found {:?};{detail} set point {:.1} Nm, multisine {}, error {:.3} → {:.3}",
+                if pass { "pass" } else { "FAIL" },
+                found(&d),
+                t.set_point_nm,
+                t.multisine,
+                d.error_before,
+                d.error_after
+            );
+        }
+    }
+    println!("{passed} of {total} random pairs pass");
+    assert!(passed >= 14, "{passed} of {total} random pairs pass (15 measured in session 13)");
+}
