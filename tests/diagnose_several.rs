@@ -711,10 +711,12 @@ fn random_pair(rng: &mut StdRng) -> (Truth, RigParams, Vec<(String, &'static str
 /// Twenty random pairs of the vocabulary (kinds, magnitudes, set points, sweep or multisine and
 /// seeds drawn by a seeded generator; written in session 13 after its algorithm was settled):
 /// a pair passes when exactly its two effects are found, each parameter within 20 %. Session 13
-/// measured 15 of 20 (the five that fail are printed with what they find: a play first taken
-/// 2.5 times too wide, which then hides the compliance; a third, spurious friction; a
-/// compliance and a damping traded against each other at the noise floor, 20–21 % off; a lag
-/// taken for a dead time beside play). The floor is one below that, so that losing two cases
+/// measured 15 of 20, then 16 with the restart from the first round's runner-up (a lag taken
+/// for a dead time beside play, 0.147, now the dead time, 0.030). The four that fail are printed
+/// with what they find: a play first taken 2.5 times too wide, which hides the compliance (the
+/// restart from the compliance alone does not find the play beside it either); a third,
+/// spurious friction; twice a compliance and a damping traded against each other at the noise
+/// floor, 20–21 % off. The floor is one below the measured count, so that losing two cases
 /// fails.
 #[test]
 fn random_pairs_of_the_vocabulary() {
@@ -752,5 +754,5 @@ fn random_pairs_of_the_vocabulary() {
         }
     }
     println!("{passed} of {total} random pairs pass");
-    assert!(passed >= 14, "{passed} of {total} random pairs pass (15 measured in session 13)");
+    assert!(passed >= 15, "{passed} of {total} random pairs pass (16 measured in session 13)");
 }

@@ -953,114 +953,153 @@ pub fn diagnose(
     }
     progress("none");
     let skipped: Vec<Candidate> = Candidate::ALL.into_iter().filter(|c| !excitable(*c)).collect();
-    let mut current = none.clone();
-    let mut search = vec![none.step()];
-    let mut first_round: Vec<Fit> = Vec::new();
-    // every candidate's screening fit of the forward selection, for the swap step
-    let mut tried: Vec<Fit> = Vec::new();
-    // forward selection: the best plausible candidate that beats the model so far is added.
-    // An implausible one that scores better (it bends the declared mechanics to imitate an
-    // effect, as damping missing beside a compliance does) is followed one round ahead: it is
-    // taken only if a plausible model one effect later beats the plausible step. Every model
-    // kept is plausible.
-    while current.effects.len() < MAX_EFFECTS {
-        // nothing left that a candidate could explain clearly: the residual is white
-        if !current.effects.is_empty() {
-            let rho = problem.residual(&problem.build(&current.effects, &current.x)).map(|r| lag1_autocorrelation(&r));
-            if rho.is_some_and(|r| r < WHITE_RESIDUAL_LAG1) {
-                break;
-            }
-        }
-        let fits = round(&current);
-        let plausible = best_beating(&fits, &current, true);
-        let implausible =
-            best_beating(&fits, &current, false).filter(|i| plausible.as_ref().is_none_or(|p| i.score < p.score));
-        tried.extend(fits.iter().cloned());
-        if current.effects.is_empty() {
-            first_round = fits;
-        }
-        let mut steps: Option<Vec<Fit>> = None;
-        if let Some(i) = implausible.filter(|_| current.effects.len() + 1 < MAX_EFFECTS) {
-            let i = polish(i);
-            let ahead = round(&i);
-            tried.extend(ahead.iter().cloned());
-            if let Some(next) = best_beating(&ahead, &i, true).filter(|n| plausible.as_ref().is_none_or(|p| n.beats(p)))
-            {
-                steps = Some(vec![i, polish(next)]);
-            }
-        }
-        match steps.or_else(|| plausible.map(|p| vec![polish(p)])) {
-            Some(steps) => {
-                for s in steps {
-                    search.push(s.step());
-                    current = s;
+    // the selection from `start` (the re-fitted declared model, or a first effect), `search`
+    // the steps that led there: forward rounds, the leave-out check and the swap step
+    let select = |start: Fit, mut search: Vec<PathStep>| -> Selection {
+        let mut current = start;
+        let mut first_round: Vec<Fit> = Vec::new();
+        // every candidate's screening fit of the forward selection, for the swap step
+        let mut tried: Vec<Fit> = Vec::new();
+        // forward selection: the best plausible candidate that beats the model so far is added.
+        // An implausible one that scores better (it bends the declared mechanics to imitate an
+        // effect, as damping missing beside a compliance does) is followed one round ahead: it is
+        // taken only if a plausible model one effect later beats the plausible step. Every model
+        // kept is plausible.
+        while current.effects.len() < MAX_EFFECTS {
+            // nothing left that a candidate could explain clearly: the residual is white
+            if !current.effects.is_empty() {
+                let rho =
+                    problem.residual(&problem.build(&current.effects, &current.x)).map(|r| lag1_autocorrelation(&r));
+                if rho.is_some_and(|r| r < WHITE_RESIDUAL_LAG1) {
+                    break;
                 }
             }
-            None => break,
+            let fits = round(&current);
+            let plausible = best_beating(&fits, &current, true);
+            let implausible =
+                best_beating(&fits, &current, false).filter(|i| plausible.as_ref().is_none_or(|p| i.score < p.score));
+            tried.extend(fits.iter().cloned());
+            if current.effects.is_empty() {
+                first_round = fits;
+            }
+            let mut steps: Option<Vec<Fit>> = None;
+            if let Some(i) = implausible.filter(|_| current.effects.len() + 1 < MAX_EFFECTS) {
+                let i = polish(i);
+                let ahead = round(&i);
+                tried.extend(ahead.iter().cloned());
+                if let Some(next) =
+                    best_beating(&ahead, &i, true).filter(|n| plausible.as_ref().is_none_or(|p| n.beats(p)))
+                {
+                    steps = Some(vec![i, polish(next)]);
+                }
+            }
+            match steps.or_else(|| plausible.map(|p| vec![polish(p)])) {
+                Some(steps) => {
+                    for s in steps {
+                        search.push(s.step());
+                        current = s;
+                    }
+                }
+                None => break,
+            }
         }
-    }
-    let (steps, mut leaving_out) = leave_out(current.clone());
-    for s in steps {
-        search.push(s.step());
-        current = s;
-    }
-    // the swap step: each kept effect replaced by the candidates that can imitate it
-    // ([`Candidate::alternatives`]: forward selection may have taken a dead time for a lag
-    // before the other effects were there to tell them apart). The alternative is fitted in
-    // its place beside the other effects at their values (from its own starts, all parameters
-    // re-fitted). Only near-ties are tried: an alternative that the effect beat clearly beside
-    // the same effects in the selection (lower score and 10 % less error) is not. A swap that
-    // lowers the score is kept, then the effects are checked by leaving each out again.
-    let near_tie = |fit: &Fit, i: usize, a: Candidate| -> bool {
-        let screened = |c: Candidate| {
-            tried.iter().find(|f| f.effects.len() == i + 1 && f.effects[..i] == fit.effects[..i] && f.effects[i] == c)
+        let (steps, mut leaving_out) = leave_out(current.clone());
+        for s in steps {
+            search.push(s.step());
+            current = s;
+        }
+        // the swap step: each kept effect replaced by the candidates that can imitate it
+        // ([`Candidate::alternatives`]: forward selection may have taken a dead time for a lag
+        // before the other effects were there to tell them apart). The alternative is fitted in
+        // its place beside the other effects at their values (from its own starts, all parameters
+        // re-fitted). Only near-ties are tried: an alternative that the effect beat clearly beside
+        // the same effects in the selection (lower score and 10 % less error) is not. A swap that
+        // lowers the score is kept, then the effects are checked by leaving each out again.
+        let near_tie = |fit: &Fit, i: usize, a: Candidate| -> bool {
+            let screened = |c: Candidate| {
+                tried
+                    .iter()
+                    .find(|f| f.effects.len() == i + 1 && f.effects[..i] == fit.effects[..i] && f.effects[i] == c)
+            };
+            match (screened(fit.effects[i]), screened(a)) {
+                (Some(chosen), Some(other)) => !chosen.beats(other),
+                _ => true,
+            }
         };
-        match (screened(fit.effects[i]), screened(a)) {
-            (Some(chosen), Some(other)) => !chosen.beats(other),
-            _ => true,
-        }
-    };
-    let swap = |fit: &Fit, i: usize, a: Candidate| -> Fit {
-        let f = extend(&fit.without(i), a);
-        // polished only where it is a near-tie of the model it would replace (within the 10 %
-        // that "beats" asks of the error), as the selection polishes only its winner
-        if f.cost.is_finite() && 0.9 * f.error() <= fit.error() {
-            polish(f)
-        } else {
-            f
-        }
-    };
-    for _ in 0..MAX_EFFECTS {
-        let trials: Vec<(usize, Candidate)> = current
-            .effects
-            .iter()
-            .enumerate()
-            .flat_map(|(i, c)| c.alternatives().into_iter().map(move |a| (i, a)))
-            .filter(|&(i, a)| {
-                excitable(a)
-                    && !current.effects.iter().enumerate().any(|(k, o)| k != i && o.overlaps(a))
-                    && near_tie(&current, i, a)
-            })
-            .collect();
-        let swapped: Vec<Fit> = super::on_two_workers(trials.len(), &|t| swap(&current, trials[t].0, trials[t].1));
-        let best = swapped
-            .into_iter()
-            .filter(|f| f.cost.is_finite() && f.plausible() && f.score < current.score)
-            .min_by(|a, b| a.score.total_cmp(&b.score));
-        match best {
-            Some(b) => {
-                current = polish(b);
-                search.push(current.step());
-                let (steps, left_out) = leave_out(current.clone());
-                for s in steps {
-                    search.push(s.step());
-                    current = s;
-                }
-                leaving_out = left_out;
+        let swap = |fit: &Fit, i: usize, a: Candidate| -> Fit {
+            let f = extend(&fit.without(i), a);
+            // polished only where it is a near-tie of the model it would replace (within the 10 %
+            // that "beats" asks of the error), as the selection polishes only its winner
+            if f.cost.is_finite() && 0.9 * f.error() <= fit.error() {
+                polish(f)
+            } else {
+                f
             }
-            None => break,
+        };
+        for _ in 0..MAX_EFFECTS {
+            let trials: Vec<(usize, Candidate)> = current
+                .effects
+                .iter()
+                .enumerate()
+                .flat_map(|(i, c)| c.alternatives().into_iter().map(move |a| (i, a)))
+                .filter(|&(i, a)| {
+                    excitable(a)
+                        && !current.effects.iter().enumerate().any(|(k, o)| k != i && o.overlaps(a))
+                        && near_tie(&current, i, a)
+                })
+                .collect();
+            let swapped: Vec<Fit> = super::on_two_workers(trials.len(), &|t| swap(&current, trials[t].0, trials[t].1));
+            let best = swapped
+                .into_iter()
+                .filter(|f| f.cost.is_finite() && f.plausible() && f.score < current.score)
+                .min_by(|a, b| a.score.total_cmp(&b.score));
+            match best {
+                Some(b) => {
+                    current = polish(b);
+                    search.push(current.step());
+                    let (steps, left_out) = leave_out(current.clone());
+                    for s in steps {
+                        search.push(s.step());
+                        current = s;
+                    }
+                    leaving_out = left_out;
+                }
+                None => break,
+            }
         }
-    }
+        Selection { current, search, leaving_out, first_round }
+    };
+    let main = select(none.clone(), vec![none.step()]);
+    // An answer that leaves more than [`RESTART_LEFT_FRACTION`] of the declared model's error
+    // in a structured residual may owe it to its first step: an effect that explains most of
+    // the record alone in a wrong place (a play twice too wide imitating a compliance) hides
+    // the effects that belong beside its right place. The selection is run again from the
+    // first round's best other effect, and its answer is kept if it beats this one clearly.
+    let structured = |f: &Fit| {
+        problem
+            .residual(&problem.build(&f.effects, &f.x))
+            .is_some_and(|r| lag1_autocorrelation(&r) >= WHITE_RESIDUAL_LAG1)
+    };
+    let stuck = main.current.error() > RESTART_LEFT_FRACTION * error_before && structured(&main.current);
+    let runner_up = main
+        .first_round
+        .iter()
+        .filter(|f| f.cost.is_finite() && f.plausible() && f.beats(&none))
+        .filter(|f| f.effects.iter().all(|c| !main.current.effects.iter().any(|m| m.overlaps(*c))))
+        .min_by(|a, b| a.score.total_cmp(&b.score))
+        .cloned();
+    let Selection { mut current, search, leaving_out, first_round } = match runner_up.filter(|_| stuck) {
+        Some(r) => {
+            let r = polish(r);
+            let alt = select(r.clone(), vec![none.step(), r.step()]);
+            if alt.current.beats(&main.current) {
+                Selection { first_round: main.first_round, ..alt }
+            } else {
+                main
+            }
+        }
+        None => main,
+    };
 
     // The answer's own path, declared → +A → +A+B: where the search reached the answer only
     // by additions, its steps; otherwise (an effect left out or swapped) the nested models
@@ -1192,6 +1231,23 @@ pub fn diagnose(
         traces,
     })
 }
+
+/// What a run of the selection ends at.
+struct Selection {
+    /// The answer.
+    current: Fit,
+    /// Each model it moved to.
+    search: Vec<PathStep>,
+    /// The answer without each of its effects, re-fitted (none for a single effect).
+    leaving_out: Vec<Fit>,
+    /// Every candidate fitted beside the re-fitted declared model (empty for a run that starts
+    /// from an effect).
+    first_round: Vec<Fit>,
+}
+
+/// An answer leaving more than this fraction of the declared model's error, in a structured
+/// residual, is searched for again from the first round's best other effect.
+pub const RESTART_LEFT_FRACTION: f64 = 0.1;
 
 /// A found effect as the path names it ("backlash", "coulomb_friction at M2").
 fn label(c: Candidate) -> String {
