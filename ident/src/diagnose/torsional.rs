@@ -59,7 +59,8 @@ pub struct TorsionalDiagnosis {
     /// The answer's path: declared (re-fitted) → +A → +A+B, the kept effects in the order
     /// that lowers the error most (each model re-fitted); the order of `effects`.
     pub path: Vec<PathStep>,
-    /// What the search did: each model it moved to (effects added, left out, swapped).
+    /// What the search did: each model it moved to (effects added, left out, swapped; a restart
+    /// from the first round's runner-up begins again at the declared model).
     pub search: Vec<PathStep>,
     /// Normalised error of the declared model (1 = no better than predicting nothing).
     pub error_before: f64,
@@ -1093,7 +1094,9 @@ pub fn diagnose(
             let r = polish(r);
             let alt = select(r.clone(), vec![none.step(), r.step()]);
             if alt.current.beats(&main.current) {
-                Selection { first_round: main.first_round, ..alt }
+                // the search reports both runs: the first, then the restart from the declared model
+                let search = main.search.into_iter().chain(alt.search).collect();
+                Selection { first_round: main.first_round, search, ..alt }
             } else {
                 main
             }
