@@ -513,7 +513,7 @@ pub const WHITE_RESIDUAL_LAG1: f64 = 0.19 * 0.809_016_994_374_947_5;
 ///
 /// With play the error over the parameters is a train of narrow notches, not a basin: the
 /// impacts' timing decides the phase of everything after them, and a stiffness 8 % off can
-/// raise the error from 0.02 to 0.4 where 2 % off gives 0.05 (the held-out compliance + play
+/// raise the error from 0.02 to 0.4 where 2 % off gives 0.05–0.09 (the held-out compliance + play
 /// record of `tests/diagnose_several.rs`). The magnitudes of short-time spectra keep where and
 /// how strongly the rig responds and drop the phase; over the same parameters they fall
 /// smoothly to the truth (0.22, 0.14, 0.12, 0.06, 0.011 for stiffness 20, 12, 8, 4, 0 % low).
