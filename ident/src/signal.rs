@@ -154,35 +154,24 @@ pub fn high_pass(x: &[f64], dt_s: f64, cutoff_hz: f64) -> Vec<f64> {
     buf.iter().map(|c| c.re / n as f64).collect()
 }
 
-/// Short-time spectral magnitudes: Hann-windowed frames of `window` samples every half window,
-/// the magnitudes of DFT lines 1 to `lines` of each. They keep a response's amplitude over time
-/// and frequency and drop its phase.
+/// Hann-windowed frames of a signal and their DFTs: one FFT plan and one window for all the
+/// frames (and all the signals) they are made for.
 #[derive(Clone)]
-pub struct Spectrogram {
+struct HannFrames {
     fft: std::sync::Arc<dyn rustfft::Fft<f64>>,
     hann: Vec<f64>,
-    lines: usize,
 }
 
-impl std::fmt::Debug for Spectrogram {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.debug_struct("Spectrogram").field("window", &self.hann.len()).field("lines", &self.lines).finish()
-    }
-}
-
-impl Spectrogram {
-    /// Frames of `window` samples (at least 4), lines 1..=`lines` (at most half the window).
-    pub fn new(window: usize, lines: usize) -> Spectrogram {
-        let window = window.max(4);
+impl HannFrames {
+    fn new(window: usize) -> HannFrames {
         let hann =
             (0..window).map(|i| 0.5 - 0.5 * (2.0 * std::f64::consts::PI * i as f64 / window as f64).cos()).collect();
-        Spectrogram { fft: FftPlanner::new().plan_fft_forward(window), hann, lines: lines.clamp(1, window / 2) }
+        HannFrames { fft: FftPlanner::new().plan_fft_forward(window), hann }
     }
 
-    /// The magnitudes of every whole frame of `x`, frame by frame, appended to `out`.
-    pub fn magnitudes(&self, x: &[f64], out: &mut Vec<f64>) {
+    /// `visit(start, dft)` for every whole frame of `x`, frames `hop` (at least 1) samples apart.
+    fn each(&self, x: &[f64], hop: usize, mut visit: impl FnMut(usize, &[Complex64])) {
         let window = self.hann.len();
-        let hop = window / 2;
         let mut buf = vec![Complex64::new(0.0, 0.0); window];
         let mut scratch = vec![Complex64::new(0.0, 0.0); self.fft.get_inplace_scratch_len()];
         let mut start = 0;
@@ -191,9 +180,38 @@ impl Spectrogram {
                 *b = Complex64::new(v * h, 0.0);
             }
             self.fft.process_with_scratch(&mut buf, &mut scratch);
-            out.extend(buf[1..=self.lines].iter().map(|c| c.norm()));
-            start += hop;
+            visit(start, &buf);
+            start += hop.max(1);
         }
+    }
+}
+
+/// Short-time spectral magnitudes: Hann-windowed frames of `window` samples every half window,
+/// the magnitudes of DFT lines 1 to `lines` of each. They keep a response's amplitude over time
+/// and frequency and drop its phase.
+#[derive(Clone)]
+pub struct Spectrogram {
+    frames: HannFrames,
+    lines: usize,
+}
+
+impl std::fmt::Debug for Spectrogram {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Spectrogram").field("window", &self.frames.hann.len()).field("lines", &self.lines).finish()
+    }
+}
+
+impl Spectrogram {
+    /// Frames of `window` samples (at least 4), lines 1..=`lines` (at most half the window).
+    pub fn new(window: usize, lines: usize) -> Spectrogram {
+        let window = window.max(4);
+        Spectrogram { frames: HannFrames::new(window), lines: lines.clamp(1, window / 2) }
+    }
+
+    /// The magnitudes of every whole frame of `x`, frame by frame, appended to `out`.
+    pub fn magnitudes(&self, x: &[f64], out: &mut Vec<f64>) {
+        let lines = self.lines;
+        self.frames.each(x, self.frames.hann.len() / 2, |_, dft| out.extend(dft[1..=lines].iter().map(|c| c.norm())));
     }
 }
 
@@ -207,25 +225,14 @@ pub fn band_power_over_time(
     f_lo: f64,
     f_hi: f64,
 ) -> (Vec<f64>, Vec<f64>) {
-    let mut planner = FftPlanner::new();
-    let fft = planner.plan_fft_forward(window);
-    let hann: Vec<f64> =
-        (0..window).map(|i| 0.5 - 0.5 * (2.0 * std::f64::consts::PI * i as f64 / window as f64).cos()).collect();
     let df = 1.0 / (window as f64 * dt_s);
     let (k_lo, k_hi) = ((f_lo / df).ceil() as usize, ((f_hi / df).floor() as usize).min(window / 2));
     let mut times = Vec::new();
     let mut power = Vec::new();
-    let mut buf = vec![Complex64::new(0.0, 0.0); window];
-    let mut start = 0;
-    while start + window <= x.len() {
-        for i in 0..window {
-            buf[i] = Complex64::new(x[start + i] * hann[i], 0.0);
-        }
-        fft.process(&mut buf);
-        power.push(buf[k_lo..=k_hi].iter().map(|c| c.norm_sqr()).sum());
+    HannFrames::new(window).each(x, hop, |start, dft| {
+        power.push(dft[k_lo..=k_hi].iter().map(|c| c.norm_sqr()).sum());
         times.push((start as f64 + window as f64 / 2.0) * dt_s);
-        start += hop;
-    }
+    });
     (times, power)
 }
 

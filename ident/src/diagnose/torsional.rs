@@ -172,11 +172,7 @@ impl Problem<'_> {
         if self.spectra_norm <= 0.0 {
             return None;
         }
-        self.spectral_residual_of(&self.simulate(model)?)
-    }
-
-    /// [`Problem::spectral_residual`] of simulated (high-passed) speeds.
-    fn spectral_residual_of(&self, s: &[Vec<f64>; 2]) -> Option<Vec<f64>> {
+        let s = self.simulate(model)?;
         let mut r = Vec::with_capacity(self.measured_spectra.len());
         self.spectrogram.magnitudes(&s[0], &mut r);
         self.spectrogram.magnitudes(&s[1], &mut r);
@@ -521,15 +517,6 @@ pub const WHITE_RESIDUAL_LAG1: f64 = 0.19 * 0.809_016_994_374_947_5;
 /// speeds, which then decides).
 pub const PHASE_FREE_WINDOW_S: f64 = 0.5;
 
-/// The largest power of two not above `n` (1 for 0).
-fn prev_power_of_two(n: usize) -> usize {
-    if n <= 1 {
-        1
-    } else {
-        1 << (usize::BITS - 1 - n.leading_zeros())
-    }
-}
-
 /// Most effects the forward selection adds.
 pub const MAX_EFFECTS: usize = 3;
 
@@ -653,7 +640,7 @@ pub fn diagnose(
     let speed0 = 0.5 * (sweep.speed_m2_radps[0] + sweep.speed_m3_radps[0]);
     // frames of about PHASE_FREE_WINDOW_S (a power of two of samples, at most a quarter of the
     // record), lines up to a tenth of the sampling rate (where the compliance's mode is held)
-    let window = ((PHASE_FREE_WINDOW_S / dt).max(4.0) as usize).next_power_of_two().min(prev_power_of_two(n / 4));
+    let window = ((PHASE_FREE_WINDOW_S / dt).max(4.0) as usize).next_power_of_two().min(1 << (n / 4).max(1).ilog2());
     let spectrogram = Spectrogram::new(window, (0.1 * window as f64) as usize);
     let mut measured_spectra = Vec::new();
     spectrogram.magnitudes(&measured[0], &mut measured_spectra);
@@ -954,6 +941,11 @@ pub fn diagnose(
     }
     progress("none");
     let skipped: Vec<Candidate> = Candidate::ALL.into_iter().filter(|c| !excitable(*c)).collect();
+    // whether a fit's residual is white ([`WHITE_RESIDUAL_LAG1`]: nothing left that a candidate
+    // could explain clearly), `None` where it cannot be simulated
+    let white = |f: &Fit| {
+        problem.residual(&problem.build(&f.effects, &f.x)).map(|r| lag1_autocorrelation(&r) < WHITE_RESIDUAL_LAG1)
+    };
     // the selection from `start` (the re-fitted declared model, or a first effect), `search`
     // the steps that led there: forward rounds, the leave-out check and the swap step
     let select = |start: Fit, mut search: Vec<PathStep>| -> Selection {
@@ -967,13 +959,8 @@ pub fn diagnose(
         // taken only if a plausible model one effect later beats the plausible step. Every model
         // kept is plausible.
         while current.effects.len() < MAX_EFFECTS {
-            // nothing left that a candidate could explain clearly: the residual is white
-            if !current.effects.is_empty() {
-                let rho =
-                    problem.residual(&problem.build(&current.effects, &current.x)).map(|r| lag1_autocorrelation(&r));
-                if rho.is_some_and(|r| r < WHITE_RESIDUAL_LAG1) {
-                    break;
-                }
+            if !current.effects.is_empty() && white(&current) == Some(true) {
+                break;
             }
             let fits = round(&current);
             let plausible = best_beating(&fits, &current, true);
@@ -1076,12 +1063,7 @@ pub fn diagnose(
     // the record alone in a wrong place (a play twice too wide imitating a compliance) hides
     // the effects that belong beside its right place. The selection is run again from the
     // first round's best other effect, and its answer is kept if it beats this one clearly.
-    let structured = |f: &Fit| {
-        problem
-            .residual(&problem.build(&f.effects, &f.x))
-            .is_some_and(|r| lag1_autocorrelation(&r) >= WHITE_RESIDUAL_LAG1)
-    };
-    let stuck = main.current.error() > RESTART_LEFT_FRACTION * error_before && structured(&main.current);
+    let stuck = main.current.error() > RESTART_LEFT_FRACTION * error_before && white(&main.current) == Some(false);
     let runner_up = main
         .first_round
         .iter()
