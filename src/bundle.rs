@@ -409,14 +409,85 @@ pub const SWEEP_SIGNALS: [(&str, Dimension); 4] = [
     ("speed_m3_radps", Dimension::AngularSpeed),
 ];
 
+/// Longest line of a CSV record, bytes: a header of thousands of named columns fits; a file
+/// without line breaks (or one long binary run) is refused after this many bytes, not held whole.
+pub const MAX_CSV_LINE_BYTES: usize = 1 << 20;
+
+/// A reader that fails on a line longer than [`MAX_CSV_LINE_BYTES`] or on a NUL byte (binary
+/// data, not a text CSV), naming the line; so what the CSV parser holds stays one bounded line.
+struct TextLines<R> {
+    inner: R,
+    line: usize,
+    line_bytes: usize,
+    /// The fault found in the last read, returned by the next (the good bytes before it first).
+    fault: Option<String>,
+}
+
+impl<R> TextLines<R> {
+    fn new(inner: R) -> Self {
+        TextLines { inner, line: 1, line_bytes: 0, fault: None }
+    }
+}
+
+impl<R: std::io::Read> std::io::Read for TextLines<R> {
+    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+        if let Some(fault) = self.fault.take() {
+            return Err(std::io::Error::new(std::io::ErrorKind::InvalidData, fault));
+        }
+        let n = self.inner.read(buf)?;
+        for (i, &b) in buf[..n].iter().enumerate() {
+            if b == b'\n' {
+                self.line += 1;
+                self.line_bytes = 0;
+                continue;
+            }
+            self.line_bytes += 1;
+            let fault = if b == 0 {
+                format!("line {}: a NUL byte: not a text CSV", self.line)
+            } else if self.line_bytes > MAX_CSV_LINE_BYTES {
+                format!(
+                    "line {} is longer than {MAX_CSV_LINE_BYTES} bytes: not a CSV record (one line per sample)",
+                    self.line
+                )
+            } else {
+                continue;
+            };
+            self.fault = Some(fault);
+            return self.read_fault_after(i);
+        }
+        Ok(n)
+    }
+}
+
+impl<R: std::io::Read> TextLines<R> {
+    /// The `good` bytes before a fault, or the fault itself when there are none.
+    fn read_fault_after(&mut self, good: usize) -> std::io::Result<usize> {
+        if good > 0 {
+            return Ok(good);
+        }
+        let fault = self.fault.take().unwrap_or_default();
+        Err(std::io::Error::new(std::io::ErrorKind::InvalidData, fault))
+    }
+}
+
 /// Reads named columns of a numeric CSV with a header line; returns them in the order asked.
+/// A name that heads two columns is refused (which one is meant cannot be told).
 pub fn read_columns(path: &Path, names: &[&str]) -> Result<Vec<Vec<f64>>, BundleError> {
     check_data_file(path)?;
-    let mut rdr = csv::ReaderBuilder::new()
-        .trim(csv::Trim::All)
-        .from_path(path)
-        .map_err(|e| error(path, None, format!("cannot read: {e}")))?;
+    let file = std::fs::File::open(path).map_err(|e| error(path, None, format!("cannot read: {e}")))?;
+    let text = TextLines::new(std::io::BufReader::new(file));
+    let mut rdr = csv::ReaderBuilder::new().trim(csv::Trim::All).from_reader(text);
     let headers = rdr.headers().map_err(|e| error(path, Some(1), format!("cannot read the header: {e}")))?.clone();
+    for n in names {
+        let at: Vec<usize> = headers.iter().enumerate().filter(|(_, h)| h == n).map(|(i, _)| i + 1).collect();
+        if at.len() > 1 {
+            return Err(error(
+                path,
+                Some(1),
+                format!("column `{n}` appears {} times (columns {at:?}): name each signal once", at.len()),
+            ));
+        }
+    }
     let index: Vec<usize> = names
         .iter()
         .map(|n| {
@@ -434,7 +505,11 @@ pub fn read_columns(path: &Path, names: &[&str]) -> Result<Vec<Vec<f64>>, Bundle
     let mut cols = vec![Vec::new(); names.len()];
     for (row, rec) in rdr.records().enumerate() {
         let line = row + 2;
-        let rec = rec.map_err(|e| error(path, Some(line), e.to_string()))?;
+        let rec = rec.map_err(|e| match e.kind() {
+            // the line reader's own message names its line
+            csv::ErrorKind::Io(io) => error(path, None, io.to_string()),
+            _ => error(path, Some(line), e.to_string()),
+        })?;
         for (c, &i) in index.iter().enumerate() {
             let field =
                 rec.get(i).ok_or_else(|| error(path, Some(line), format!("missing value of `{}`", names[c])))?;
@@ -459,6 +534,9 @@ pub fn read_columns(path: &Path, names: &[&str]) -> Result<Vec<Vec<f64>>, Bundle
 
 /// Checks `time_s` is strictly increasing and uniform; returns the sample time.
 pub fn uniform_sample_time(path: &Path, t: &[f64]) -> Result<f64, BundleError> {
+    if t.len() < 2 {
+        return Err(error(path, None, format!("{} samples: a recording needs at least two", t.len())));
+    }
     // the median step is the reference: one bad row cannot move it
     let mut steps: Vec<f64> = t.windows(2).map(|w| w[1] - w[0]).collect();
     steps.sort_by(|a, b| a.total_cmp(b));
@@ -735,6 +813,10 @@ struct DriveOutputFile {
     offset: f64,
 }
 
+/// Most measured outputs a `drive_test` may have (a speed and a force or torque at every body of
+/// the largest line).
+pub const MAX_OUTPUTS: usize = 2 * plant::MAX_BODIES;
+
 /// Reads a `drive_test` bundle and its CSV: the line validated with named keys, every input and
 /// output resolved to its body or coupling, the columns read and checked as for the other kinds.
 pub fn load_drive_test(file: &Path) -> Result<DriveTestBundle, BundleError> {
@@ -762,6 +844,18 @@ pub fn load_drive_test(file: &Path) -> Result<DriveTestBundle, BundleError> {
     };
     if raw.inputs.is_empty() || raw.outputs.is_empty() {
         return Err(error(file, None, "expected at least one [[inputs]] and one [[outputs]] entry"));
+    }
+    if raw.inputs.len() > plant::drive::MAX_INPUTS || raw.outputs.len() > MAX_OUTPUTS {
+        return Err(error(
+            file,
+            None,
+            format!(
+                "{} [[inputs]] and {} [[outputs]]: a drive test takes at most {} inputs and {MAX_OUTPUTS} outputs",
+                raw.inputs.len(),
+                raw.outputs.len(),
+                plant::drive::MAX_INPUTS
+            ),
+        ));
     }
     let mut inputs = Vec::new();
     for (k, i) in raw.inputs.iter().enumerate() {
@@ -919,7 +1013,7 @@ pub fn read_mat(path: &Path, names: &[&str]) -> Result<Vec<Vec<f64>>, BundleErro
     std::panic::set_hook(hook);
     let mat = match parsed {
         Ok(Ok(m)) => m,
-        Ok(Err(e)) => return Err(error(path, None, format!("cannot parse the .mat file: {e}"))),
+        Ok(Err(e)) => return Err(error(path, None, format!("cannot parse the .mat file: {}", parser_message(&e)))),
         Err(_) => return Err(error(path, None, "cannot parse the .mat file (the reader failed on its contents)")),
     };
     let available: Vec<String> = mat.iter().map(|(k, _)| k.clone()).collect();
@@ -934,6 +1028,13 @@ pub fn read_mat(path: &Path, names: &[&str]) -> Result<Vec<Vec<f64>>, BundleErro
                 path,
                 None,
                 format!("variable `{name}` is a {dims:?} array: expected a row or column vector"),
+            ));
+        }
+        if var.is_complex() == Some(true) {
+            return Err(error(
+                path,
+                None,
+                format!("variable `{name}` is complex: a measured signal is real (save its real part, or abs(), as the signal)"),
             ));
         }
         let values: Option<Vec<f64>> = var
@@ -979,6 +1080,37 @@ pub fn read_mat(path: &Path, names: &[&str]) -> Result<Vec<Vec<f64>>, BundleErro
     Ok(out)
 }
 
+/// A third-party parser's error as one plain line: its first line, terminal colour codes and
+/// control characters removed, at most 200 characters (some parsers print a backtrace with the
+/// build machine's paths in their `Display`).
+fn parser_message(e: &dyn std::fmt::Display) -> String {
+    let text = e.to_string();
+    let mut plain = String::new();
+    let mut chars = text.chars().peekable();
+    while let Some(c) = chars.next() {
+        if c == '\u{1b}' {
+            // an ANSI escape: ESC [ parameters final-letter
+            if chars.peek() == Some(&'[') {
+                chars.next();
+                for p in chars.by_ref() {
+                    if p.is_ascii_alphabetic() {
+                        break;
+                    }
+                }
+            }
+        } else if c == '\n' {
+            break;
+        } else if !c.is_control() {
+            plain.push(c);
+        }
+    }
+    let plain = plain.trim();
+    match plain.char_indices().nth(200) {
+        Some((i, _)) => format!("{}…", &plain[..i]),
+        None => plain.to_string(),
+    }
+}
+
 /// Channels of an MDF 4 file (`.mf4`, `.mdf`), read with falcon_mdf: each channel's values
 /// (converted by the file's own conversion rules), its unit, and its group's master time.
 struct MdfChannels {
@@ -999,7 +1131,7 @@ fn read_mdf_channels(path: &Path, names: &[&str]) -> Result<MdfChannels, BundleE
     std::panic::set_hook(Box::new(|_| {}));
     let result = std::panic::catch_unwind(|| -> Result<MdfChannels, BundleError> {
         let f = falcon_mdf::Mf4File::open_buffered(path)
-            .map_err(|e| error(path, None, format!("not a readable MDF 4 file: {e}")))?;
+            .map_err(|e| error(path, None, format!("not a readable MDF 4 file: {}", parser_message(&e))))?;
         let mut channels = Vec::with_capacity(names.len());
         for name in names {
             channels.push(
@@ -1021,6 +1153,18 @@ fn read_mdf_channels(path: &Path, names: &[&str]) -> Result<MdfChannels, BundleE
             let (dg, cg) = group_of(lead);
             let group = &f.data_groups()[dg].channel_groups[cg];
             let master = group.master_channel();
+            let record_bytes = group.record_size(0) as u64;
+            if record_bytes > f.file_size() {
+                return Err(error(
+                    path,
+                    None,
+                    format!(
+                        "channel `{}`: its group declares records of {record_bytes} bytes in a file of {} bytes: the file is corrupt",
+                        names[lead],
+                        f.file_size()
+                    ),
+                ));
+            }
             let mut read: Vec<&falcon_mdf::model::Channel> = members.iter().map(|&i| channels[i]).collect();
             read.extend(master);
             // the declared count is only a capacity hint, bounded by what the file can hold
@@ -1029,7 +1173,7 @@ fn read_mdf_channels(path: &Path, names: &[&str]) -> Result<MdfChannels, BundleE
             let mut values: Vec<Vec<f64>> = read.iter().map(|_| Vec::with_capacity(hint)).collect();
             let failed = |k: usize, e: falcon_mdf::error::Mf4Error| {
                 let name = members.get(k).map_or("its master (time)", |&i| names[i]);
-                error(path, None, format!("channel `{name}`: {e}"))
+                error(path, None, format!("channel `{name}`: {}", parser_message(&e)))
             };
             for window in f.signals_chunks(&read, MDF_WINDOW_RECORDS).map_err(|e| failed(0, e))? {
                 let window = window.map_err(|e| failed(0, e))?;
@@ -1037,10 +1181,17 @@ fn read_mdf_channels(path: &Path, names: &[&str]) -> Result<MdfChannels, BundleE
                     v.extend_from_slice(&sig.values_f64().map_err(|e| failed(k, e))?);
                 }
             }
-            let time = match master {
+            let time: Vec<f64> = match master {
                 Some(_) => values.pop().unwrap_or_default(),
                 None => (0..values.first().map_or(0, Vec::len)).map(|k| k as f64).collect(),
             };
+            if time.len() < 2 {
+                return Err(error(
+                    path,
+                    None,
+                    format!("channel `{}`: {} samples: a recording needs at least two", names[lead], time.len()),
+                ));
+            }
             for (&i, v) in members.iter().zip(values) {
                 if v.len() != time.len() {
                     return Err(error(

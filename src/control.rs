@@ -191,8 +191,11 @@ pub struct MpcReport {
     pub allocations_first_step: u64,
     /// Steps that fell back to the shifted plan.
     pub fallbacks: usize,
-    /// Largest |u₀ − u₀*| over the checked steps, Nm (u₀* from the same QP solved to 1e-12).
-    pub u0_error_nm: f64,
+    /// Controller steps of the timed run.
+    pub steps: usize,
+    /// Largest |u₀ − u₀*| over the checked steps, Nm (u₀* from the same QP solved to 1e-12);
+    /// none when no step could be checked (each fell back).
+    pub u0_error_nm: Option<f64>,
     /// Steps checked for `u0_error_nm`.
     pub u0_checked_steps: usize,
     /// Shuffle after the drive-torque step.
@@ -227,13 +230,34 @@ impl MpcReport {
             if let Some(e) = o.remove("sweep_peak_torque_deviation_nm") {
                 o.insert("sweep_peak_torque_deviation_Nm".into(), e);
             }
+            let why = self.invalid();
+            o.insert("verdict".into(), (if why.is_some() { "not_valid" } else { "valid" }).into());
+            o.insert("not_valid_because".into(), why.into());
         }
         v
+    }
+
+    /// Why the figures do not describe the MPC, if they do not: the QP missed its time limit
+    /// in more than [`mpc::closed_loop::MAX_FALLBACK_SHARE`] of the steps, so the loop ran on
+    /// the fallback plan.
+    pub fn invalid(&self) -> Option<String> {
+        let share = self.fallbacks as f64 / self.steps.max(1) as f64;
+        (self.steps == 0 || share > mpc::closed_loop::MAX_FALLBACK_SHARE).then(|| {
+            format!(
+                "the QP missed its time limit in {} of {} steps ({:.0} %): the loop ran on the fallback plan, so these figures do not describe the MPC; shorten --horizon, use more --blocks or raise --time-limit-us",
+                self.fallbacks,
+                self.steps,
+                share * 100.0
+            )
+        })
     }
 
     /// Text for the terminal.
     pub fn human(&self) -> String {
         let mut s = String::new();
+        if let Some(why) = self.invalid() {
+            s += &format!("NOT VALID: {why}\n");
+        }
         s += &format!(
             "designed on a model with effects: {}; closed on a plant with effects: {}\n",
             self.model_effects, self.plant_effects
@@ -265,10 +289,13 @@ impl MpcReport {
             self.allocations_per_step,
             self.fallbacks
         );
-        s += &format!(
-            "  first input vs the exact optimum: max |u0 − u0*| = {:.2e} Nm over {} steps\n",
-            self.u0_error_nm, self.u0_checked_steps
-        );
+        s += &match self.u0_error_nm {
+            Some(e) => format!(
+                "  first input vs the exact optimum: max |u0 − u0*| = {e:.2e} Nm over {} steps\n",
+                self.u0_checked_steps
+            ),
+            None => "  first input vs the exact optimum: not checked (every checked step fell back)\n".to_string(),
+        };
         s += &format!(
             "  shuffle after a {} Nm drive-torque step ({}; settling band ±{:.0} %):\n",
             self.shuffle.step_nm,
@@ -476,7 +503,8 @@ pub fn report(
         allocations_per_step: run.step_allocations.iter().skip(1).copied().max().unwrap_or(0),
         allocations_first_step: run.step_allocations.first().copied().unwrap_or(0),
         fallbacks: run.fallbacks,
-        u0_error_nm: u0_error,
+        steps: run.step_times_s.len(),
+        u0_error_nm: (checked > 0).then_some(u0_error),
         u0_checked_steps: checked,
         shuffle: Shuffle {
             mpc: fig(&step.mpc),

@@ -96,24 +96,54 @@ pub enum Target {
     Device(PathBuf),
 }
 
+impl Target {
+    /// The file or device written.
+    pub fn path(&self) -> &Path {
+        match self {
+            Target::File(p) | Target::Device(p) => p,
+        }
+    }
+}
+
+/// Where `path` writes to: a symbolic link is followed to the file it names (also when that
+/// file does not exist yet, so a dangling link is written through, not replaced), an existing
+/// file is canonical, a new name is its canonical folder joined with the name.
+fn resolve_output(path: &Path, named: &dyn Fn() -> String) -> anyhow::Result<PathBuf> {
+    let mut p = path.to_path_buf();
+    // a chain of links ends within 40 steps (the kernel's own limit), else it is a loop
+    for _ in 0..40 {
+        match std::fs::symlink_metadata(&p) {
+            Ok(m) if m.file_type().is_symlink() => {
+                let target = std::fs::read_link(&p).map_err(|e| anyhow::anyhow!("{}: {e}", named()))?;
+                p = match p.parent() {
+                    Some(dir) if target.is_relative() => dir.join(target),
+                    _ => target,
+                };
+            }
+            Ok(_) => return std::fs::canonicalize(&p).map_err(|e| anyhow::anyhow!("{}: {e}", named())),
+            Err(_) => {
+                // a new name (or a link's missing target): its folder must exist
+                let parent = p.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(Path::new("."));
+                let dir = std::fs::canonicalize(parent).map_err(|e| {
+                    anyhow::anyhow!("{}: the folder {} does not exist ({e})", named(), parent.display())
+                })?;
+                let name = p.file_name().ok_or_else(|| anyhow::anyhow!("{}: not a file name", named()))?;
+                return Ok(dir.join(name));
+            }
+        }
+    }
+    anyhow::bail!("{}: too many levels of symbolic links", named())
+}
+
 /// Checks an output path before the computation starts: its folder exists and is writable, it
-/// is a regular file, a new name or a character device, and it is none of `inputs`.
+/// is a regular file, a new name (a dangling symbolic link names its target) or a character
+/// device, and it is none of `inputs`.
 pub fn output(path: &Path, option: &str, inputs: &[PathBuf]) -> anyhow::Result<Target> {
     let named = || format!("{option} {}", path.display());
     if path.as_os_str().is_empty() {
         anyhow::bail!("{option}: an empty file name was given");
     }
-    // the file a symbolic link points to (std::fs::metadata follows links)
-    let resolved = match std::fs::canonicalize(path) {
-        Ok(p) => p,
-        Err(_) => {
-            // a new name: its folder must exist
-            let parent = path.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
-            let dir = std::fs::canonicalize(parent)
-                .map_err(|e| anyhow::anyhow!("{}: the folder {} does not exist ({e})", named(), parent.display()))?;
-            dir.join(path.file_name().ok_or_else(|| anyhow::anyhow!("{}: not a file name", named()))?)
-        }
-    };
+    let resolved = resolve_output(path, &named)?;
     for input in inputs {
         if std::fs::canonicalize(input).map(|i| i == resolved).unwrap_or(false) {
             anyhow::bail!(
@@ -138,6 +168,61 @@ pub fn output(path: &Path, option: &str, inputs: &[PathBuf]) -> anyhow::Result<T
         .map_err(|e| anyhow::anyhow!("{}: cannot write in {}: {e}", named(), dir.display()))?;
     let _ = std::fs::remove_file(&probe);
     Ok(Target::File(resolved))
+}
+
+/// The outputs of one command, checked together before the first is written: each as
+/// [`output`] checks it, none one of the command's inputs, no file named by two options.
+#[derive(Debug, Default)]
+pub struct Outputs {
+    inputs: Vec<PathBuf>,
+    claimed: Vec<(PathBuf, String)>,
+}
+
+impl Outputs {
+    /// The outputs of a command reading `inputs` (every file it reads, data files included).
+    pub fn new(inputs: &[PathBuf]) -> Self {
+        Outputs { inputs: inputs.to_vec(), claimed: Vec::new() }
+    }
+
+    /// Checks `path` as the output of `option` and claims it.
+    pub fn file(&mut self, path: &Path, option: &str) -> anyhow::Result<Target> {
+        let target = output(path, option, &self.inputs)?;
+        if let Target::File(resolved) = &target {
+            if let Some((_, other)) = self.claimed.iter().find(|(p, _)| p == resolved) {
+                anyhow::bail!(
+                    "{option} {}: {other} writes this file too; give each output its own file",
+                    path.display()
+                );
+            }
+            self.claimed.push((resolved.clone(), option.to_string()));
+        }
+        Ok(target)
+    }
+
+    /// Checks `path` as an SVG output of `option` and claims it.
+    pub fn svg(&mut self, path: &Path, option: &str) -> anyhow::Result<Target> {
+        if path.extension().and_then(|e| e.to_str()).map(|e| e.eq_ignore_ascii_case("svg")) != Some(true)
+            && !path.starts_with("/dev")
+        {
+            anyhow::bail!("{option} {}: the plot is written as SVG; give a file name ending in .svg", path.display());
+        }
+        self.file(path, option)
+    }
+
+    /// `names` in the folder `dir` of `option` (created if missing), each checked and claimed.
+    pub fn in_folder<const N: usize>(
+        &mut self,
+        dir: &Path,
+        option: &str,
+        names: [&str; N],
+    ) -> anyhow::Result<[Target; N]> {
+        let resolved = output_dir(dir, option)?;
+        let mut out = Vec::with_capacity(N);
+        for name in names {
+            out.push(self.file(&resolved.join(name), option)?);
+        }
+        Ok(out.try_into().expect("N targets"))
+    }
 }
 
 /// A folder for outputs (`--out`, `--descriptions`): created if missing; refused if it is not a
@@ -190,12 +275,6 @@ pub fn write(target: &Target, bytes: &[u8]) -> anyhow::Result<()> {
             })
         }
     }
-}
-
-/// Checks `path` as an output of `option` and writes `bytes` to it (for outputs decided and
-/// written at once, e.g. the FMUs into a checked folder).
-pub fn write_new(path: &Path, option: &str, bytes: &[u8]) -> anyhow::Result<()> {
-    write(&output(path, option, &[])?, bytes)
 }
 
 #[cfg(test)]

@@ -4,6 +4,7 @@
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
+use crate::files::{Outputs, Target};
 use plant::Rig;
 use rigtwin_fmu::{describe, FmuParams, Version, MODEL_IDENTIFIER, PARAMS_RESOURCE};
 
@@ -68,11 +69,18 @@ pub fn params_of_file(file: &Path) -> anyhow::Result<FmuParams> {
     }
 }
 
-/// Writes both modelDescription.xml files into `dir/fmi3/` and `dir/fmi2/`.
-pub fn write_descriptions(p: &FmuParams, dir: &Path) -> anyhow::Result<()> {
-    for (version, sub) in [(Version::Fmi3, "fmi3"), (Version::Fmi2, "fmi2")] {
-        let d = crate::files::output_dir(&dir.join(sub), "--descriptions")?;
-        crate::files::write_new(&d.join("modelDescription.xml"), "--descriptions", describe(p, version).as_bytes())?;
+/// Claims the two modelDescription.xml files `--descriptions DIR` writes: `DIR/fmi3/` and
+/// `DIR/fmi2/` (created if missing).
+pub fn description_targets(outs: &mut Outputs, dir: &Path) -> anyhow::Result<[Target; 2]> {
+    let [fmi3] = outs.in_folder(&dir.join("fmi3"), "--descriptions", ["modelDescription.xml"])?;
+    let [fmi2] = outs.in_folder(&dir.join("fmi2"), "--descriptions", ["modelDescription.xml"])?;
+    Ok([fmi3, fmi2])
+}
+
+/// Writes both modelDescription.xml files (FMI 3, FMI 2) to their checked targets.
+pub fn write_descriptions(p: &FmuParams, targets: &[Target; 2]) -> anyhow::Result<()> {
+    for (version, target) in [Version::Fmi3, Version::Fmi2].into_iter().zip(targets) {
+        crate::files::write(target, describe(p, version).as_bytes())?;
     }
     Ok(())
 }
@@ -97,20 +105,28 @@ pub fn archive(p: &FmuParams, lib: &[u8], version: Version) -> anyhow::Result<Ve
     Ok(buf.into_inner())
 }
 
-/// Writes `rigtwin-fmi3.fmu` and `rigtwin-fmi2.fmu` into `out` (`rigtwin-mpc-fmi3.fmu` and
-/// `rigtwin-mpc-fmi2.fmu` for the controller); returns their paths.
-pub fn package(p: &FmuParams, lib: &[u8], out: &Path) -> anyhow::Result<[PathBuf; 2]> {
+/// The file names of the FMUs `rigtwin fmu` writes (FMI 3, FMI 2): `rigtwin-fmi3.fmu` and
+/// `rigtwin-fmi2.fmu`, or `rigtwin-mpc-fmi3.fmu` and `rigtwin-mpc-fmi2.fmu` for the controller.
+pub fn fmu_names(controller: bool) -> [&'static str; 2] {
+    if controller {
+        ["rigtwin-mpc-fmi3.fmu", "rigtwin-mpc-fmi2.fmu"]
+    } else {
+        ["rigtwin-fmi3.fmu", "rigtwin-fmi2.fmu"]
+    }
+}
+
+/// The file name of the closed loop's SSP archive.
+pub const SSP_NAME: &str = "rigtwin-closed-loop.ssp";
+
+/// Writes the FMI 3 and FMI 2 FMUs of `p` to their checked targets (see [`fmu_names`]).
+pub fn package(p: &FmuParams, lib: &[u8], targets: &[Target; 2]) -> anyhow::Result<()> {
     // the parameters must describe a model before anything is written
     rigtwin_fmu::check(p).map_err(|e| anyhow::anyhow!("the parameter set does not describe a model: {e}"))?;
-    let dir = crate::files::output_dir(out, "--out")?;
-    let stem = if p.controller.is_some() { "rigtwin-mpc" } else { "rigtwin" };
-    let mut written = Vec::new();
-    for (version, name) in [(Version::Fmi3, format!("{stem}-fmi3.fmu")), (Version::Fmi2, format!("{stem}-fmi2.fmu"))] {
-        let bytes = archive(p, lib, version)?;
-        crate::files::write_new(&dir.join(&name), "--out", &bytes)?;
-        written.push(out.join(&name));
+    let archives = [archive(p, lib, Version::Fmi3)?, archive(p, lib, Version::Fmi2)?];
+    for (bytes, target) in archives.iter().zip(targets) {
+        crate::files::write(target, bytes)?;
     }
-    Ok([written.remove(0), written.remove(0)])
+    Ok(())
 }
 
 /// The closed loop's connections: (plant output, controller input) and (controller output,
@@ -124,12 +140,12 @@ pub const LOOP_CONNECTIONS: [(&str, &str, &str, &str); 6] = [
     ("controller", "M_m3", "plant", "M_m3"),
 ];
 
-/// Writes `rigtwin-closed-loop.ssp` into `out`: an SSP 1.0 archive with the FMI 2 FMUs of the
+/// Writes `rigtwin-closed-loop.ssp` ([`SSP_NAME`]) to `target`: an SSP 1.0 archive with the FMI 2 FMUs of the
 /// plant `plant` and the controller `controller` (as `resources/plant.fmu` and
 /// `resources/controller.fmu`) and their connections ([`LOOP_CONNECTIONS`]), which OSP libcosim
 /// and other SSP importers load as one system. The references (`w_m2_ref`, `w_m3_ref`,
 /// `M_drive_ref`) stay open inputs of the controller.
-pub fn closed_loop_ssp(plant: &FmuParams, controller: &FmuParams, lib: &[u8], out: &Path) -> anyhow::Result<PathBuf> {
+pub fn closed_loop_ssp(plant: &FmuParams, controller: &FmuParams, lib: &[u8], target: &Target) -> anyhow::Result<()> {
     rigtwin_fmu::check(plant)
         .map_err(|e| anyhow::anyhow!("the plant's parameter set does not describe a model: {e}"))?;
     if plant.drive.is_some() || plant.controller.is_some() || controller.controller.is_none() {
@@ -192,8 +208,5 @@ pub fn closed_loop_ssp(plant: &FmuParams, controller: &FmuParams, lib: &[u8], ou
         }
         zip.finish()?;
     }
-    let dir = crate::files::output_dir(out, "--out")?;
-    let path = dir.join("rigtwin-closed-loop.ssp");
-    crate::files::write_new(&path, "--out", buf.get_ref())?;
-    Ok(out.join("rigtwin-closed-loop.ssp"))
+    crate::files::write(target, buf.get_ref())
 }

@@ -178,6 +178,20 @@ pub fn parametrise(
             (rig.model, m)
         }
         Source::Bundles(files) => {
+            for (i, f) in files.iter().enumerate() {
+                let same = |g: &PathBuf| match (std::fs::canonicalize(f), std::fs::canonicalize(g)) {
+                    (Ok(a), Ok(b)) => a == b,
+                    _ => f == g,
+                };
+                if let Some(g) = files[..i].iter().find(|g| same(g)) {
+                    anyhow::bail!(
+                        "{} is given twice ({} and {}): each variant's sweep counts once; give sweeps of at least two variants",
+                        f.display(),
+                        g.display(),
+                        f.display()
+                    );
+                }
+            }
             let mut template: Option<(PathBuf, RigParams)> = None;
             let mut m = Vec::new();
             for f in files {
@@ -226,6 +240,14 @@ pub fn parametrise(
                 });
             }
             let (_, t) = template.ok_or_else(|| anyhow::anyhow!("no bundle given"))?;
+            if m.iter().all(|x| x.variant == m[0].variant) {
+                let names: Vec<&str> = m.iter().filter_map(|x| x.file.as_deref()).collect();
+                anyhow::bail!(
+                    "every bundle is a sweep of variant {} ({}): the parametrisation needs sweeps of at least two variants",
+                    m[0].variant,
+                    names.join(", ")
+                );
+            }
             (t, m)
         }
     };

@@ -6,6 +6,7 @@ use std::process::ExitCode;
 
 use ident::{DesignSettings, ModelChoice, ParametriseSettings};
 use plant::{paper, Rig, Variant};
+use rigtwin::files::Outputs;
 use rigtwin::identification::{self, FrequencyMethod, Source};
 use rigtwin::report::{self, ModelKind};
 use rigtwin::rigfile::load_rig;
@@ -80,7 +81,7 @@ enum Command {
         #[command(flatten)]
         rig: RigArgs,
         /// Number of masses to keep.
-        #[arg(long, default_value_t = 3)]
+        #[arg(long, default_value_t = 3, allow_negative_numbers = true, value_parser = |s: &str| count_in(s, 2, 1000))]
         masses: usize,
     },
     /// Drive inertia and side-shaft stiffness from the natural frequencies of two or more rig
@@ -97,7 +98,7 @@ enum Command {
         rig: Option<PathBuf>,
         /// Standard uncertainty of every frequency, Hz; with --measured default 0.005
         /// (half the last digit of two-decimal values); with bundles it replaces the estimate.
-        #[arg(long, value_name = "HZ")]
+        #[arg(long, value_name = "HZ", allow_negative_numbers = true, value_parser = positive)]
         sigma_hz: Option<f64>,
         /// Model the frequencies are explained with.
         #[arg(long, value_enum, default_value_t = ModelArg::Differential)]
@@ -106,7 +107,7 @@ enum Command {
         #[arg(long, value_enum, default_value_t = FrequencyMethod::ModalFit)]
         method: FrequencyMethod,
         /// Monte Carlo draws for the intervals (0: linearised only).
-        #[arg(long, default_value_t = 2000)]
+        #[arg(long, default_value_t = 2000, allow_negative_numbers = true, value_parser = |s: &str| count_in(s, 0, ident::MAX_MONTE_CARLO_SAMPLES))]
         samples: usize,
         /// Print JSON instead of text.
         #[arg(long)]
@@ -153,10 +154,10 @@ enum Command {
         #[arg(long)]
         controller: bool,
         /// The controller's prediction horizon, steps of 1 ms (with --controller).
-        #[arg(long, default_value_t = 50, requires = "controller")]
+        #[arg(long, default_value_t = 50, requires = "controller", allow_negative_numbers = true, value_parser = |s: &str| count_in(s, 1, mpc::MAX_HORIZON))]
         horizon: usize,
         /// The controller's number of move blocks, 0: every step free (with --controller).
-        #[arg(long, default_value_t = 4, requires = "controller")]
+        #[arg(long, default_value_t = 4, requires = "controller", allow_negative_numbers = true, value_parser = |s: &str| count_in(s, 0, mpc::MAX_HORIZON))]
         blocks: usize,
         /// With --controller: the plant of rigtwin-closed-loop.ssp (a rig file with its
         /// [effects]); default: the rig of --params.
@@ -168,17 +169,17 @@ enum Command {
     /// allocations, first input against the exact optimum, shuffle overshoot and settling.
     Mpc {
         /// Prediction horizon, steps of 1 ms (10-100 in the real-time regime).
-        #[arg(long, default_value_t = 50)]
+        #[arg(long, default_value_t = 50, allow_negative_numbers = true, value_parser = |s: &str| count_in(s, 1, mpc::MAX_HORIZON))]
         horizon: usize,
         /// What the rig is asked to do.
         #[arg(long, value_enum, default_value_t = ScenarioArg::Step)]
         scenario: ScenarioArg,
         /// Length of the timed run, s, at most 120 (default: 1 s step, 3.5 s sweep; the sweep's
         /// chirp spans the whole run). The shuffle figures always come from the 1 s step.
-        #[arg(long, value_name = "S")]
+        #[arg(long, value_name = "S", allow_negative_numbers = true, value_parser = positive)]
         duration: Option<f64>,
         /// Number of move blocks (1, 2, 4, … steps, the last taking the rest); 0: every step free.
-        #[arg(long, default_value_t = 4)]
+        #[arg(long, default_value_t = 4, allow_negative_numbers = true, value_parser = |s: &str| count_in(s, 0, mpc::MAX_HORIZON))]
         blocks: usize,
         /// QP formulation.
         #[arg(long, value_enum, default_value_t = FormulationArg::Condensed)]
@@ -192,7 +193,7 @@ enum Command {
         #[arg(long, value_name = "FILE")]
         plant: Option<PathBuf>,
         /// Wall-clock limit of one QP solve, µs; past it the shifted previous plan is applied.
-        #[arg(long, default_value_t = 600.0)]
+        #[arg(long, default_value_t = 600.0, allow_negative_numbers = true, value_parser = positive)]
         time_limit_us: f64,
         /// Print JSON instead of text.
         #[arg(long)]
@@ -238,10 +239,10 @@ enum Command {
         #[arg(long, value_name = "FILE")]
         rig: Option<PathBuf>,
         /// Standard uncertainty of each measured frequency, Hz.
-        #[arg(long, default_value_t = 0.05)]
+        #[arg(long, default_value_t = 0.05, allow_negative_numbers = true, value_parser = positive)]
         sigma_hz: f64,
         /// Required relative 95 % half-width of both parameters.
-        #[arg(long, default_value_t = 0.05)]
+        #[arg(long, default_value_t = 0.05, allow_negative_numbers = true, value_parser = positive)]
         target: f64,
         /// Model.
         #[arg(long, value_enum, default_value_t = ModelArg::Differential)]
@@ -310,6 +311,25 @@ fn parse_measured(s: &str) -> Result<(Variant, f64), String> {
     Ok((variant, hz))
 }
 
+/// A whole number in `lo..=hi` (clap names the flag in its message).
+fn count_in(s: &str, lo: usize, hi: usize) -> Result<usize, String> {
+    let n: i128 = s.trim().parse().map_err(|_| format!("expected a whole number from {lo} to {hi}"))?;
+    match usize::try_from(n) {
+        Ok(n) if (lo..=hi).contains(&n) => Ok(n),
+        _ => Err(format!("{n} is out of range: expected a whole number from {lo} to {hi}")),
+    }
+}
+
+/// A positive, finite number.
+fn positive(s: &str) -> Result<f64, String> {
+    let v: f64 = s.trim().parse().map_err(|_| "expected a positive number".to_string())?;
+    if v > 0.0 && v.is_finite() {
+        Ok(v)
+    } else {
+        Err(format!("{v} is out of range: expected a positive, finite number"))
+    }
+}
+
 fn parse_variant(s: &str) -> Result<Variant, String> {
     s.parse().map_err(|e: plant::PlantError| e.to_string())
 }
@@ -375,8 +395,8 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             }
         }
         Command::Bearing { bundle, structure, coupling, method, plot, json } => {
-            let inputs = rigtwin::bundle::input_files(&bundle);
-            let plot = plot.map(|p| rigtwin::plot::svg_target(&p, "--plot", &inputs)).transpose()?;
+            let mut outs = Outputs::new(&rigtwin::bundle::input_files(&bundle));
+            let plot = plot.map(|p| outs.svg(&p, "--plot")).transpose()?;
             let b = rigtwin::bundle::load_bearing(&bundle)?;
             let structure = structure.map(|s| match s {
                 StructureArg::Kc => ident::Structure::KC,
@@ -413,27 +433,43 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                 }
                 p.controller = Some(rigtwin_fmu::controller::ControllerSpec::new(horizon, blocks));
             }
-            if let Some(d) = &descriptions {
-                rigtwin::fmu_package::write_descriptions(&p, d)?;
-            }
-            let lib = rigtwin::fmu_package::library()?;
             // the closed loop's plant is checked before anything is written
-            let plant = match (&plant, controller) {
+            let plant_params = match (&plant, controller) {
                 (Some(f), _) => Some(rigtwin::fmu_package::params_of_file(f)?),
                 (None, true) => Some(rigtwin_fmu::FmuParams { controller: None, ..p.clone() }),
                 (None, false) => None,
             };
-            if let Some(pl) = &plant {
+            if let Some(pl) = &plant_params {
                 if pl.drive.is_some() {
                     anyhow::bail!("--plant: a drive model; the closed loop is the paper rig's (give a rig file)");
                 }
                 rigtwin_fmu::check(pl).map_err(|e| anyhow::anyhow!("--plant: {e}"))?;
             }
-            let [a, b] = rigtwin::fmu_package::package(&p, &lib, &out)?;
+            rigtwin_fmu::check(&p).map_err(|e| anyhow::anyhow!("the parameter set does not describe a model: {e}"))?;
+            // every output is checked before the first is written; none may be an input
+            let inputs: Vec<PathBuf> =
+                params.iter().chain(&plant).flat_map(|f| rigtwin::bundle::input_files(f)).collect();
+            let mut outs = Outputs::new(&inputs);
+            let fmus = outs.in_folder(&out, "--out", rigtwin::fmu_package::fmu_names(controller))?;
+            let ssp = match plant_params {
+                Some(_) => Some(outs.in_folder(&out, "--out", [rigtwin::fmu_package::SSP_NAME])?),
+                None => None,
+            };
+            let described =
+                descriptions.map(|d| rigtwin::fmu_package::description_targets(&mut outs, &d)).transpose()?;
+            let lib = rigtwin::fmu_package::library()?;
+            if let Some(targets) = &described {
+                rigtwin::fmu_package::write_descriptions(&p, targets)?;
+            }
+            rigtwin::fmu_package::package(&p, &lib, &fmus)?;
+            let [a, b] = rigtwin::fmu_package::fmu_names(controller).map(|n| out.join(n));
             outln!("wrote {} and {} (token {})", a.display(), b.display(), rigtwin_fmu::token(&p));
-            if let Some(pl) = &plant {
-                let ssp = rigtwin::fmu_package::closed_loop_ssp(pl, &p, &lib, &out)?;
-                outln!("wrote {} (the plant's and the controller's FMI 2 FMUs, connected)", ssp.display());
+            if let (Some(pl), Some([target])) = (&plant_params, &ssp) {
+                rigtwin::fmu_package::closed_loop_ssp(pl, &p, &lib, target)?;
+                outln!(
+                    "wrote {} (the plant's and the controller's FMI 2 FMUs, connected)",
+                    out.join(rigtwin::fmu_package::SSP_NAME).display()
+                );
             }
         }
         Command::Mpc {
@@ -449,6 +485,13 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             plot,
             export_qp,
         } => {
+            // every output is checked before the loop runs; none may be an input
+            let inputs: Vec<PathBuf> =
+                params.iter().chain(&plant).flat_map(|f| rigtwin::bundle::input_files(f)).collect();
+            let mut outs = Outputs::new(&inputs);
+            let plot = plot.map(|f| outs.svg(&f, "--plot")).transpose()?;
+            let export_qp = export_qp.map(|f| outs.file(&f, "--export-qp")).transpose()?;
+            let model_name = params.as_ref().map_or("the embedded rig".to_string(), |f| f.display().to_string());
             let p = match &params {
                 Some(f) => rigtwin::fmu_package::params_of_file(f)?,
                 None => rigtwin_fmu::FmuParams::default(),
@@ -469,10 +512,13 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                     plant::Domain::Rotational => 10.0,
                     plant::Domain::Translational => 0.1,
                 };
+                if plot.is_some() || export_qp.is_some() {
+                    anyhow::bail!(
+                        "--plot and --export-qp are written for the paper rig's loop; {model_name} is a drive model"
+                    );
+                }
                 let rep = rigtwin::control::drive_report(model, &truth, &section, horizon, time_limit_us * 1e-6, step)
-                    .map_err(|e| {
-                        anyhow::anyhow!("{}: {e:#}", params.as_ref().map_or(String::new(), |f| f.display().to_string()))
-                    })?;
+                    .map_err(|e| anyhow::anyhow!("{model_name}: {e:#}"))?;
                 if json {
                     print_json(&serde_json::to_value(&rep)?)?;
                 } else {
@@ -493,9 +539,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                 }
                 None => p.clone(),
             };
-            let mut settings = section.rig_settings(horizon).map_err(|e| {
-                anyhow::anyhow!("{}: {e}", params.as_ref().map_or(String::new(), |f| f.display().to_string()))
-            })?;
+            let mut settings = section.rig_settings(horizon).map_err(|e| anyhow::anyhow!("{model_name}: {e}"))?;
             settings.move_blocks = if blocks == 0 { Vec::new() } else { mpc::exponential_blocks(horizon, blocks) };
             settings.formulation = match formulation {
                 FormulationArg::Condensed => mpc::Formulation::Condensed,
@@ -508,8 +552,6 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                 ScenarioArg::Sweep => mpc::closed_loop::ScenarioKind::Sweep,
             };
             let mut qps = Vec::new();
-            let plot = plot.map(|f| rigtwin::plot::svg_target(&f, "--plot", &[])).transpose()?;
-            let export_qp = export_qp.map(|f| rigtwin::files::output(&f, "--export-qp", &[])).transpose()?;
             let (rep, run) = rigtwin::control::report(
                 &p,
                 &truth,
@@ -531,15 +573,17 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             } else {
                 out!("{}", rep.human());
             }
+            if let Some(why) = rep.invalid() {
+                return Err(NotValid(why).into());
+            }
         }
         Command::Diagnose { bundle, json, plot, write_model, save_signals } => {
             // every output is checked before the diagnosis starts, none may be an input
-            let inputs = rigtwin::bundle::input_files(&bundle);
-            let json = json.map(|f| rigtwin::files::output(&f, "--json", &inputs)).transpose()?;
-            let write_model = write_model.map(|f| rigtwin::files::output(&f, "--write-model", &inputs)).transpose()?;
-            let plot = plot.map(|f| rigtwin::plot::svg_target(&f, "--plot", &inputs)).transpose()?;
-            let save_signals =
-                save_signals.map(|f| rigtwin::files::output(&f, "--save-signals", &inputs)).transpose()?;
+            let mut outs = Outputs::new(&rigtwin::bundle::input_files(&bundle));
+            let json = json.map(|f| outs.file(&f, "--json")).transpose()?;
+            let write_model = write_model.map(|f| outs.file(&f, "--write-model")).transpose()?;
+            let plot = plot.map(|f| outs.svg(&f, "--plot")).transpose()?;
+            let save_signals = save_signals.map(|f| outs.file(&f, "--save-signals")).transpose()?;
             let start = std::time::Instant::now();
             let show = std::io::IsTerminal::is_terminal(&std::io::stderr());
             let progress = |name: &str| {
@@ -584,8 +628,11 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             let summary = report::summary(&r, variant)?;
             // the FMUs of the same rig, in the variant asked for
             let params = rigtwin::fmu_package::params_of_rig(&Rig { variant, ..r.clone() })?;
+            let mut outs = Outputs::new(&rig.rig.iter().cloned().collect::<Vec<_>>());
+            let fmus = outs.in_folder(&out, "--out", rigtwin::fmu_package::fmu_names(false))?;
             let lib = rigtwin::fmu_package::library()?;
-            let [a, b] = rigtwin::fmu_package::package(&params, &lib, &out)?;
+            rigtwin::fmu_package::package(&params, &lib, &fmus)?;
+            let [a, b] = rigtwin::fmu_package::fmu_names(false).map(|n| out.join(n));
             if rig.json {
                 print_json(&summary)?;
             } else {
@@ -601,6 +648,23 @@ fn run(cli: Cli) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// A result that was computed and printed but cannot be trusted (the MPC ran on its fallback):
+/// exit code [`EXIT_NOT_VALID`].
+#[derive(Debug)]
+struct NotValid(String);
+
+impl std::fmt::Display for NotValid {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+impl std::error::Error for NotValid {}
+
+/// Exit code of a run whose output says it is not a valid result (1: an error, nothing
+/// computed; 2: the command line could not be parsed).
+const EXIT_NOT_VALID: u8 = 3;
+
 /// Counts heap allocations so that `rigtwin mpc` can report them per controller step.
 #[global_allocator]
 static ALLOCATOR: mpc::alloc_counter::Counting = mpc::alloc_counter::Counting;
@@ -608,6 +672,10 @@ static ALLOCATOR: mpc::alloc_counter::Counting = mpc::alloc_counter::Counting;
 fn main() -> ExitCode {
     match run(Cli::parse()) {
         Ok(()) => ExitCode::SUCCESS,
+        Err(e) if e.is::<NotValid>() => {
+            eprintln!("not valid: {e:#}");
+            ExitCode::from(EXIT_NOT_VALID)
+        }
         Err(e) => {
             eprintln!("error: {e:#}");
             ExitCode::FAILURE

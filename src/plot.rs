@@ -1,8 +1,6 @@
 //! Line plots as SVG (time histories, spectra): panels stacked vertically, one or more
 //! labelled series each.
 
-use std::path::Path;
-
 use crate::files::{self, Target};
 
 /// One panel of a plot.
@@ -21,16 +19,6 @@ pub struct Panel {
 
 pub(crate) fn err<E: std::fmt::Display>(e: E) -> anyhow::Error {
     anyhow::anyhow!("drawing the plot failed: {e}")
-}
-
-/// Checks a `--plot` path before the computation: an SVG file name, writable, not an input.
-pub fn svg_target(path: &Path, option: &str, inputs: &[std::path::PathBuf]) -> anyhow::Result<Target> {
-    if path.extension().and_then(|e| e.to_str()).map(|e| e.eq_ignore_ascii_case("svg")) != Some(true)
-        && !path.starts_with("/dev")
-    {
-        anyhow::bail!("{option} {}: the plot is written as SVG; give a file name ending in .svg", path.display());
-    }
-    files::output(path, option, inputs)
 }
 
 /// Writes `panels` as SVG to `target` under `title` (drawn in memory, then written safely).

@@ -8,7 +8,8 @@ use std::path::{Path, PathBuf};
 
 use proptest::prelude::*;
 
-/// Cases per property: 6 properties × 500 cases = 3000 inputs per run.
+/// Cases per property: 8 properties × 500 cases = 4000 inputs per run (`.ci/run` prints the
+/// count from this line and the list of properties).
 const CASES: u32 = 500;
 
 fn shared(name: &str) -> String {
@@ -252,6 +253,58 @@ proptest! {
     }
 
     #[test]
+    fn drive_models_and_tests_load_or_are_refused(
+        toml_ms in prop::collection::vec(mutation(), 0..4),
+        as_model in any::<bool>(),
+    ) {
+        let d = scratch();
+        let mut toml = shared("bench_gear.toml");
+        if as_model {
+            toml = toml.replace("kind = \"drive_test\"", "kind = \"drive_model\"").replace("data = \"bench_gear.csv\"\n", "");
+        }
+        for m in &toml_ms {
+            toml = String::from_utf8_lossy(&apply(&toml, m)).into_owned();
+        }
+        std::fs::write(d.join("b.toml"), toml).unwrap();
+        std::fs::write(d.join("bench_gear.csv"), head(&shared("bench_gear.csv"), 2000)).unwrap();
+        if let Ok(m) = rigtwin::bundle::load_drive_model(&d.join("b.toml")) {
+            prop_assert!(m.validate().is_ok());
+            prop_assert!(m.line.bodies.len() <= plant::MAX_BODIES);
+        }
+        let _ = std::fs::remove_dir_all(&d);
+    }
+
+    #[test]
+    fn fmu_state_bytes_deserialise_or_are_refused(
+        flips in prop::collection::vec((any::<usize>(), any::<u8>()), 1..6),
+        cut in any::<usize>(),
+    ) {
+        let bytes = state_bytes();
+        let mut b = bytes.to_vec();
+        for (i, v) in &flips {
+            let n = b.len();
+            b[i % n] = *v;
+        }
+        if cut % 4 == 0 {
+            b.truncate(cut % (bytes.len() + 1));
+        }
+        // a state is either refused or of the declared shape with every value finite: set on
+        // an instance of the FMU it claims to be from, it gives finite outputs or is refused
+        if let Ok(s) = rigtwin_fmu::instance::Snapshot::from_bytes(&b) {
+            let mut i = state_instance();
+            if i.restore(&s).is_ok() {
+                let t = i.table().clone();
+                for v in t.variables.iter().filter(|v| v.name.starts_with("w_")) {
+                    let mut out = [0.0];
+                    if i.get_f64(&[v.vr], &mut out).is_ok() {
+                        prop_assert!(out[0].is_finite());
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
     fn random_bytes_are_refused_cleanly(bytes in prop::collection::vec(any::<u8>(), 0..400)) {
         let d = scratch();
         std::fs::write(d.join("b.toml"), &bytes).unwrap();
@@ -261,6 +314,38 @@ proptest! {
         let _ = rigtwin::rigfile::parse_rig(&text, Path::new("b.toml"));
         let _ = std::fs::remove_dir_all(&d);
     }
+}
+
+/// A default FMU instance for the state property.
+fn state_instance() -> rigtwin_fmu::instance::Instance {
+    struct Quiet;
+    impl rigtwin_fmu::instance::Logger for Quiet {
+        fn log(&self, _: rigtwin_fmu::instance::Status, _: &str, _: &str) {}
+    }
+    let p = rigtwin_fmu::FmuParams::default();
+    rigtwin_fmu::instance::Instance::new(
+        "fuzz",
+        rigtwin_fmu::instance::Interface::CoSimulation,
+        Box::new(Quiet),
+        false,
+        &p,
+    )
+}
+
+/// The serialized state of a default instance after initialisation and a few driven steps.
+fn state_bytes() -> &'static [u8] {
+    static BYTES: std::sync::OnceLock<Vec<u8>> = std::sync::OnceLock::new();
+    BYTES.get_or_init(|| {
+        let mut i = state_instance();
+        i.enter_initialization_mode(0.0, None).unwrap();
+        i.exit_initialization_mode().unwrap();
+        let drive = i.table().variables.iter().find(|v| v.name == "M_drive").unwrap().vr;
+        for k in 0..10 {
+            i.set_f64(&[drive], &[20.0 * (k as f64 * 0.4).sin()]).unwrap();
+            i.do_step(k as f64 * 1e-3, 1e-3).unwrap();
+        }
+        i.snapshot().to_bytes()
+    })
 }
 
 /// The undamaged base file of `mdf_files_read_or_are_refused` loads, resampled onto 1 kHz: the

@@ -105,15 +105,15 @@ pub(crate) unsafe fn serialize_state(state: *mut c_void, out: *mut u8, size: usi
 
 /// DeserializeFMUState into a new state.
 pub(crate) unsafe fn deserialize_state(
+    inst: &Instance,
     bytes: *const u8,
     size: usize,
     state: *mut *mut c_void,
     function: &str,
 ) -> Res<()> {
-    let snap = Snapshot::from_bytes(slice(bytes, size)?).ok_or_else(|| Failure {
-        status: Status::Error,
-        message: format!("{function}: the bytes are not a state of this FMU"),
-    })?;
+    let snap = Snapshot::from_bytes(slice(bytes, size)?)
+        .map_err(|why| Failure { status: Status::Error, message: format!("{function}: {why}") })?;
+    inst.check_state(&snap).map_err(|f| Failure { message: format!("{function}: {}", f.message), ..f })?;
     if state.is_null() {
         return Err(null_argument(function));
     }

@@ -325,7 +325,7 @@ pub unsafe extern "C" fn fmi2DeSerializeFMUstate(
     size: usize,
     state: *mut fmi2FMUstate,
 ) -> fmi2Status {
-    with(c, |_| ffi::deserialize_state(bytes as *const u8, size, state, "fmi2DeSerializeFMUstate"))
+    with(c, |comp| ffi::deserialize_state(&comp.inner, bytes as *const u8, size, state, "fmi2DeSerializeFMUstate"))
 }
 
 #[no_mangle]

@@ -417,7 +417,7 @@ pub unsafe extern "C" fn fmi3DeserializeFMUState(
     size: usize,
     state: *mut fmi3FMUState,
 ) -> fmi3Status {
-    with(instance, |_| ffi::deserialize_state(bytes, size, state, "fmi3DeserializeFMUState"))
+    with(instance, |inst| ffi::deserialize_state(inst, bytes, size, state, "fmi3DeserializeFMUState"))
 }
 
 #[no_mangle]

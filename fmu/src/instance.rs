@@ -86,6 +86,9 @@ pub trait Logger {
 /// A saved instance state (Get/SetFMUState): with dead times, the inputs' histories too.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Snapshot {
+    /// The instantiation token of the FMU the state was taken from: a state of another model,
+    /// even one of the same dimensions, is refused.
+    token: String,
     mode: Mode,
     time: f64,
     x: Vec<f64>,
@@ -97,12 +100,16 @@ pub struct Snapshot {
     internal: Vec<f64>,
 }
 
-/// Version 5: parameters, inputs and one history per input of any model (a drive model's as
-/// well as the rig's) and the controller's state, so a state saved by an older FMU is refused
-/// rather than misread.
-const SNAPSHOT_MAGIC: &[u8; 8] = b"RIGTWIN5";
-/// Magic, mode, variant, number of states, inputs, parameters and controller values.
-const SNAPSHOT_HEADER: usize = 8 + 1 + 4 + 4 + 4 + 4 + 4;
+/// Version 6: the FMU's instantiation token, then parameters, inputs and one history per input
+/// of any model and the controller's state, so a state saved by an older FMU or by another
+/// model is refused rather than misread.
+const SNAPSHOT_MAGIC: &[u8; 8] = b"RIGTWIN6";
+/// Bytes of the instantiation token ("{8-4-4-4-12}" hexadecimal digits).
+const SNAPSHOT_TOKEN: usize = 38;
+/// Magic, token, mode, variant, number of states, inputs, parameters and controller values.
+const SNAPSHOT_HEADER: usize = 8 + SNAPSHOT_TOKEN + 1 + 4 + 4 + 4 + 4 + 4;
+/// Where the mode byte is; the variant and the four counts follow it.
+const SNAPSHOT_MODE_AT: usize = 8 + SNAPSHOT_TOKEN;
 /// Most states, inputs or parameters a serialized state may claim (a bound against a
 /// corrupt length, far above any model here).
 const SNAPSHOT_MAX_LEN: usize = 1 << 16;
@@ -112,6 +119,10 @@ impl Snapshot {
     pub fn to_bytes(&self) -> Vec<u8> {
         let mut b = Vec::with_capacity(self.byte_len());
         b.extend_from_slice(SNAPSHOT_MAGIC);
+        let mut token = [b' '; SNAPSHOT_TOKEN];
+        let n = self.token.len().min(SNAPSHOT_TOKEN);
+        token[..n].copy_from_slice(&self.token.as_bytes()[..n]);
+        b.extend_from_slice(&token);
         b.push(self.mode as u8);
         b.extend(self.variant.to_le_bytes());
         for n in [self.x.len(), self.u.len(), self.params.len(), self.internal.len()] {
@@ -136,14 +147,46 @@ impl Snapshot {
             + 8 * (1 + self.x.len() + self.u.len() + self.params.len() + self.internal.len() + 2 * records)
     }
 
-    /// The state of serialized bytes, if they are one.
-    pub fn from_bytes(b: &[u8]) -> Option<Snapshot> {
+    /// Where the continuous states stand in [`Snapshot::to_bytes`] (the time is the 8 bytes
+    /// before them): for tools and tests that inspect a serialized state.
+    pub fn state_bytes(&self) -> std::ops::Range<usize> {
+        let start = SNAPSHOT_HEADER + 4 * self.u.len() + 8;
+        start..start + 8 * self.x.len()
+    }
+
+    /// Every value a number (a state with a NaN or an infinity is no state of an FMU); an input
+    /// history's first record may stand at −∞ (the initialisation's value, held before the start).
+    fn is_finite(&self) -> bool {
+        let history_ok =
+            self.history.iter().flatten().all(|&(t, v)| !t.is_nan() && t != f64::INFINITY && v.is_finite());
+        std::iter::once(self.time)
+            .chain(self.x.iter().copied())
+            .chain(self.u.iter().copied())
+            .chain(self.params.iter().copied())
+            .chain(self.internal.iter().copied())
+            .all(f64::is_finite)
+            && history_ok
+    }
+
+    /// The state of serialized bytes, if they are one: of this format, consistent in its
+    /// lengths, and every value finite (else why not).
+    pub fn from_bytes(b: &[u8]) -> Result<Snapshot, &'static str> {
+        let s = Self::parse(b).ok_or("the bytes are not a serialized state of a rigtwin FMU of this version")?;
+        if !s.is_finite() {
+            return Err("the serialized state holds a value that is not a finite number");
+        }
+        Ok(s)
+    }
+
+    fn parse(b: &[u8]) -> Option<Snapshot> {
         if b.len() < SNAPSHOT_HEADER || &b[..8] != SNAPSHOT_MAGIC {
             return None;
         }
+        let token = std::str::from_utf8(&b[8..SNAPSHOT_MODE_AT]).ok()?.trim_end().to_string();
         let word =
             |at: usize| -> Option<usize> { Some(u32::from_le_bytes(b.get(at..at + 4)?.try_into().ok()?) as usize) };
-        let (nx, nu, np, ni) = (word(13)?, word(17)?, word(21)?, word(25)?);
+        let counts = SNAPSHOT_MODE_AT + 1 + 4;
+        let (nx, nu, np, ni) = (word(counts)?, word(counts + 4)?, word(counts + 8)?, word(counts + 12)?);
         if [nx, nu, np, ni].iter().any(|&n| n > SNAPSHOT_MAX_LEN) {
             return None;
         }
@@ -163,9 +206,9 @@ impl Snapshot {
             Mode::Terminated,
             Mode::Failed,
         ]
-        .get(b[8] as usize)
+        .get(b[SNAPSHOT_MODE_AT] as usize)
         .copied()?;
-        let variant = i32::from_le_bytes(b[9..13].try_into().ok()?);
+        let variant = i32::from_le_bytes(b[SNAPSHOT_MODE_AT + 1..SNAPSHOT_MODE_AT + 5].try_into().ok()?);
         let f: Vec<f64> =
             b[start..].chunks_exact(8).map(|c| f64::from_le_bytes(c.try_into().expect("8 bytes"))).collect();
         let p0 = 1 + nx + nu;
@@ -178,6 +221,7 @@ impl Snapshot {
             at += 2 * n;
         }
         Some(Snapshot {
+            token,
             mode,
             time: f[0],
             x: f[1..1 + nx].to_vec(),
@@ -212,6 +256,8 @@ pub struct Instance {
     table: Table,
     /// The parameter set instantiated: its structure (rig, or which drive model) is fixed.
     spec: FmuParams,
+    /// The instantiation token of the parameter set (a saved state carries it).
+    token: String,
     params: Vec<f64>,
     variant: i32,
     start: (Vec<f64>, i32),
@@ -264,6 +310,7 @@ impl Instance {
             params,
             variant,
             spec: p.clone(),
+            token: crate::token(p),
             x: DVector::zeros(table.nx()),
             table,
             u: DVector::zeros(nu),
@@ -729,6 +776,7 @@ impl Instance {
     /// The instance's state (GetFMUState).
     pub fn snapshot(&self) -> Snapshot {
         Snapshot {
+            token: self.token.clone(),
             mode: self.mode,
             time: self.time,
             x: self.x.as_slice().to_vec(),
@@ -747,8 +795,15 @@ impl Instance {
         }
     }
 
-    /// Restores a state (SetFMUState); refuses a state of another FMU.
-    pub fn restore(&mut self, s: &Snapshot) -> Res<()> {
+    /// Whether `s` is a state of this FMU: taken from the same model (its instantiation token),
+    /// of its dimensions, every value finite.
+    pub fn check_state(&self, s: &Snapshot) -> Res<()> {
+        if s.token != self.token {
+            return error(format!(
+                "the state was taken from the FMU {}, this is {}: a state only fits the model it came from",
+                s.token, self.token
+            ));
+        }
         if s.x.len() != self.nx() || s.u.len() != self.u.len() || s.params.len() != self.params.len() {
             return error(format!(
                 "the state has {} continuous states, {} inputs and {} parameters; this FMU has {}, {} and {}",
@@ -760,6 +815,15 @@ impl Instance {
                 self.params.len()
             ));
         }
+        if !s.is_finite() {
+            return error("the state holds a value that is not a finite number");
+        }
+        Ok(())
+    }
+
+    /// Restores a state (SetFMUState); refuses a state of another FMU.
+    pub fn restore(&mut self, s: &Snapshot) -> Res<()> {
+        self.check_state(s)?;
         let history = s
             .history
             .iter()

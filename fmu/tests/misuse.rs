@@ -50,15 +50,21 @@ unsafe extern "C" fn log3(env: *mut c_void, status: u32, _category: *const c_cha
 
 /// A co-simulation (or model-exchange) FMI 3 instance of the default parameters logging into `log`.
 unsafe fn instance(log: &mut Log, me: bool) -> *mut c_void {
-    let token = CString::new(rigtwin_fmu::token(&FmuParams::default())).unwrap();
+    instance_of(log, me, &FmuParams::default(), None)
+}
+
+/// An FMI 3 instance of parameter set `p`, whose params.json is in the folder `resources`.
+unsafe fn instance_of(log: &mut Log, me: bool, p: &FmuParams, resources: Option<&CStr>) -> *mut c_void {
+    let token = CString::new(rigtwin_fmu::token(p)).unwrap();
+    let resources = resources.map_or(std::ptr::null(), CStr::as_ptr);
     let env = log as *mut Log as *mut c_void;
     let inst = if me {
-        fmi3InstantiateModelExchange(c"me".as_ptr(), token.as_ptr(), std::ptr::null(), false, false, env, Some(log3))
+        fmi3InstantiateModelExchange(c"me".as_ptr(), token.as_ptr(), resources, false, false, env, Some(log3))
     } else {
         fmi3InstantiateCoSimulation(
             c"cs".as_ptr(),
             token.as_ptr(),
-            std::ptr::null(),
+            resources,
             false,
             false,
             false,
@@ -217,5 +223,83 @@ fn a_stop_time_before_the_start_time_is_refused() {
         assert_eq!(rigtwin_fmu::fmi2::fmi2SetupExperiment(c, 0, 0.0, 1.0, 1, 0.5), ERROR);
         assert_eq!(rigtwin_fmu::fmi2::fmi2SetupExperiment(c, 0, 0.0, 0.0, 1, 0.5), OK);
         rigtwin_fmu::fmi2::fmi2FreeInstance(c);
+    });
+}
+
+/// The serialized state of `inst` after a few steps with a drive torque (so its states move).
+unsafe fn serialized_state(inst: *mut c_void) -> Vec<u8> {
+    assert_eq!(init(inst), OK);
+    let drive = VR_INPUT + 1;
+    for k in 0..20 {
+        assert_eq!(fmi3SetFloat64(inst, &drive, 1, &(50.0 * (k as f64 * 0.3).sin()), 1), OK);
+        assert_eq!(step(inst, k as f64 * 1e-3, 1e-3), OK);
+    }
+    let mut state: *mut c_void = std::ptr::null_mut();
+    assert_eq!(fmi3GetFMUState(inst, &mut state), OK);
+    let mut size = 0usize;
+    assert_eq!(fmi3SerializedFMUStateSize(inst, state, &mut size), OK);
+    let mut bytes = vec![0u8; size];
+    assert_eq!(fmi3SerializeFMUState(inst, state, bytes.as_mut_ptr(), size), OK);
+    assert_eq!(fmi3FreeFMUState(inst, &mut state), OK);
+    bytes
+}
+
+#[test]
+fn a_serialized_state_with_a_nan_or_infinite_state_value_is_refused() {
+    in_child("a_serialized_state_with_a_nan_or_infinite_state_value_is_refused", || unsafe {
+        let mut log = Log::new();
+        let inst = instance(&mut log, false);
+        let bytes = serialized_state(inst);
+        // the round trip itself is accepted
+        let mut state: *mut c_void = std::ptr::null_mut();
+        assert_eq!(fmi3DeserializeFMUState(inst, bytes.as_ptr(), bytes.len(), &mut state), OK);
+        assert_eq!(fmi3SetFMUState(inst, state), OK);
+        assert_eq!(fmi3FreeFMUState(inst, &mut state), OK);
+        // the time and every continuous state made NaN or infinite in turn
+        let states = rigtwin_fmu::instance::Snapshot::from_bytes(&bytes).unwrap().state_bytes();
+        assert!(states.len() >= 6 * 8, "the rig has at least six states");
+        for at in (states.start - 8..states.end).step_by(8) {
+            for bad in [f64::NAN, f64::INFINITY, f64::NEG_INFINITY] {
+                let mut b = bytes.clone();
+                b[at..at + 8].copy_from_slice(&bad.to_le_bytes());
+                let mut state: *mut c_void = std::ptr::null_mut();
+                assert_eq!(fmi3DeserializeFMUState(inst, b.as_ptr(), b.len(), &mut state), ERROR, "byte {at} = {bad}");
+                assert!(state.is_null());
+                assert!(log.last().unwrap().1.contains("not a finite number"), "{log:?}");
+            }
+        }
+        // the instance keeps its finite state
+        for vr in VR_STATE..VR_STATE + 6 {
+            let (s, v) = get(inst, vr);
+            assert!(s == OK && v.is_finite());
+        }
+        fmi3FreeInstance(inst);
+    });
+}
+
+#[test]
+fn the_state_of_another_model_with_the_same_dimensions_is_refused() {
+    in_child("the_state_of_another_model_with_the_same_dimensions_is_refused", || unsafe {
+        // another parameter set of the same structure: same states, inputs and parameters
+        let mut other = FmuParams::default();
+        other.powertrain.j_drive *= 1.5;
+        assert_ne!(rigtwin_fmu::token(&other), rigtwin_fmu::token(&FmuParams::default()));
+        let dir = std::env::temp_dir().join(format!("rigtwin-misuse-other-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        std::fs::write(dir.join(rigtwin_fmu::PARAMS_RESOURCE), serde_json::to_vec(&other).unwrap()).unwrap();
+        let resources = CString::new(dir.to_str().unwrap()).unwrap();
+        let mut their_log = Log::new();
+        let theirs = instance_of(&mut their_log, false, &other, Some(&resources));
+        let bytes = serialized_state(theirs);
+        fmi3FreeInstance(theirs);
+        let mut log = Log::new();
+        let inst = instance(&mut log, false);
+        let own = serialized_state(inst);
+        assert_eq!(own.len(), bytes.len(), "the two states have the same dimensions");
+        let mut state: *mut c_void = std::ptr::null_mut();
+        assert_eq!(fmi3DeserializeFMUState(inst, bytes.as_ptr(), bytes.len(), &mut state), ERROR);
+        assert!(state.is_null());
+        assert!(log.last().unwrap().1.contains("only fits the model it came from"), "{log:?}");
+        fmi3FreeInstance(inst);
     });
 }

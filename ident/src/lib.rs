@@ -24,5 +24,6 @@ pub use design::{design_spring, Design, DesignRow, DesignSettings};
 pub use error::{IdentError, Result};
 pub use parametrise::{
     Confidence, Estimate, Measurement, ModelChoice, MonteCarlo, PairSolution, Parametrisation, ParametriseSettings,
+    MAX_MONTE_CARLO_SAMPLES,
 };
 pub use sweep::{FrequencyEstimate, SeenMode, Sweep, SweepAnalysis, SweepSettings};

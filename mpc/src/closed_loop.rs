@@ -9,6 +9,11 @@ use serde::Serialize;
 use crate::controller::Controller;
 use crate::error::Result;
 
+/// Largest share of a run's controller steps that may fall back to the shifted previous plan
+/// (the QP missed its time limit or failed) for the run to describe the MPC: past it the loop
+/// was mostly driven by stale plans, and its figures are the fallback's, not the controller's.
+pub const MAX_FALLBACK_SHARE: f64 = 0.1;
+
 /// Anything that takes the inputs for one sample period and gives its outputs.
 pub trait Plant {
     /// Current outputs (all of them, in the plant's output order).

@@ -33,4 +33,5 @@ pub use controller::{Controller, StepInfo};
 pub use error::{MpcError, Result};
 pub use settings::{
     exponential_blocks, Formulation, InputSettings, MpcSection, MpcSettings, OutputSettings, SolverSettings,
+    MAX_HORIZON,
 };

@@ -311,6 +311,12 @@ impl MpcSection {
     }
 }
 
+/// Longest prediction horizon, steps: twice the real-time regime's longest (10–100 steps at
+/// 1 ms). The QP's size grows with it (the sparse formulation's KKT system by the horizon times
+/// the states, the condensed one's dense Hessian by its square), and a longer horizon cannot be
+/// solved within a 1 kHz loop's step on this class of machine.
+pub const MAX_HORIZON: usize = 200;
+
 /// Move blocks 1, 2, 4, … doubling, at most `count` of them, the last one taking the rest of
 /// `horizon`: fine near the present where the first input is decided, coarse far out.
 pub fn exponential_blocks(horizon: usize, count: usize) -> Vec<usize> {
@@ -429,8 +435,8 @@ impl MpcSettings {
             }
         };
         pos("dt_s", self.dt_s)?;
-        if self.horizon == 0 || self.horizon > 1000 {
-            return Err(setting("horizon", format!("must be 1..=1000 steps, got {}", self.horizon)));
+        if self.horizon == 0 || self.horizon > MAX_HORIZON {
+            return Err(setting("horizon", format!("must be 1..={MAX_HORIZON} steps, got {}", self.horizon)));
         }
         if !self.move_blocks.is_empty() {
             let sum: usize = self.move_blocks.iter().sum();

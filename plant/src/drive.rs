@@ -101,12 +101,25 @@ pub struct DriveModel {
     pub effects: Vec<Effect>,
 }
 
+/// Most inputs (forces or torques) a drive model may have.
+pub const MAX_INPUTS: usize = 8;
+/// Most effects a drive model may have (one of each kind on every element is far more than a
+/// record can tell apart).
+pub const MAX_EFFECTS: usize = 32;
+
 impl DriveModel {
     /// Checks the line, the inputs and every effect (element in range, parameter positive and
     /// finite, no element with the same effect twice).
     pub fn validate(&self) -> Result<()> {
         self.line.validate()?;
         let n = self.line.bodies.len();
+        if self.inputs.len() > MAX_INPUTS || self.effects.len() > MAX_EFFECTS {
+            return Err(PlantError::Invalid(format!(
+                "{} inputs and {} effects: a model takes at most {MAX_INPUTS} inputs and {MAX_EFFECTS} effects",
+                self.inputs.len(),
+                self.effects.len()
+            )));
+        }
         if let Some(&b) = self.inputs.iter().find(|&&b| b >= n) {
             return Err(PlantError::Invalid(format!("an input acts on body {} of a line of {n}", b + 1)));
         }

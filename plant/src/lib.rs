@@ -48,7 +48,7 @@ pub use drive::{
     TimeDelay,
 };
 pub use error::{PlantError, Result};
-pub use line::{Coupling, Domain, Line, LineBody, Quantity};
+pub use line::{Coupling, Domain, Line, LineBody, Quantity, MAX_BODIES, MAX_COUPLINGS};
 pub use mechanical::{Layout, MechanicalModel, Output, Spring};
 pub use modal::{damp, modes, Modes, Pole};
 pub use reduce::{reduce, Reduction, ReductionStep};

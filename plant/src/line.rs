@@ -115,6 +115,13 @@ pub struct Line {
     pub couplings: Vec<Coupling>,
 }
 
+/// Most bodies a line may have: four times a real-sized shaft line (8 bodies, two gear stages);
+/// the work of a diagnosis or an MPC grows with a high power of the count, and a model far
+/// larger than this would take hours or exhaust memory on a rig's PC.
+pub const MAX_BODIES: usize = 32;
+/// Most couplings a line may have (twice [`MAX_BODIES`]: branched gearboxes, parallel paths).
+pub const MAX_COUPLINGS: usize = 2 * MAX_BODIES;
+
 impl Line {
     /// Checks every value; errors name the key as a bundle spells it (`model.bodies[2].inertia`,
     /// 1-based like the bundle's positions).
@@ -122,6 +129,13 @@ impl Line {
         let u = self.domain.units();
         if self.bodies.is_empty() {
             return Err(PlantError::Invalid("`model.bodies` is empty: a line needs at least one body".into()));
+        }
+        if self.bodies.len() > MAX_BODIES || self.couplings.len() > MAX_COUPLINGS {
+            return Err(PlantError::Invalid(format!(
+                "`model.bodies` has {} entries and `model.couplings` {}: rigtwin takes lines of at most {MAX_BODIES} bodies and {MAX_COUPLINGS} couplings (a diagnosis or MPC of a larger model would not finish on this class of machine): reduce the line to its lowest modes first",
+                self.bodies.len(),
+                self.couplings.len()
+            )));
         }
         let general = self.couplings.iter().any(|c| c.elongation.is_some());
         if !general && self.couplings.len() + 1 != self.bodies.len() {
