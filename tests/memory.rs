@@ -6,7 +6,8 @@
 //! at least the 36 MB file on top of that. Alone in this test binary so no other child's peak
 //! is mixed in.
 
-use std::os::unix::process::CommandExt;
+mod common;
+
 use std::process::Command;
 
 #[test]
@@ -40,17 +41,7 @@ fn an_mdf_record_is_read_in_memory_proportional_to_the_selected_channels() {
     let run = |limit: u64| {
         let mut cmd = Command::new(env!("CARGO_BIN_EXE_rigtwin"));
         cmd.args(["check", dir.join("b.toml").to_str().unwrap()]).stderr(std::process::Stdio::null());
-        // SAFETY: setrlimit is async-signal-safe; nothing else runs between fork and exec
-        unsafe {
-            cmd.pre_exec(move || {
-                let l = libc::rlimit { rlim_cur: limit, rlim_max: limit };
-                if libc::setrlimit(libc::RLIMIT_DATA, &l) == 0 {
-                    Ok(())
-                } else {
-                    Err(std::io::Error::last_os_error())
-                }
-            });
-        }
+        common::limit_data(&mut cmd, limit);
         cmd.status().unwrap().success()
     };
     let within = run(cap);

@@ -2,6 +2,9 @@
 //! limit and checks the exit code, the message (file, line or key, and what was expected) and
 //! what is left on disk. Nothing may hang, panic, clobber a file or pass as a result.
 
+mod common;
+
+use common::shared;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
@@ -21,20 +24,9 @@ fn run_in(dir: &Path, args: &[&str], limit_s: u64) -> Run {
 /// (RLIMIT_DATA): a reader that holds more than that fails its allocation and aborts, which the
 /// checks see as a missing message.
 fn run_limited(dir: &Path, args: &[&str], limit_s: u64, data_bytes: Option<u64>) -> Run {
-    use std::os::unix::process::CommandExt;
     let mut cmd = Command::new(env!("CARGO_BIN_EXE_rigtwin"));
     if let Some(limit) = data_bytes {
-        // SAFETY: setrlimit is async-signal-safe; nothing else runs between fork and exec
-        unsafe {
-            cmd.pre_exec(move || {
-                let l = libc::rlimit { rlim_cur: limit, rlim_max: limit };
-                if libc::setrlimit(libc::RLIMIT_DATA, &l) == 0 {
-                    Ok(())
-                } else {
-                    Err(std::io::Error::last_os_error())
-                }
-            });
-        }
+        common::limit_data(&mut cmd, limit);
     }
     let mut child = cmd
         .args(args)
@@ -64,28 +56,28 @@ fn run_limited(dir: &Path, args: &[&str], limit_s: u64, data_bytes: Option<u64>)
 
 /// A refusal: exit code 1, nothing on stdout, and stderr containing each of `words`.
 fn refused(dir: &Path, args: &[&str], words: &[&str]) -> String {
-    let r = run_in(dir, args, 60);
-    assert_eq!(r.code, Some(1), "rigtwin {args:?} should fail:\nstdout {}\nstderr {}", r.stdout, r.stderr);
-    assert!(r.stdout.is_empty(), "rigtwin {args:?} printed a result:\n{}", r.stdout);
-    for w in words {
-        assert!(r.stderr.contains(w), "rigtwin {args:?}: `{w}` missing in:\n{}", r.stderr);
-    }
-    r.stderr
+    refused_with(1, dir, args, words)
 }
 
 /// A command line clap refuses: exit code 2, nothing on stdout, stderr naming each of `words`.
 fn usage_refused(dir: &Path, args: &[&str], words: &[&str]) -> String {
+    refused_with(2, dir, args, words)
+}
+
+fn refused_with(code: i32, dir: &Path, args: &[&str], words: &[&str]) -> String {
     let r = run_in(dir, args, 60);
-    assert_eq!(r.code, Some(2), "rigtwin {args:?} should be a usage error:\nstdout {}\nstderr {}", r.stdout, r.stderr);
+    assert_eq!(
+        r.code,
+        Some(code),
+        "rigtwin {args:?} should fail with {code}:\nstdout {}\nstderr {}",
+        r.stdout,
+        r.stderr
+    );
     assert!(r.stdout.is_empty(), "rigtwin {args:?} printed a result:\n{}", r.stdout);
     for w in words {
         assert!(r.stderr.contains(w), "rigtwin {args:?}: `{w}` missing in:\n{}", r.stderr);
     }
     r.stderr
-}
-
-fn shared(name: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/data").join(name)
 }
 
 /// A scratch folder with copies of the example bundle `name` (TOML and data files).

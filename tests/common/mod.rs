@@ -20,6 +20,23 @@ pub fn fmu_dir() -> &'static Path {
     })
 }
 
+/// Caps the data segment (heap, large allocations: RLIMIT_DATA) of the process `cmd` starts at
+/// `bytes`: an allocation beyond it fails, and the run ends without its message.
+pub fn limit_data(cmd: &mut Command, bytes: u64) {
+    use std::os::unix::process::CommandExt;
+    // SAFETY: setrlimit is async-signal-safe; nothing else runs between fork and exec
+    unsafe {
+        cmd.pre_exec(move || {
+            let l = libc::rlimit { rlim_cur: bytes, rlim_max: bytes };
+            if libc::setrlimit(libc::RLIMIT_DATA, &l) == 0 {
+                Ok(())
+            } else {
+                Err(std::io::Error::last_os_error())
+            }
+        });
+    }
+}
+
 /// The Python of the venv `.ci/run` makes (override with RIGTWIN_PYTHON).
 pub fn python() -> PathBuf {
     if let Ok(p) = std::env::var("RIGTWIN_PYTHON") {
