@@ -92,8 +92,11 @@ pub enum Target {
     /// A regular file or a new name: written to a temporary file beside it, then renamed
     /// over it (a symbolic link is followed, so the link stays and its target is replaced).
     File(PathBuf),
-    /// A character device (`/dev/null`, `/dev/stdout` on a terminal): written through.
+    /// A character device (`/dev/null`, a terminal): written through.
     Device(PathBuf),
+    /// Standard output (`-` or `/dev/stdout`, whatever it is connected to: a terminal, a pipe,
+    /// a file).
+    Stdout,
 }
 
 impl Target {
@@ -101,6 +104,7 @@ impl Target {
     pub fn path(&self) -> &Path {
         match self {
             Target::File(p) | Target::Device(p) => p,
+            Target::Stdout => Path::new("-"),
         }
     }
 }
@@ -142,6 +146,9 @@ pub fn output(path: &Path, option: &str, inputs: &[PathBuf]) -> anyhow::Result<T
     let named = || format!("{option} {}", path.display());
     if path.as_os_str().is_empty() {
         anyhow::bail!("{option}: an empty file name was given");
+    }
+    if path == Path::new("-") || path == Path::new("/dev/stdout") {
+        return Ok(Target::Stdout);
     }
     let resolved = resolve_output(path, &named)?;
     for input in inputs {
@@ -187,6 +194,12 @@ impl Outputs {
     /// Checks `path` as the output of `option` and claims it.
     pub fn file(&mut self, path: &Path, option: &str) -> anyhow::Result<Target> {
         let target = output(path, option, &self.inputs)?;
+        if target == Target::Stdout {
+            if let Some((_, other)) = self.claimed.iter().find(|(p, _)| p == Path::new("-")) {
+                anyhow::bail!("{option} -: {other} writes to standard output too; give one of them a file");
+            }
+            self.claimed.push((PathBuf::from("-"), option.to_string()));
+        }
         if let Target::File(resolved) = &target {
             if let Some((_, other)) = self.claimed.iter().find(|(p, _)| p == resolved) {
                 anyhow::bail!(
@@ -256,6 +269,12 @@ fn temporary(path: &Path) -> PathBuf {
 /// renamed over the target; on any failure the temporary file is removed.
 pub fn write(target: &Target, bytes: &[u8]) -> anyhow::Result<()> {
     match target {
+        Target::Stdout => {
+            // a reader that has gone (`| head`) is no error of ours
+            let mut out = std::io::stdout().lock();
+            let _ = out.write_all(bytes).and_then(|()| out.flush());
+            Ok(())
+        }
         Target::Device(p) => {
             let mut f =
                 std::fs::OpenOptions::new().write(true).open(p).map_err(|e| anyhow::anyhow!("{}: {e}", p.display()))?;

@@ -6,7 +6,7 @@ use std::process::ExitCode;
 
 use ident::{DesignSettings, ModelChoice, ParametriseSettings};
 use plant::{paper, Rig, Variant};
-use rigtwin::files::Outputs;
+use rigtwin::files::{Outputs, Target};
 use rigtwin::identification::{self, FrequencyMethod, Source};
 use rigtwin::report::{self, ModelKind};
 use rigtwin::rigfile::load_rig;
@@ -52,9 +52,10 @@ struct RigArgs {
     /// rig's d_short and d_long.
     #[arg(long, value_name = "ZETA", allow_negative_numbers = true)]
     damping_ratio: Option<f64>,
-    /// Print JSON instead of text.
-    #[arg(long)]
-    json: bool,
+    /// The report as JSON: to standard output instead of the text (`--json` or `--json -`), or
+    /// to FILE besides the text.
+    #[arg(long, value_name = "FILE|-", num_args = 0..=1, default_missing_value = "-")]
+    json: Option<PathBuf>,
 }
 
 #[derive(Subcommand)]
@@ -109,9 +110,10 @@ enum Command {
         /// Monte Carlo draws for the intervals (0: linearised only).
         #[arg(long, default_value_t = 2000, allow_negative_numbers = true, value_parser = |s: &str| count_in(s, 0, ident::MAX_MONTE_CARLO_SAMPLES))]
         samples: usize,
-        /// Print JSON instead of text.
-        #[arg(long)]
-        json: bool,
+        /// The report as JSON: to standard output instead of the text (`--json` or `--json -`),
+        /// or to FILE besides the text.
+        #[arg(long, value_name = "FILE|-", num_args = 0..=1, default_missing_value = "-")]
+        json: Option<PathBuf>,
     },
     /// Bearing/seal K, C, M from a two-test shake bundle (San Andrés 2011).
     Bearing {
@@ -130,9 +132,10 @@ enum Command {
         /// Write measured and fitted impedances as SVG.
         #[arg(long, value_name = "FILE.svg")]
         plot: Option<PathBuf>,
-        /// Print JSON instead of text.
-        #[arg(long)]
-        json: bool,
+        /// The report as JSON: to standard output instead of the text (`--json` or `--json -`),
+        /// or to FILE besides the text.
+        #[arg(long, value_name = "FILE|-", num_args = 0..=1, default_missing_value = "-")]
+        json: Option<PathBuf>,
     },
     /// Write the FMUs (FMI 3.0 and FMI 2.0, co-simulation and model exchange).
     Fmu {
@@ -195,9 +198,10 @@ enum Command {
         /// Wall-clock limit of one QP solve, µs; past it the shifted previous plan is applied.
         #[arg(long, default_value_t = 600.0, allow_negative_numbers = true, value_parser = positive)]
         time_limit_us: f64,
-        /// Print JSON instead of text.
-        #[arg(long)]
-        json: bool,
+        /// The report as JSON: to standard output instead of the text (`--json` or `--json -`),
+        /// or to FILE besides the text.
+        #[arg(long, value_name = "FILE|-", num_args = 0..=1, default_missing_value = "-")]
+        json: Option<PathBuf>,
         /// Write side-shaft torque, load speed and machine torques over time as SVG.
         #[arg(long, value_name = "FILE.svg")]
         plot: Option<PathBuf>,
@@ -211,8 +215,9 @@ enum Command {
         /// The measurement bundle.
         #[arg(value_name = "BUNDLE.toml")]
         bundle: PathBuf,
-        /// Also write the report as JSON to this file.
-        #[arg(long, value_name = "FILE")]
+        /// The report as JSON: to standard output instead of the text (`--json` or `--json -`),
+        /// or to FILE besides the text.
+        #[arg(long, value_name = "FILE|-", num_args = 0..=1, default_missing_value = "-")]
         json: Option<PathBuf>,
         /// Write measured vs model (before and after) and the residual spectrum as SVG.
         #[arg(long, value_name = "FILE.svg")]
@@ -247,9 +252,10 @@ enum Command {
         /// Model.
         #[arg(long, value_enum, default_value_t = ModelArg::Differential)]
         model: ModelArg,
-        /// Print JSON instead of text.
-        #[arg(long)]
-        json: bool,
+        /// The report as JSON: to standard output instead of the text (`--json` or `--json -`),
+        /// or to FILE besides the text.
+        #[arg(long, value_name = "FILE|-", num_args = 0..=1, default_missing_value = "-")]
+        json: Option<PathBuf>,
     },
 }
 
@@ -347,32 +353,40 @@ fn load(args: &RigArgs) -> anyhow::Result<(Rig, Variant)> {
     Ok((rig, variant))
 }
 
-fn print_json<T: serde::Serialize>(v: &T) -> anyhow::Result<()> {
-    outln!("{}", serde_json::to_string_pretty(v)?);
+/// A command's report: the text to standard output unless the JSON goes there, the JSON to its
+/// checked target (see `rigtwin::report::json_document` for its one convention).
+fn emit<T: serde::Serialize>(json: Option<&Target>, value: &T, text: &str) -> anyhow::Result<()> {
+    if json != Some(&Target::Stdout) {
+        out!("{text}");
+    }
+    if let Some(target) = json {
+        rigtwin::files::write(target, rigtwin::report::json_document(value)?.as_bytes())?;
+    }
     Ok(())
+}
+
+/// The checked target of `--json` for a command reading `inputs`.
+fn json_target(json: &Option<PathBuf>, inputs: Vec<PathBuf>) -> anyhow::Result<Option<Target>> {
+    json.as_ref().map(|f| Outputs::new(&inputs).file(f, "--json")).transpose()
 }
 
 fn run(cli: Cli) -> anyhow::Result<()> {
     match cli.command {
         Command::Modal { rig, model } => {
+            let json = json_target(&rig.json, rig.rig.iter().cloned().collect())?;
             let (r, variant) = load(&rig)?;
             let rep = report::modal(&r, model, variant)?;
-            if rig.json {
-                print_json(&rep)?;
-            } else {
-                out!("{}", rep.human(12));
-            }
+            emit(json.as_ref(), &rep, &rep.human(12))?;
         }
         Command::Reduce { rig, masses } => {
+            let json = json_target(&rig.json, rig.rig.iter().cloned().collect())?;
             let (r, variant) = load(&rig)?;
             let rep = report::reduction(&r, variant, masses)?;
-            if rig.json {
-                print_json(&rep)?;
-            } else {
-                out!("{}", rep.human());
-            }
+            emit(json.as_ref(), &rep, &rep.human())?;
         }
         Command::Parametrise { bundles, measured, rig, sigma_hz, model, method, samples, json } => {
+            let inputs = bundles.iter().chain(&rig).flat_map(|f| rigtwin::bundle::input_files(f)).collect();
+            let json = json_target(&json, inputs)?;
             let source = match (bundles.is_empty(), measured.is_empty()) {
                 (false, true) => Source::Bundles(bundles),
                 (true, false) => Source::Measured {
@@ -388,15 +402,12 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             };
             let settings = ParametriseSettings { monte_carlo_samples: samples, ..Default::default() };
             let rep = identification::parametrise(source, model.into(), method, sigma_hz, &settings)?;
-            if json {
-                print_json(&rep)?;
-            } else {
-                out!("{}", rep.human());
-            }
+            emit(json.as_ref(), &rep, &rep.human())?;
         }
         Command::Bearing { bundle, structure, coupling, method, plot, json } => {
             let mut outs = Outputs::new(&rigtwin::bundle::input_files(&bundle));
             let plot = plot.map(|p| outs.svg(&p, "--plot")).transpose()?;
+            let json = json.map(|f| outs.file(&f, "--json")).transpose()?;
             let b = rigtwin::bundle::load_bearing(&bundle)?;
             let structure = structure.map(|s| match s {
                 StructureArg::Kc => ident::Structure::KC,
@@ -416,11 +427,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                 let title = format!("{} — {:?} {:?}/{:?}", bundle.display(), rep.method, rep.structure, rep.coupling);
                 rigtwin::bearing::plot(p, &imp, &b.support, &rep.element, &title)?;
             }
-            if json {
-                print_json(&rep)?;
-            } else {
-                out!("{}", rep.human());
-            }
+            emit(json.as_ref(), &rep, &rep.human())?;
         }
         Command::Fmu { params, out, descriptions, controller, horizon, blocks, plant } => {
             let mut p = match &params {
@@ -491,6 +498,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             let mut outs = Outputs::new(&inputs);
             let plot = plot.map(|f| outs.svg(&f, "--plot")).transpose()?;
             let export_qp = export_qp.map(|f| outs.file(&f, "--export-qp")).transpose()?;
+            let json = json.map(|f| outs.file(&f, "--json")).transpose()?;
             let model_name = params.as_ref().map_or("the embedded rig".to_string(), |f| f.display().to_string());
             let p = match &params {
                 Some(f) => rigtwin::fmu_package::params_of_file(f)?,
@@ -519,11 +527,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                 }
                 let rep = rigtwin::control::drive_report(model, &truth, &section, horizon, time_limit_us * 1e-6, step)
                     .map_err(|e| anyhow::anyhow!("{model_name}: {e:#}"))?;
-                if json {
-                    print_json(&serde_json::to_value(&rep)?)?;
-                } else {
-                    out!("{}", rep.human());
-                }
+                emit(json.as_ref(), &rep, &rep.human())?;
                 return Ok(());
             }
             let truth = match &plant {
@@ -568,11 +572,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             if let Some(f) = &plot {
                 rigtwin::control::plot(f, &p, &run, kind)?;
             }
-            if json {
-                print_json(&rep.to_json())?;
-            } else {
-                out!("{}", rep.human());
-            }
+            emit(json.as_ref(), &rep.to_json(), &rep.human())?;
             if let Some(why) = rep.invalid() {
                 return Err(NotValid(why).into());
             }
@@ -592,10 +592,6 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                 }
             };
             let d = rigtwin::diagnosis::diagnose(&bundle, &progress)?;
-            if let Some(f) = &json {
-                let text = serde_json::to_string_pretty(&d.report)?;
-                rigtwin::files::write(f, text.as_bytes())?;
-            }
             if let Some(f) = &write_model {
                 rigtwin::files::write(f, d.model_toml.as_bytes())?;
             }
@@ -605,23 +601,20 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             if let Some(f) = &plot {
                 rigtwin::plot::lines(f, &format!("rigtwin diagnose {}", bundle.display()), &d.panels)?;
             }
-            out!("{}", rigtwin::diagnosis::human(&d.report));
+            emit(json.as_ref(), &d.report, &rigtwin::diagnosis::human(&d.report))?;
         }
         Command::Check { bundle } => {
             out!("{}", rigtwin::bundle::summary(&bundle)?);
         }
         Command::DesignSpring { rig, sigma_hz, target, model, json } => {
+            let json = json_target(&json, rig.iter().cloned().collect())?;
             let r = match &rig {
                 Some(f) => load_rig(f)?,
                 None => paper::rig(),
             };
             let settings = DesignSettings { sigma_hz, target, ..Default::default() };
             let rep = identification::design(&r, model.into(), &settings)?;
-            if json {
-                print_json(&rep)?;
-            } else {
-                out!("{}", rep.human());
-            }
+            emit(json.as_ref(), &rep, &rep.human())?;
         }
         Command::Run { rig, out } => {
             let (r, variant) = load(&rig)?;
@@ -629,20 +622,18 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             // the FMUs of the same rig, in the variant asked for
             let params = rigtwin::fmu_package::params_of_rig(&Rig { variant, ..r.clone() })?;
             let mut outs = Outputs::new(&rig.rig.iter().cloned().collect::<Vec<_>>());
+            let json = rig.json.as_ref().map(|f| outs.file(f, "--json")).transpose()?;
             let fmus = outs.in_folder(&out, "--out", rigtwin::fmu_package::fmu_names(false))?;
             let lib = rigtwin::fmu_package::library()?;
             rigtwin::fmu_package::package(&params, &lib, &fmus)?;
             let [a, b] = rigtwin::fmu_package::fmu_names(false).map(|n| out.join(n));
-            if rig.json {
-                print_json(&summary)?;
-            } else {
-                out!("{}", summary.human());
-                outln!(
-                    "\n5. FMUs (FMI 3.0 and 2.0, co-simulation and model exchange)\n  {}\n  {}",
-                    a.display(),
-                    b.display()
-                );
-            }
+            let text = format!(
+                "{}\n5. FMUs (FMI 3.0 and 2.0, co-simulation and model exchange)\n  {}\n  {}\n",
+                summary.human(),
+                a.display(),
+                b.display()
+            );
+            emit(json.as_ref(), &summary, &text)?;
         }
     }
     Ok(())

@@ -323,3 +323,20 @@ impl Summary {
         s
     }
 }
+
+/// The version of rigtwin's JSON reports: `schema_version` in every document a command writes
+/// (`docs/json.md` lists the documents); raised when a key is renamed or removed.
+pub const JSON_SCHEMA_VERSION: u32 = 1;
+
+/// A report as the JSON document a command writes: an object with `schema_version`, pretty
+/// printed, ending in a line break.
+pub fn json_document<T: serde::Serialize>(report: &T) -> anyhow::Result<String> {
+    let mut v = serde_json::to_value(report)?;
+    match v.as_object_mut() {
+        Some(o) => {
+            o.insert("schema_version".into(), JSON_SCHEMA_VERSION.into());
+        }
+        None => v = serde_json::json!({ "schema_version": JSON_SCHEMA_VERSION, "report": v }),
+    }
+    Ok(serde_json::to_string_pretty(&v)? + "\n")
+}

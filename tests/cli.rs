@@ -316,3 +316,41 @@ fn readme_lists_every_flag() {
         }
     }
 }
+
+/// One JSON convention: `--json` and `--json -` print the JSON (only) to standard output,
+/// `/dev/stdout` too when it is a pipe, `--json FILE` writes the file and prints the text; every
+/// document carries `schema_version`.
+#[test]
+fn every_command_writes_json_one_way() {
+    let d = common::scratch("cli", "json-convention");
+    let sweep = common::shared("v1_sweep_b.toml");
+    let sweep = sweep.to_str().unwrap();
+    let commands: Vec<Vec<&str>> = vec![
+        vec!["modal"],
+        vec!["reduce"],
+        vec!["design-spring"],
+        vec!["parametrise", "--measured", "V1=12.77", "--measured", "V2=12.62", "--samples", "0"],
+        vec!["mpc", "--duration", "0.2"],
+        vec!["diagnose", sweep],
+    ];
+    for args in &commands {
+        for flag in [&["--json"][..], &["--json", "-"], &["--json", "/dev/stdout"]] {
+            let all: Vec<&str> = args.iter().copied().chain(flag.iter().copied()).collect();
+            let out = Command::new(env!("CARGO_BIN_EXE_rigtwin")).args(&all).current_dir(&d).output().unwrap();
+            assert!(out.status.success(), "{all:?}: {}", String::from_utf8_lossy(&out.stderr));
+            let v: Value = serde_json::from_slice(&out.stdout)
+                .unwrap_or_else(|e| panic!("{all:?}: stdout is not one JSON document ({e})"));
+            assert_eq!(v["schema_version"], 1, "{all:?}");
+        }
+        assert!(!d.join("-").exists(), "{args:?}: no file named `-`");
+        // a file: the JSON there, the text on stdout
+        let file = d.join("report.json");
+        let all: Vec<&str> = args.iter().copied().chain(["--json", file.to_str().unwrap()]).collect();
+        let out = Command::new(env!("CARGO_BIN_EXE_rigtwin")).args(&all).current_dir(&d).output().unwrap();
+        assert!(out.status.success(), "{all:?}: {}", String::from_utf8_lossy(&out.stderr));
+        let v: Value = serde_json::from_str(&std::fs::read_to_string(&file).unwrap()).unwrap();
+        assert_eq!(v["schema_version"], 1);
+        assert!(serde_json::from_slice::<Value>(&out.stdout).is_err(), "{all:?}: the text, not JSON, on stdout");
+        std::fs::remove_file(&file).unwrap();
+    }
+}

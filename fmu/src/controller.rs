@@ -36,10 +36,25 @@ pub const OUTPUTS: [(&str, &str); 3] = [
 /// Tunable parameters: (name, unit, description, constraint), in the order of
 /// [`ControllerSpec::values`].
 pub const PARAMETERS: [(&str, &str, &str, Constraint); 9] = [
-    ("mpc.speed_weight", "1", "weight on the load speeds' tracking error, per (rad/s)^2", Constraint::Positive),
-    ("mpc.shaft_weight", "1", "weight on the side-shaft torques' oscillation, per (N.m)^2", Constraint::NonNegative),
+    (
+        "mpc.speed_weight",
+        "s2/rad2",
+        "weight on the load speeds' tracking error: cost per (rad/s)^2",
+        Constraint::Positive,
+    ),
+    (
+        "mpc.shaft_weight",
+        "1/(N.m)2",
+        "weight on the side-shaft torques' oscillation: cost per (N.m)^2",
+        Constraint::NonNegative,
+    ),
     ("mpc.shaft_soft_max", "N.m", "soft bound on |side-shaft torque|", Constraint::Positive),
-    ("mpc.drive_weight", "1", "weight on the drive torque's tracking error, per (N.m)^2", Constraint::Positive),
+    (
+        "mpc.drive_weight",
+        "1/(N.m)2",
+        "weight on the drive torque's tracking error: cost per (N.m)^2",
+        Constraint::Positive,
+    ),
     ("mpc.load_torque_max", "N.m", "hard bound on |load-machine torque|", Constraint::Positive),
     ("mpc.drive_torque_max", "N.m", "hard bound on |drive torque|", Constraint::Positive),
     ("mpc.load_rate_max", "N.m/s", "hard bound on the load-machine torque's rate", Constraint::Positive),

@@ -12,7 +12,7 @@ pub const MODEL_IDENTIFIER: &str = "rigtwin";
 
 /// Units used by the table: (name, SI base-unit exponents kg, m, s, rad, the FMI 3 type and
 /// quantity that carries it).
-const UNITS: [(&str, [i32; 4], &str); 18] = [
+const UNITS: [(&str, [i32; 4], &str); 20] = [
     ("s", [0, 0, 1, 0], "Time"),
     ("rad", [0, 0, 0, 1], "Angle"),
     ("rad/s", [0, 0, -1, 1], "AngularVelocity"),
@@ -31,6 +31,9 @@ const UNITS: [(&str, [i32; 4], &str); 18] = [
     ("N.m/s", [1, 2, -3, 0], "TorqueRate"),
     ("N/s", [1, 1, -3, 0], "ForceRate"),
     ("1", [0, 0, 0, 0], "Ratio"),
+    // the controller's weights: cost per squared error
+    ("s2/rad2", [0, 0, 2, -2], "SpeedErrorWeight"),
+    ("1/(N.m)2", [-2, -4, 4, 0], "TorqueErrorWeight"),
 ];
 
 /// The FMI 3 type declaring a unit.
@@ -184,6 +187,22 @@ pub fn describe(p: &FmuParams, version: Version) -> String {
     describe_with(p, version, &token(p))
 }
 
+/// The FMU's `modelName`, which importers show: what the FMU is, so that a plant, a drive line
+/// and a controller side by side in a tool are told apart.
+pub fn model_name(p: &FmuParams) -> String {
+    match (&p.drive, &p.controller) {
+        (_, Some(_)) => "rigtwin MPC controller".into(),
+        (None, None) => "rigtwin open-differential rig".into(),
+        (Some(m), None) => {
+            let kind = match m.line.domain {
+                plant::Domain::Rotational => "drive line",
+                plant::Domain::Translational => "linear axis",
+            };
+            format!("rigtwin {kind} ({} bodies)", m.line.bodies.len())
+        }
+    }
+}
+
 fn describe_with(p: &FmuParams, version: Version, token: &str) -> String {
     let table = Table::new(p);
     let vars = &table.variables;
@@ -200,7 +219,8 @@ fn describe_with(p: &FmuParams, version: Version, token: &str) -> String {
         Version::Fmi3 => {
             let _ = writeln!(
                 x,
-                "<fmiModelDescription fmiVersion=\"3.0\" modelName=\"rigtwin\" description=\"{}\" generationTool=\"rigtwin {}\" instantiationToken=\"{token}\" variableNamingConvention=\"structured\">",
+                "<fmiModelDescription fmiVersion=\"3.0\" modelName=\"{}\" description=\"{}\" generationTool=\"rigtwin {}\" instantiationToken=\"{token}\" variableNamingConvention=\"structured\">",
+                xml_escape(&model_name(p)),
                 xml_escape(&desc),
                 env!("CARGO_PKG_VERSION")
             );
@@ -214,7 +234,8 @@ fn describe_with(p: &FmuParams, version: Version, token: &str) -> String {
         Version::Fmi2 => {
             let _ = writeln!(
                 x,
-                "<fmiModelDescription fmiVersion=\"2.0\" modelName=\"rigtwin\" guid=\"{token}\" description=\"{}\" generationTool=\"rigtwin {}\" variableNamingConvention=\"structured\" numberOfEventIndicators=\"0\">",
+                "<fmiModelDescription fmiVersion=\"2.0\" modelName=\"{}\" guid=\"{token}\" description=\"{}\" generationTool=\"rigtwin {}\" variableNamingConvention=\"structured\" numberOfEventIndicators=\"0\">",
+                xml_escape(&model_name(p)),
                 xml_escape(&desc),
                 env!("CARGO_PKG_VERSION")
             );

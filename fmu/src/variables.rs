@@ -493,11 +493,15 @@ impl Table {
         let bodies: Vec<&str> = m.line.bodies.iter().map(|b| b.name.as_str()).collect();
         for (k, name) in names.iter().enumerate() {
             let (unit, description) = if k < n {
-                (q, format!("position (angle) of {}", bodies[k]))
+                let what = match domain {
+                    Domain::Rotational => "angle",
+                    Domain::Translational => "position",
+                };
+                (q, format!("{what} of {}", bodies[k]))
             } else if k < 2 * n {
                 (w, format!("speed of {}", bodies[k - n]))
             } else {
-                (f, "force (torque) after the actuator lag".to_string())
+                (f, format!("{} after the actuator lag", force_word(domain)))
             };
             push(name.clone(), Causality::Output, Slot::State(k), unit, description, Constraint::Finite);
         }
@@ -515,14 +519,14 @@ impl Table {
         for (i, name) in m.coupling_force_names().into_iter().enumerate() {
             let c = &m.line.couplings[i];
             let description = match (&c.elongation, &c.name) {
-                (None, _) => format!("force (torque) in coupling {} ({}-{})", i + 1, bodies[i], bodies[i + 1]),
-                (Some(_), Some(name)) => format!("force (torque) in coupling {} ({name})", i + 1),
-                (Some(_), None) => format!("force (torque) in coupling {}", i + 1),
+                (None, _) => format!("{} in coupling {} ({}-{})", force_word(domain), i + 1, bodies[i], bodies[i + 1]),
+                (Some(_), Some(name)) => format!("{} in coupling {} ({name})", force_word(domain), i + 1),
+                (Some(_), None) => format!("{} in coupling {}", force_word(domain), i + 1),
             };
             push(name, Causality::Output, Slot::Torque(i), f, description, Constraint::Finite);
         }
         for (j, name) in m.input_names().into_iter().enumerate() {
-            let description = format!("force (torque) on {}", bodies[m.inputs[j]]);
+            let description = format!("{} on {}", force_word(domain), bodies[m.inputs[j]]);
             push(name, Causality::Input, Slot::Input(j), f, description, Constraint::Finite);
         }
         let derivative_state = (0..nx).map(|k| (k < n).then_some(k + n)).collect();
@@ -599,6 +603,14 @@ fn time_row() -> Variable {
         unit: "s",
         description: "simulation time".into(),
         constraint: Constraint::Finite,
+    }
+}
+
+/// What a coupling or an actuator transmits in `domain`, for descriptions.
+fn force_word(domain: Domain) -> &'static str {
+    match domain {
+        Domain::Rotational => "torque",
+        Domain::Translational => "force",
     }
 }
 
