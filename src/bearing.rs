@@ -120,10 +120,12 @@ pub fn identify(
             .min_by_key(|a| (a.structure == Structure::KCM) as u8 * 2 + (a.coupling == Coupling::Full) as u8)
         {
             warnings.push(format!(
-                "the {s:?}/{c:?} model does not reproduce the direct impedances (lowest r² {worst:.3}); \
-                 {:?}/{:?} does (Re Hxx r² {:.4}, Re Hyy r² {:.4}){}",
-                better.structure,
-                better.coupling,
+                "the {}/{} model does not reproduce the direct impedances (lowest r² {worst:.3}); \
+                 {}/{} does (Re Hxx r² {:.4}, Re Hyy r² {:.4}){}",
+                crate::report::words(&s),
+                crate::report::words(&c),
+                crate::report::words(&better.structure),
+                crate::report::words(&better.coupling),
                 better.r2.hxx[0],
                 better.r2.hyy[0],
                 if s == Structure::KC && better.structure == Structure::KCM {
@@ -164,8 +166,13 @@ impl BearingReport {
         let mut s = String::new();
         let _ = writeln!(
             s,
-            "Bearing identification — {}: {:?}, structure {:?}, coupling {:?} (declared {:?}, {:?})",
-            self.file, self.method, self.structure, self.coupling, self.declared_structure, self.declared_coupling
+            "Bearing identification — {}: {}, structure {}, coupling {} (declared {}, {})",
+            self.file,
+            crate::report::words(&self.method),
+            crate::report::words(&self.structure),
+            crate::report::words(&self.coupling),
+            crate::report::words(&self.declared_structure),
+            crate::report::words(&self.declared_coupling)
         );
         let avg = match self.averaging {
             Averaging::Periodic { periods } => format!("periodic excitation, {periods} periods averaged"),
@@ -216,8 +223,13 @@ impl BearingReport {
         for a in &self.alternatives {
             let _ = writeln!(
                 s,
-                "  for comparison {:?}/{:?}: r² Re/Im Hxx {:.4}/{:.4}, Hyy {:.4}/{:.4}",
-                a.structure, a.coupling, a.r2.hxx[0], a.r2.hxx[1], a.r2.hyy[0], a.r2.hyy[1]
+                "  for comparison {}/{}: r² Re/Im Hxx {:.4}/{:.4}, Hyy {:.4}/{:.4}",
+                crate::report::words(&a.structure),
+                crate::report::words(&a.coupling),
+                a.r2.hxx[0],
+                a.r2.hxx[1],
+                a.r2.hyy[0],
+                a.r2.hyy[1]
             );
         }
         for w in &self.warnings {

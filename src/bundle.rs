@@ -1371,14 +1371,22 @@ pub fn summary(file: &Path) -> anyhow::Result<String> {
             }
             "drive_test" => {
                 let b = load_drive_test(file)?;
-                let names =
-                    b.inputs
-                        .iter()
-                        .map(|s| format!("input {} on body {}", s.column, b.line.bodies[s.at].name))
-                        .chain(b.outputs.iter().map(|s| {
-                            format!("output {} ({:?})", s.column, s.quantity.unwrap_or(plant::Quantity::Speed))
-                        }))
-                        .collect();
+                let names = b
+                    .inputs
+                    .iter()
+                    .map(|s| format!("input {} on body {}", s.column, b.line.bodies[s.at].name))
+                    .chain(b.outputs.iter().map(|s| {
+                        format!(
+                            "output {} ({} at {})",
+                            s.column,
+                            crate::report::words(&s.quantity.unwrap_or(plant::Quantity::Speed)),
+                            match s.quantity {
+                                Some(plant::Quantity::CouplingForce) => format!("coupling {}", s.at + 1),
+                                _ => format!("body {}", b.line.bodies[s.at].name),
+                            }
+                        )
+                    }))
+                    .collect();
                 ("drive_test", b.input_data[0].len(), b.dt_s, names, b.conversions)
             }
             other => anyhow::bail!(

@@ -218,6 +218,30 @@ pub struct MpcReport {
     pub sweep_peak_torque_deviation_nm: Option<Pair>,
 }
 
+/// Move blocks as a person reads them: `1, 2, 4, 43` or `200 × 1` (runs of one length folded).
+fn blocks_in_words(blocks: &[usize]) -> String {
+    let mut runs: Vec<(usize, usize)> = Vec::new();
+    for &b in blocks {
+        match runs.last_mut() {
+            Some((len, count)) if *len == b => *count += 1,
+            _ => runs.push((b, 1)),
+        }
+    }
+    let parts: Vec<String> = runs
+        .iter()
+        .map(
+            |&(len, count)| {
+                if count > 2 {
+                    format!("{count} × {len}")
+                } else {
+                    vec![len.to_string(); count].join(", ")
+                }
+            },
+        )
+        .collect();
+    format!("[{}] steps", parts.join(", "))
+}
+
 /// Rename `u0_error_nm` and `step_time_us` to the contract's spelling.
 impl MpcReport {
     /// JSON with the contract's keys (`u0_error_Nm`).
@@ -271,17 +295,17 @@ impl MpcReport {
             }
         }
         s += &format!(
-            "MPC on the open-differential rig: N = {} at {} ms, {:?}, move blocks {:?} → QP {} variables × {} constraints\n",
+            "MPC on the open-differential rig: N = {} at {} ms, {} QP, move blocks {} → QP {} variables × {} constraints\n",
             self.horizon,
             self.dt_s * 1e3,
-            self.formulation,
-            self.move_blocks,
+            crate::report::words(&self.formulation),
+            blocks_in_words(&self.move_blocks),
             self.qp_variables,
             self.qp_constraints
         );
         s += &format!(
-            "  controller step ({:?} run): median {:.1} µs, p99 {:.1} µs, max {:.1} µs; {:.1} QP iterations; {} allocation(s) per step; {} fallback(s)\n",
-            self.scenario,
+            "  controller step ({} run): median {:.1} µs, p99 {:.1} µs, max {:.1} µs; {:.1} QP iterations; {} allocation(s) per step; {} fallback(s)\n",
+            crate::report::words(&self.scenario),
             self.step_time_us.median,
             self.step_time_us.p99,
             self.step_time_us.max,
@@ -574,7 +598,7 @@ pub fn plot(
             ],
         },
     ];
-    lines(target, &format!("rigtwin mpc: {kind:?} scenario, MPC vs PI speed control"), &panels)
+    lines(target, &format!("rigtwin mpc: {} scenario, MPC vs PI speed control", crate::report::words(&kind)), &panels)
 }
 
 /// A drive model as the FMU integrates it (`rigtwin_fmu::drive::DriveDynamics`: exact ZOH

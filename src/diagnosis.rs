@@ -442,19 +442,48 @@ pub fn rig_toml(
 
 /// Text for the terminal.
 pub fn human(r: &DiagnosisReport) -> String {
-    let at = r.at.as_ref().map(|a| format!(" at {a}")).unwrap_or_default();
-    let mut s = format!("diagnosis ({}): {}{at}\n", r.kind, r.effect);
-    for (k, v) in &r.parameters {
-        s += &format!("  {k} = {v:.6e}\n");
+    let named = |effect: &str, at: Option<&String>| match at {
+        Some(a) => format!("{} at {a}", effect_name(effect)),
+        None => effect_name(effect).to_string(),
+    };
+    let kind = r.kind.replace('_', " ");
+    let mut s = if r.effect == "none" {
+        format!("{kind}: the declared model fits (no effect improves it clearly)\n")
+    } else if r.effects.len() > 1 {
+        let all: Vec<String> = r.effects.iter().map(|e| named(&e.effect, e.at.as_ref())).collect();
+        format!("{kind}: the declared model lacks {}\n", all.join(" and "))
+    } else {
+        format!("{kind}: the declared model lacks {}\n", named(&r.effect, r.at.as_ref()))
+    };
+    let show = |p: &mut dyn Iterator<Item = (&String, &f64)>| {
+        p.map(|(k, v)| crate::units::display(k, *v)).collect::<Vec<_>>().join(", ")
+    };
+    if r.effects.len() > 1 {
+        for e in &r.effects {
+            s += &format!("  {}: {}\n", named(&e.effect, e.at.as_ref()), show(&mut e.parameters.iter()));
+        }
+        let of_effects = |k: &String| r.effects.iter().any(|e| e.parameters.contains_key(k));
+        let rest: Vec<(&String, &f64)> = r.parameters.iter().filter(|(k, _)| !of_effects(k)).collect();
+        if !rest.is_empty() {
+            s += &format!("  declared, re-fitted: {}\n", show(&mut rest.into_iter()));
+        }
+    } else {
+        for (k, v) in &r.parameters {
+            s += &format!("  {}\n", crate::units::display(k, *v));
+        }
     }
-    s += &format!("  error before {:.4}, after {:.4} ({})\n", r.error_before, r.error_after, r.error_definition);
-    s += "  candidates (best score first):\n";
+    s += &format!("  error {:.4} → {:.4}  ({})\n", r.error_before, r.error_after, r.error_definition);
+    if r.structured_residual {
+        s += "  the residual is still structured: something the candidates do not describe remains\n";
+    }
+    s += "  candidates, best first:\n";
     for c in &r.candidates {
-        let name = match &c.at {
-            Some(a) => format!("{} at {a}", c.effect),
-            None => c.effect.clone(),
-        };
-        s += &format!("    {name:<34} error {:.4}  score {:>12.1}\n", c.error_after, c.score);
+        s += &format!(
+            "    {:<36} error {:.4}  score {:>10.1}\n",
+            named(&c.effect, c.at.as_ref()),
+            c.error_after,
+            c.score
+        );
     }
     for n in &r.notes {
         s += &format!("  note: {n}\n");
@@ -463,6 +492,21 @@ pub fn human(r: &DiagnosisReport) -> String {
         s += &format!("  converted: {c}\n");
     }
     s
+}
+
+/// An effect's name as a person reads it (the JSON keeps the identifier).
+pub fn effect_name(effect: &str) -> &str {
+    match effect {
+        "time_delay" => "a dead time",
+        "actuator_lag" => "an actuator lag",
+        "backlash" => "play (backlash)",
+        "coulomb_friction" => "Coulomb friction",
+        "drive_compliance" => "a drive compliance",
+        "shaft_damping" => "shaft damping",
+        "sensor_delay" => "a sensor delay",
+        "none" => "none (the declared model)",
+        other => other,
+    }
 }
 
 fn drive(file: &Path, progress: &(dyn Fn(&str) + Sync)) -> anyhow::Result<Diagnosis> {

@@ -129,8 +129,11 @@ pub struct ParametriseReport {
     pub measurements: Vec<MeasurementReport>,
     /// Every pair of different variants.
     pub pairs: Vec<PairReport>,
-    /// Least squares over all.
-    pub estimate: EstimateReport,
+    /// The tool's answer: the extension's j_drive and c_short where one explains the variants,
+    /// else the least-squares estimate of `model`.
+    pub answer: Answer,
+    /// Least squares over all variants with `model` (the ideal open differential by default).
+    pub least_squares: EstimateReport,
     /// The other model.
     pub other_model: Comparison,
     /// The extended models fitted when the open differential misses the variants (χ²/dof above
@@ -142,6 +145,39 @@ pub struct ParametriseReport {
     pub explained_by: Option<ident::parametrise::Extension>,
     /// Things the user should know.
     pub warnings: Vec<String>,
+}
+
+/// The parametrisation's answer, whichever model gave it.
+#[derive(Debug, Clone, Serialize)]
+pub struct Answer {
+    /// Which model: `differential`, `smooth`, or `differential_with_side_gears` /
+    /// `differential_with_asymmetry` (an extension that explains the variants).
+    pub model: String,
+    /// Drive inertia, kg m².
+    pub j_drive_kgm2: f64,
+    /// Short side-shaft stiffness, N m/rad.
+    #[serde(rename = "c_short_Nm_per_rad")]
+    pub c_short_nm_per_rad: f64,
+    /// 95 % interval of `j_drive_kgm2` (null where not bounded).
+    pub j_drive_ci95_kgm2: Option<[f64; 2]>,
+    /// 95 % interval of `c_short_Nm_per_rad`.
+    #[serde(rename = "c_short_ci95_Nm_per_rad")]
+    pub c_short_ci95_nm_per_rad: Option<[f64; 2]>,
+    /// χ² of the model that gave it, and its degrees of freedom.
+    pub chi2: f64,
+    /// Degrees of freedom of `chi2`.
+    pub dof: usize,
+    /// Whether that model is consistent with every variant: χ² below its 95 % quantile
+    /// (`ident::parametrise::chi2_95`; with no degree of freedom left, χ² must be 0).
+    pub explains_the_variants: bool,
+}
+
+/// A rig model's name as a person reads it.
+fn model_words(m: ModelChoice) -> &'static str {
+    match m {
+        ModelChoice::Differential => "the open differential",
+        ModelChoice::Smooth => "the smooth strand (eq. 14)",
+    }
 }
 
 /// Runs the whole parametrisation.
@@ -278,8 +314,9 @@ pub fn parametrise(
         let list: Vec<String> = measured_hz.iter().map(|(v, f)| format!("{v} = {f:.4} Hz")).collect();
         anyhow::bail!(
             "no pair of variants has a real positive (j_drive, c_short) that gives its frequencies ({}): the \
-             {model:?} model cannot explain these measurements, so there is nothing to estimate",
-            list.join(", ")
+             {} cannot explain these measurements, so there is nothing to estimate",
+            list.join(", "),
+            model_words(model)
         );
     }
     let e = problem.estimate(&meas, settings)?;
@@ -313,9 +350,9 @@ pub fn parametrise(
     }
     if e.sigma_scale > 3f64.sqrt() {
         warnings.push(format!(
-            "the {:?} model does not explain all variants within their uncertainties (χ²/dof = {:.1}): \
+            "{} does not explain all variants within their uncertainties (χ²/dof = {:.1}): \
              the intervals are widened by √(χ²/dof) = {:.2}; a residual this size points to an effect the model lacks",
-            e.model,
+            model_words(e.model),
             e.chi2 / e.dof as f64,
             e.sigma_scale
         ));
@@ -348,36 +385,43 @@ pub fn parametrise(
         c_short: other_fit.as_ref().map(|f| f.c_short),
         chi2: other_fit.as_ref().map(|f| f.chi2),
     };
-    if let Some(x) = extensions.first().filter(|_| explains) {
-        warnings.push(format!(
-            "the variants are explained by the open differential with {} ({} = {:.4e}; χ² {:.3} → {:.3}): \
-             j_drive = {:.4} kg m^2 {}, c_short = {:.1} Nm/rad {} from that model (linearised 95 % intervals)",
-            match x.extension {
-                ident::parametrise::Extension::SideGears => "its side gears' inertia",
-                ident::parametrise::Extension::Asymmetry => "c_long/c_short fitted",
-            },
-            x.extension.parameter(),
-            x.value,
-            estimate.chi2,
-            x.chi2,
-            x.j_drive,
-            interval(x.j_drive_ci95, 4),
-            x.c_short,
-            interval(x.c_short_ci95, 1)
-        ));
-    } else if !extensions.is_empty() {
+    // where an extension explains the variants its values are the answer (`answer`, said first)
+    if !explains && !extensions.is_empty() {
         warnings.push(
             "no extension (side gears' inertia, an asymmetry) explains the variants better: the misfit stays unexplained"
                 .into(),
         );
     }
+    let answer = match extensions.first().filter(|_| explains) {
+        Some(x) => Answer {
+            model: format!("differential_with_{}", serde_json::to_value(x.extension)?.as_str().unwrap_or("")),
+            j_drive_kgm2: x.j_drive,
+            c_short_nm_per_rad: x.c_short,
+            j_drive_ci95_kgm2: x.j_drive_ci95,
+            c_short_ci95_nm_per_rad: x.c_short_ci95,
+            chi2: x.chi2,
+            dof: x.dof,
+            explains_the_variants: x.chi2 <= ident::parametrise::chi2_95(x.dof),
+        },
+        None => Answer {
+            model: serde_json::to_value(model)?.as_str().unwrap_or("").to_string(),
+            j_drive_kgm2: estimate.j_drive,
+            c_short_nm_per_rad: estimate.c_short,
+            j_drive_ci95_kgm2: estimate.j_drive_ci95,
+            c_short_ci95_nm_per_rad: estimate.c_short_ci95,
+            chi2: estimate.chi2,
+            dof: estimate.dof,
+            explains_the_variants: estimate.chi2 <= ident::parametrise::chi2_95(estimate.dof),
+        },
+    };
     Ok(ParametriseReport {
         model,
         method,
         measured_hz,
         measurements,
         pairs,
-        estimate,
+        answer,
+        least_squares: estimate,
         other_model,
         extensions,
         explained_by,
@@ -393,7 +437,39 @@ impl ParametriseReport {
     /// Human-readable form.
     pub fn human(&self) -> String {
         let mut s = String::new();
-        let _ = writeln!(s, "Indirect parametrisation — model: {:?}, frequencies: {:?}", self.model, self.method);
+        let a = &self.answer;
+        let _ = writeln!(
+            s,
+            "j_drive {} {}, c_short {} {} (95 % intervals)",
+            crate::units::quantity(a.j_drive_kgm2, "kg·m²"),
+            interval(a.j_drive_ci95_kgm2, 4),
+            crate::units::quantity(a.c_short_nm_per_rad, "N·m/rad"),
+            interval(a.c_short_ci95_nm_per_rad, 1),
+        );
+        let from = match self.explained_by {
+            Some(ident::parametrise::Extension::SideGears) => {
+                format!("{} with its side gears' inertia", model_words(self.model))
+            }
+            Some(ident::parametrise::Extension::Asymmetry) => {
+                format!("{} with c_long/c_short fitted", model_words(self.model))
+            }
+            None => model_words(self.model).to_string(),
+        };
+        let _ = writeln!(
+            s,
+            "  from {from}, which {} the {} variants (χ² {:.2} with {} degrees of freedom; 95 % bound {:.2})",
+            if a.explains_the_variants { "explains" } else { "does NOT explain all of" },
+            self.measured_hz.len(),
+            a.chi2,
+            a.dof,
+            ident::parametrise::chi2_95(a.dof)
+        );
+        let method = match self.method {
+            FrequencyMethod::ModalFit => "modal fit of each sweep",
+            FrequencyMethod::Paper => "the paper's power-over-time method",
+        };
+        let _ =
+            writeln!(s, "\nHow: the shuffle frequency of each variant ({method}), then {}:", model_words(self.model));
         let _ = writeln!(s, "  variant  f [Hz]      σ [Hz]    paper's method [Hz]   mode seen       source");
         for m in &self.measurements {
             let paper = m
@@ -403,7 +479,14 @@ impl ParametriseReport {
                 .unwrap_or_else(|| "-".into());
             let mode = m
                 .mode_seen
-                .map(|k| format!("{k:?} ({:+.0}°)", m.phase_m2_m3_deg.unwrap_or(0.0)))
+                .map(|k| {
+                    let seen = match k {
+                        ident::SeenMode::Shuffle => "shuffle",
+                        ident::SeenMode::OutputsAntiphase => "loads antiphase",
+                        ident::SeenMode::Unclear => "unclear",
+                    };
+                    format!("{seen} ({:+.0}°)", m.phase_m2_m3_deg.unwrap_or(0.0))
+                })
                 .unwrap_or_else(|| "-".into());
             let _ = writeln!(
                 s,
@@ -438,7 +521,7 @@ impl ParametriseReport {
                 );
             }
         }
-        let e = &self.estimate;
+        let e = &self.least_squares;
         let _ = writeln!(
             s,
             "\n  least squares over {} measurements (χ² = {:.3}, dof {}), {} 95 % intervals:",
@@ -470,8 +553,11 @@ impl ParametriseReport {
             let chosen = if Some(x.extension) == self.explained_by { " ← explains the variants" } else { "" };
             let _ = writeln!(
                 s,
-                "  extended by {:?}: {} = {:.4e} {}, j_drive = {:.4} kg m^2 {}, c_short = {:.1} Nm/rad {}, χ² = {:.3} (dof {}){chosen}",
-                x.extension,
+                "  extended by {}: {} = {:.4e} {}, j_drive = {:.4} kg m^2 {}, c_short = {:.1} Nm/rad {}, χ² = {:.3} (dof {}){chosen}",
+                match x.extension {
+                    ident::parametrise::Extension::SideGears => "the side gears' inertia",
+                    ident::parametrise::Extension::Asymmetry => "c_long/c_short fitted",
+                },
                 x.extension.parameter(),
                 x.value,
                 interval(x.value_ci95, 6),
@@ -488,12 +574,12 @@ impl ParametriseReport {
             (Some(j), Some(c), Some(x)) => {
                 let _ = writeln!(
                     s,
-                    "  for comparison, the {:?} model: j_drive {j:.4} kg m^2, c_short {c:.1} Nm/rad, χ² = {x:.3}",
-                    o.model
+                    "  for comparison, {}: j_drive {j:.4} kg m^2, c_short {c:.1} Nm/rad, χ² = {x:.3}",
+                    model_words(o.model)
                 );
             }
             _ => {
-                let _ = writeln!(s, "  for comparison, the {:?} model finds no estimate", o.model);
+                let _ = writeln!(s, "  for comparison, {} finds no estimate", model_words(o.model));
             }
         }
         for w in &self.warnings {
@@ -540,9 +626,9 @@ impl DesignReport {
         let mut s = String::new();
         let _ = writeln!(
             s,
-            "Additional-spring design — {} ({:?} model), σ_f = {} Hz per variant, target ±{:.1} % (95 %)",
+            "Additional-spring design — {} ({} model), σ_f = {} Hz per variant, target ±{:.1} % (95 %)",
             self.rig,
-            d.model,
+            crate::report::words(&d.model),
             st.sigma_hz,
             100.0 * st.target
         );

@@ -424,7 +424,13 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             };
             let (rep, imp) = rigtwin::bearing::identify(&b, structure, coupling, method)?;
             if let Some(p) = &plot {
-                let title = format!("{} — {:?} {:?}/{:?}", bundle.display(), rep.method, rep.structure, rep.coupling);
+                let title = format!(
+                    "{} — {} {}/{}",
+                    bundle.display(),
+                    rigtwin::report::words(&rep.method),
+                    rigtwin::report::words(&rep.structure),
+                    rigtwin::report::words(&rep.coupling)
+                );
                 rigtwin::bearing::plot(p, &imp, &b.support, &rep.element, &title)?;
             }
             emit(json.as_ref(), &rep, &rep.human())?;

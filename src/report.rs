@@ -171,7 +171,7 @@ impl ModalReport {
     /// Human-readable form; `max_modes` limits the table (long chains have modes in the kHz).
     pub fn human(&self, max_modes: usize) -> String {
         let mut s = String::new();
-        let _ = writeln!(s, "{} — {:?} model, variant {}", self.rig, self.model, self.variant);
+        let _ = writeln!(s, "{} — {} model, variant {}", self.rig, words(&self.model), self.variant);
         let shown = self.frequencies_hz.len().min(max_modes);
         let dofs = self.dof_names.len();
         let show_shape = dofs <= 6;
@@ -339,4 +339,14 @@ pub fn json_document<T: serde::Serialize>(report: &T) -> anyhow::Result<String> 
         None => v = serde_json::json!({ "schema_version": JSON_SCHEMA_VERSION, "report": v }),
     }
     Ok(serde_json::to_string_pretty(&v)? + "\n")
+}
+
+/// A setting's or a kind's name as the JSON spells it, for text (`ModalFit` → `modal fit`,
+/// `SideGears` → `side gears`): never Rust's debug form.
+pub fn words<T: serde::Serialize>(value: &T) -> String {
+    match serde_json::to_value(value) {
+        Ok(serde_json::Value::String(s)) => s.replace('_', " "),
+        Ok(other) => other.to_string(),
+        Err(_) => String::new(),
+    }
 }

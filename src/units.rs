@@ -258,3 +258,103 @@ mod tests {
         assert_relative_eq!(s * 1000.0 + o, 2.0 * 1000.0 * 2.0 * PI / 60.0 + 1.0, max_relative = 1e-15);
     }
 }
+
+/// Report keys (their unit as a suffix, as in the JSON) as a person reads them: the name without
+/// the suffix and the value with its unit, in engineering form — `delay_s` 0.0055 → `delay 5.50
+/// ms`, `c_short` 1478.27 → `c_short 1478.3 N·m/rad`, `backlash_rad` 0.00274 → `backlash 2.740
+/// mrad`. Keys the rig reports without a suffix (`j_drive`, `c_short`, …) have their unit here.
+pub fn display(key: &str, value: f64) -> String {
+    // (suffix, unit shown, scales to try: (factor, prefixed unit))
+    const SUFFIXES: [(&str, &str); 18] = [
+        ("_Nm_per_rad", "N·m/rad"),
+        ("_Nms_per_rad", "N·m·s/rad"),
+        ("_N_per_m", "N/m"),
+        ("_Ns_per_m", "N·s/m"),
+        ("_kg_m2", "kg·m²"),
+        ("_kgm2", "kg·m²"),
+        ("_radps", "rad/s"),
+        ("_mps", "m/s"),
+        ("_Nm", "N·m"),
+        ("_hz", "Hz"),
+        ("_Hz", "Hz"),
+        ("_rad", "rad"),
+        ("_kg", "kg"),
+        ("_N", "N"),
+        ("_s", "s"),
+        ("_m", "m"),
+        ("_1", ""),
+        ("_deg", "°"),
+    ];
+    const BARE: [(&str, &str); 7] = [
+        ("j_drive", "kg·m²"),
+        ("j_m2", "kg·m²"),
+        ("j_m3", "kg·m²"),
+        ("c_short", "N·m/rad"),
+        ("c_long", "N·m/rad"),
+        ("c_delta", "N·m/rad"),
+        ("damping_ratio", ""),
+    ];
+    let (name, unit) = SUFFIXES
+        .iter()
+        .find_map(|(suffix, unit)| key.strip_suffix(suffix).filter(|n| !n.is_empty()).map(|n| (n, *unit)))
+        .or_else(|| BARE.iter().find(|(k, _)| *k == key).map(|(k, u)| (*k, *u)))
+        .unwrap_or((key, ""));
+    format!("{name} {}", quantity(value, unit))
+}
+
+/// A value with its unit in engineering form: a small time, angle or length with a prefix
+/// (ms, µs, mrad, mm, µm), four significant digits (five from 100 up), scientific notation only
+/// far from 1.
+pub fn quantity(value: f64, unit: &str) -> String {
+    let prefixed: &[(f64, &str)] = match unit {
+        "s" => &[(1e-3, "ms"), (1e-6, "µs")],
+        "rad" => &[(1e-3, "mrad"), (1e-6, "µrad")],
+        "m" => &[(1e-3, "mm"), (1e-6, "µm")],
+        _ => &[],
+    };
+    let (v, u) = prefixed
+        .iter()
+        .find(|(f, _)| value.abs() < 1000.0 * f && value.abs() >= *f)
+        .map_or((value, unit), |(f, u)| (value / f, *u));
+    // four significant digits, five from 100 up (a stiffness to 0.1 N·m/rad)
+    let text = significant(v, if v.abs() >= 100.0 { 5 } else { 4 });
+    if u.is_empty() {
+        text
+    } else {
+        format!("{text} {u}")
+    }
+}
+
+/// `v` with `digits` significant digits: plain notation from 1e-3 to 1e6, else scientific.
+pub fn significant(v: f64, digits: usize) -> String {
+    if !v.is_finite() {
+        return format!("{v}");
+    }
+    if v == 0.0 {
+        return "0".into();
+    }
+    let magnitude = v.abs().log10().floor() as i32;
+    if !(-3..6).contains(&magnitude) {
+        return format!("{:.*e}", digits.saturating_sub(1), v);
+    }
+    let decimals = (digits as i32 - 1 - magnitude).max(0) as usize;
+    format!("{v:.decimals$}")
+}
+
+#[cfg(test)]
+mod display_tests {
+    use super::*;
+
+    #[test]
+    fn keys_read_as_engineers_write_them() {
+        assert_eq!(display("delay_s", 5.500239e-3), "delay 5.500 ms");
+        assert_eq!(display("c_short", 1478.27), "c_short 1478.3 N·m/rad");
+        assert_eq!(display("j_drive", 0.5368647), "j_drive 0.5369 kg·m²");
+        assert_eq!(display("backlash_rad", 2.74e-3), "backlash 2.740 mrad");
+        assert_eq!(display("friction_Nm", 0.2499823), "friction 0.2500 N·m");
+        assert_eq!(display("stiffness_Nm_per_rad", 2421.3), "stiffness 2421.3 N·m/rad");
+        assert_eq!(display("damping_ratio", 0.0299), "damping_ratio 0.02990");
+        assert_eq!(display("smoothing_speed_radps", 7.3e12), "smoothing_speed 7.3000e12 rad/s");
+        assert_eq!(quantity(2.5, "s"), "2.500 s");
+    }
+}

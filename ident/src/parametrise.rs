@@ -502,6 +502,18 @@ impl Extension {
 /// χ²/dof above which the extensions are fitted: the declared model misses the variants by
 /// more than their uncertainties can explain (χ²/dof = 3 with 2 dof: p ≈ 0.05).
 pub const EXTEND_ABOVE_CHI2_PER_DOF: f64 = 3.0;
+/// The 95 % quantile of χ² with `dof` degrees of freedom (Wilson–Hilferty's cube-root normal
+/// approximation: 3.75 for 1, 5.99 for 2, 7.81 for 3; within 3 % of the exact quantile from one
+/// degree of freedom up): a model whose χ² is below it is consistent with the measurements.
+pub fn chi2_95(dof: usize) -> f64 {
+    if dof == 0 {
+        return 0.0;
+    }
+    let k = dof as f64;
+    let a = 2.0 / (9.0 * k);
+    k * (1.0 - a + 1.644_853_6 * a.sqrt()).powi(3)
+}
+
 /// An extension explains the variants when it lowers χ² by more than this: the 95 % quantile
 /// of χ² with one degree of freedom (the one parameter it adds).
 pub const EXTENSION_DELTA_CHI2: f64 = 3.84;
@@ -742,6 +754,14 @@ mod tests {
 
     fn exact(p: &Parametrisation, v: Variant, j: f64, c: f64) -> Measurement {
         Measurement { variant: v, frequency_hz: p.shuffle_frequency_hz(v, j, c).unwrap(), sigma_hz: 0.01 }
+    }
+
+    #[test]
+    fn chi2_quantiles_match_the_tables() {
+        // the exact 95 % quantiles (any statistics table): 3.841, 5.991, 7.815, 18.307 (10 dof)
+        for (dof, exact) in [(1, 3.841), (2, 5.991), (3, 7.815), (10, 18.307)] {
+            assert!((chi2_95(dof) / exact - 1.0).abs() < 0.03, "{dof}: {}", chi2_95(dof));
+        }
     }
 
     #[test]
