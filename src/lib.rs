@@ -8,6 +8,7 @@ pub mod files;
 pub mod fmu_package;
 pub mod identification;
 pub mod plot;
+pub mod progress;
 pub mod report;
 pub mod rigfile;
 pub mod units;

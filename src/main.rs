@@ -401,7 +401,9 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                 (false, false) => anyhow::bail!("give either bundles or --measured frequencies, not both"),
             };
             let settings = ParametriseSettings { monte_carlo_samples: samples, ..Default::default() };
+            let busy = rigtwin::progress::Progress::start("parametrising");
             let rep = identification::parametrise(source, model.into(), method, sigma_hz, &settings)?;
+            drop(busy);
             emit(json.as_ref(), &rep, &rep.human())?;
         }
         Command::Bearing { bundle, structure, coupling, method, plot, json } => {
@@ -422,7 +424,9 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                 MethodArg::Direct => ident::Method::Direct,
                 MethodArg::LeastSquares => ident::Method::LeastSquares,
             };
+            let busy = rigtwin::progress::Progress::start(&format!("identifying {}", bundle.display()));
             let (rep, imp) = rigtwin::bearing::identify(&b, structure, coupling, method)?;
+            drop(busy);
             if let Some(p) = &plot {
                 let title = format!(
                     "{} — {} {}/{}",
@@ -562,6 +566,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                 ScenarioArg::Sweep => mpc::closed_loop::ScenarioKind::Sweep,
             };
             let mut qps = Vec::new();
+            let busy = rigtwin::progress::Progress::start("closing the loop (MPC and PI)");
             let (rep, run) = rigtwin::control::report(
                 &p,
                 &truth,
@@ -571,6 +576,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                 Some(mpc::alloc_counter::allocations),
                 export_qp.is_some().then_some(&mut qps),
             )?;
+            drop(busy);
             if let Some(f) = &export_qp {
                 let text = serde_json::to_string(&serde_json::json!({ "qps": qps }))?;
                 rigtwin::files::write(f, text.as_bytes())?;
@@ -590,14 +596,14 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             let write_model = write_model.map(|f| outs.file(&f, "--write-model")).transpose()?;
             let plot = plot.map(|f| outs.svg(&f, "--plot")).transpose()?;
             let save_signals = save_signals.map(|f| outs.file(&f, "--save-signals")).transpose()?;
-            let start = std::time::Instant::now();
-            let show = std::io::IsTerminal::is_terminal(&std::io::stderr());
+            let busy = rigtwin::progress::Progress::start(&format!("diagnosing {}", bundle.display()));
+            let fitted = std::sync::atomic::AtomicUsize::new(0);
             let progress = |name: &str| {
-                if show || start.elapsed().as_secs_f64() > 1.0 {
-                    eprintln!("  fitted {name} ({:.1} s)", start.elapsed().as_secs_f64());
-                }
+                let n = fitted.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
+                busy.say(&format!("{n} fits done, last: {name}"));
             };
             let d = rigtwin::diagnosis::diagnose(&bundle, &progress)?;
+            drop(busy);
             if let Some(f) = &write_model {
                 rigtwin::files::write(f, d.model_toml.as_bytes())?;
             }
