@@ -765,7 +765,7 @@ pub fn drive_report(
     horizon: usize,
     time_limit_s: f64,
     step: f64,
-) -> anyhow::Result<DriveMpcReport> {
+) -> anyhow::Result<(DriveMpcReport, DriveRun)> {
     let ss = model.control_state_space()?;
     let delays = model.input_delays_s();
     let mut settings = section.drive_settings(&ss.input_names, &ss.output_names, horizon)?;
@@ -846,7 +846,18 @@ pub fn drive_report(
     let peak_force = trace.iter().flat_map(|y| penalised_idx.iter().map(move |&j| y[j].abs())).fold(0.0, f64::max);
     let (median, p99) = median_p99(&times);
     let input_at_bound_share = mpc::closed_loop::share_at_bounds(&inputs, &settings, &ss.input_names);
-    Ok(DriveMpcReport {
+    let run = DriveRun {
+        time_s: (0..trace.len()).map(|k| k as f64 * dt).collect(),
+        output_names: ss.output_names.clone(),
+        input_names: ss.input_names.clone(),
+        tracked: tracked.clone(),
+        penalised: penalised_idx.clone(),
+        reference: step,
+        step_at_s: k_step as f64 * dt,
+        outputs: trace,
+        inputs,
+    };
+    let report = DriveMpcReport {
         horizon,
         dt_s: dt,
         tracked: names,
@@ -863,7 +874,69 @@ pub fn drive_report(
         fallbacks: controller.fallbacks(),
         input_at_bound_share,
         stopped,
-    })
+    };
+    Ok((report, run))
+}
+
+/// A drive model's closed-loop run: what `rigtwin mpc --plot` draws.
+pub struct DriveRun {
+    /// Sample times, s.
+    pub time_s: Vec<f64>,
+    /// The model's outputs.
+    pub output_names: Vec<String>,
+    /// The model's inputs.
+    pub input_names: Vec<String>,
+    /// Indices of the tracked outputs.
+    pub tracked: Vec<usize>,
+    /// Indices of the penalised forces.
+    pub penalised: Vec<usize>,
+    /// The tracked outputs' reference after the step.
+    pub reference: f64,
+    /// When the reference steps, s.
+    pub step_at_s: f64,
+    /// Outputs per sample.
+    pub outputs: Vec<Vec<f64>>,
+    /// Inputs per sample.
+    pub inputs: Vec<Vec<f64>>,
+}
+
+/// Draws a drive model's run: tracked outputs with their reference, penalised forces, inputs.
+pub fn plot_drive(target: &crate::files::Target, run: &DriveRun, domain: plant::Domain) -> anyhow::Result<()> {
+    use crate::plot::{lines, Panel};
+    let (speed, force) = match domain {
+        plant::Domain::Rotational => ("rad/s", "N·m"),
+        plant::Domain::Translational => ("m/s", "N"),
+    };
+    let of = |rows: &[Vec<f64>], j: usize| run.time_s.iter().zip(rows).map(|(&t, y)| (t, y[j])).collect::<Vec<_>>();
+    let reference: Vec<(f64, f64)> =
+        run.time_s.iter().map(|&t| (t, if t >= run.step_at_s { run.reference } else { 0.0 })).collect();
+    let mut tracked: Vec<(String, Vec<(f64, f64)>)> =
+        run.tracked.iter().map(|&j| (run.output_names[j].clone(), of(&run.outputs, j))).collect();
+    tracked.push(("reference".into(), reference));
+    let mut panels = vec![Panel {
+        title: "tracked outputs and their reference".into(),
+        x_desc: "time [s]".into(),
+        y_desc: format!("speed [{speed}]"),
+        log_y: false,
+        series: tracked,
+    }];
+    if !run.penalised.is_empty() {
+        panels.push(Panel {
+            title: "penalised coupling forces".into(),
+            x_desc: "time [s]".into(),
+            y_desc: format!("force [{force}]"),
+            log_y: false,
+            series: run.penalised.iter().map(|&j| (run.output_names[j].clone(), of(&run.outputs, j))).collect(),
+        });
+    }
+    panels.push(Panel {
+        title: "inputs (MPC commands)".into(),
+        x_desc: "time [s]".into(),
+        y_desc: format!("input [{force}]"),
+        log_y: false,
+        series: (0..run.input_names.len()).map(|j| (run.input_names[j].clone(), of(&run.inputs, j))).collect(),
+    });
+    lines(target, "rigtwin mpc: reference step on the drive model", &panels)
 }
 
 /// The `[mpc]` section of a model file (empty when it has none); an unknown key or a wrong type

@@ -616,6 +616,15 @@ pub fn drive_model_toml(m: &plant::DriveModel, b: &crate::bundle::DriveTestBundl
         model: Model<'a>,
         inputs: Vec<Input<'a>>,
         effects: Vec<plant::Effect>,
+        mpc: mpc::MpcSection,
+    }
+    // the controller's input bounds: the bundle's own [mpc] section, else the record's peak
+    // |input| (what the actuators reached), so that `rigtwin mpc --params` takes the model as
+    // written; the file says which
+    let mut section = crate::control::mpc_section_of_file(&b.file)?;
+    let derived = section.input_max.is_none();
+    if derived {
+        section.input_max = Some(b.input_data.iter().map(|u| u.iter().fold(0.0_f64, |a, v| a.max(v.abs()))).collect());
     }
     // 1-based positions, as in the bundle
     let effects = m.effects.iter().map(|e| e.at_index(e.element_index().0 + 1)).collect();
@@ -631,9 +640,15 @@ pub fn drive_model_toml(m: &plant::DriveModel, b: &crate::bundle::DriveTestBundl
             .map(|(s, &body)| Input { column: &s.column, body: &m.line.bodies[body].name })
             .collect(),
         effects,
+        mpc: section,
+    };
+    let bounds = if derived {
+        "\n# [mpc] input_max: the record's peak |input| of each input (the actuators reached it);\n# raise it to the actuators' limits before running the controller on the rig\n"
+    } else {
+        ""
     };
     Ok(format!(
-        "# the extended model of {}; positions (body, coupling, input) are 1-based as in the bundle\n{}",
+        "# the extended model of {}; positions (body, coupling, input) are 1-based as in the bundle{bounds}\n{}",
         b.file.display(),
         toml::to_string(&out)?
     ))

@@ -530,13 +530,17 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                     plant::Domain::Rotational => 10.0,
                     plant::Domain::Translational => 0.1,
                 };
-                if plot.is_some() || export_qp.is_some() {
+                if export_qp.is_some() {
                     anyhow::bail!(
-                        "--plot and --export-qp are written for the paper rig's loop; {model_name} is a drive model"
+                        "--export-qp: the QP export compares the paper rig's QPs with OSQP and DAQP; {model_name} is a drive model"
                     );
                 }
-                let rep = rigtwin::control::drive_report(model, &truth, &section, horizon, time_limit_us * 1e-6, step)
-                    .map_err(|e| anyhow::anyhow!("{model_name}: {e:#}"))?;
+                let (rep, run) =
+                    rigtwin::control::drive_report(model, &truth, &section, horizon, time_limit_us * 1e-6, step)
+                        .map_err(|e| anyhow::anyhow!("{model_name}: {e:#}"))?;
+                if let Some(f) = &plot {
+                    rigtwin::control::plot_drive(f, &run, model.line.domain)?;
+                }
                 emit(json.as_ref(), &rep, &rep.human())?;
                 return Ok(());
             }

@@ -354,3 +354,36 @@ fn every_command_writes_json_one_way() {
         std::fs::remove_file(&file).unwrap();
     }
 }
+
+/// A diagnosed drive model is usable as written: `rigtwin mpc --params` runs it (its input
+/// bounds are the record's peak inputs, said in the file), and `--plot` draws the run; without
+/// bounds the refusal gives the snippet that fixes it.
+#[test]
+fn a_diagnosed_drive_model_runs_in_the_controller_as_written() {
+    let d = common::scratch("cli", "diagnosed-mpc");
+    for f in ["bench_gear.toml", "bench_gear.csv"] {
+        std::fs::copy(common::shared(f), d.join(f)).unwrap();
+    }
+    let run = |args: &[&str]| Command::new(env!("CARGO_BIN_EXE_rigtwin")).args(args).current_dir(&d).output().unwrap();
+    let out = run(&["mpc", "--params", "bench_gear.toml"]);
+    assert_eq!(out.status.code(), Some(1));
+    let e = String::from_utf8_lossy(&out.stderr);
+    assert!(e.contains("[mpc]\ninput_max = [LIMIT]"), "{e}");
+    let out = run(&["diagnose", "bench_gear.toml", "--write-model", "m.toml"]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let model = std::fs::read_to_string(d.join("m.toml")).unwrap();
+    assert!(model.contains("peak |input|"), "the file says where its bounds come from:\n{model}");
+    // the bound is the record's peak |torque|, read here from the CSV by this test
+    let csv = std::fs::read_to_string(d.join("bench_gear.csv")).unwrap();
+    let peak =
+        csv.lines().skip(1).map(|l| l.split(',').nth(1).unwrap().parse::<f64>().unwrap().abs()).fold(0.0, f64::max);
+    let v: Value = toml::from_str::<toml::Value>(&model).map(|t| serde_json::to_value(t).unwrap()).unwrap();
+    let written = v["mpc"]["input_max"][0].as_f64().unwrap();
+    assert!((written / peak - 1.0).abs() < 1e-9, "{written} vs {peak}");
+    let out = run(&["mpc", "--params", "m.toml", "--plot", "run.svg", "--json"]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let v: Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(v["schema_version"], 1);
+    let svg = std::fs::read_to_string(d.join("run.svg")).unwrap();
+    assert!(svg.contains("<svg") && svg.contains("reference"), "the plot was drawn");
+}

@@ -236,7 +236,11 @@ impl MpcSection {
         let max = self.input_max.clone().ok_or_else(|| {
             setting(
                 "[mpc] input_max",
-                format!("required for a drive model: the bounds of its inputs {}", inputs.join(", ")),
+                format!(
+                    "required for a drive model: the bounds of its inputs {}; add to the model file\n\n[mpc]\ninput_max = [{}]  # |input| limit of each, N·m (N on a linear axis)\n",
+                    inputs.join(", "),
+                    vec!["LIMIT"; inputs.len()].join(", ")
+                ),
             )
         })?;
         let rate = self.input_rate_max.clone().unwrap_or_else(|| max.iter().map(|v| v / 0.01).collect());
