@@ -1,7 +1,8 @@
 /*
  * rigtwin_mpc.h — rigtwin's model-predictive controller of the open-differential rig for C and
  * real-time targets (a static library librigtwin_mpc.a and a shared library
- * librigtwin_mpc.so / .dylib / .dll, built by `cargo build --release -p rigtwin-mpc`).
+ * librigtwin_mpc.so / .dylib / .dll, built by `cargo build --release -p rigtwin-mpc`); the link
+ * lines and a minimal program are in capi/examples/minimal.c and docs/c-api.md.
  *
  * The controller is the one `rigtwin mpc` runs: Clarabel QP on the rig's prediction model
  * (the rig file's [model] and [effects]: a dead time as input-delay states, an actuator lag and
@@ -46,7 +47,7 @@ typedef enum rigtwin_mpc_status {
 
 /* Construction options; rigtwin_mpc_default_options fills in the defaults. */
 typedef struct rigtwin_mpc_options {
-    /* Prediction horizon, steps of 1 ms (1..1000; default 50). */
+    /* Prediction horizon, steps of 1 ms (1..200; default 50). */
     int horizon;
     /* Move blocks 1, 2, 4, ... with the last taking the rest (0: every step free; default 4). */
     int move_blocks;
