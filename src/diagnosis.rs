@@ -504,6 +504,8 @@ pub fn effect_name(effect: &str) -> &str {
         "drive_compliance" => "a drive compliance",
         "shaft_damping" => "shaft damping",
         "sensor_delay" => "a sensor delay",
+        "added_mass" => "an added mass (inertia of the element)",
+        "damping" => "damping",
         "none" => "none (the declared model)",
         other => other,
     }

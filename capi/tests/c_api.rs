@@ -170,7 +170,11 @@ fn the_minimal_c_example_builds_and_runs() {
     std::fs::create_dir_all(&dir).unwrap();
     let lib = library_dir();
     let exe = dir.join("minimal");
-    compile_source("examples/minimal.c", &exe, &[lib.join("librigtwin_mpc.a").to_str().unwrap(), "-lm", "-lpthread", "-ldl"]);
+    compile_source(
+        "examples/minimal.c",
+        &exe,
+        &[lib.join("librigtwin_mpc.a").to_str().unwrap(), "-lm", "-lpthread", "-ldl"],
+    );
     let out = Command::new(&exe).output().unwrap();
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let text = String::from_utf8_lossy(&out.stdout);
