@@ -387,3 +387,32 @@ fn a_diagnosed_drive_model_runs_in_the_controller_as_written() {
     let svg = std::fs::read_to_string(d.join("run.svg")).unwrap();
     assert!(svg.contains("<svg") && svg.contains("reference"), "the plot was drawn");
 }
+
+/// The README is a guide a user follows from a clone: short, its journeys on files in the
+/// repository (not `../shared`), every document it links present.
+#[test]
+fn the_readme_is_a_guide_on_files_in_the_repository() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let readme = std::fs::read_to_string(root.join("README.md")).unwrap();
+    let lines = readme.lines().count();
+    assert!(lines <= 200, "README.md has {lines} lines: the details belong in docs/");
+    assert!(!readme.contains("../shared"), "the README's journeys use the repository's examples");
+    for link in readme.split("](").skip(1).filter_map(|s| s.split(')').next()) {
+        assert!(root.join(link).exists(), "README links {link}, which is missing");
+    }
+    for path in readme.split_whitespace().filter(|w| w.starts_with("examples/") && w.ends_with(".toml")) {
+        // a glob (variant_V*.toml) names the files it matches
+        let found = match path.split_once('*') {
+            Some((head, tail)) => {
+                let dir = root.join(Path::new(head).parent().unwrap());
+                let stem = Path::new(head).file_name().unwrap().to_str().unwrap().to_string();
+                std::fs::read_dir(dir).unwrap().filter_map(|e| e.ok()).any(|e| {
+                    let n = e.file_name().to_string_lossy().into_owned();
+                    n.starts_with(&stem) && n.ends_with(tail)
+                })
+            }
+            None => root.join(path).exists(),
+        };
+        assert!(found, "README uses {path}, which is missing");
+    }
+}
