@@ -165,6 +165,65 @@ fn spectrum(x: &[f64], dt: f64, f_max: f64) -> Vec<(f64, f64)> {
         .collect()
 }
 
+/// Where `residual` is largest: a window of `width_s` around its largest magnitude (within the
+/// record), for a panel that shows the waveforms sample by sample.
+fn zoom_range(residual: &[f64], dt: f64, width_s: f64) -> std::ops::Range<usize> {
+    let n = residual.len();
+    let peak = residual.iter().enumerate().max_by(|a, b| a.1.abs().total_cmp(&b.1.abs())).map_or(0, |(k, _)| k);
+    let half = ((0.5 * width_s / dt).round() as usize).clamp(10, n.max(20) / 2);
+    let start = peak.saturating_sub(half).min(n.saturating_sub(2 * half));
+    start..(start + 2 * half).min(n)
+}
+
+/// The panel of the waveforms where the declared model misses most, every sample.
+fn zoom_panel(time: &[f64], series: &[(&str, &[f64])], residual: &[f64], dt: f64, y_desc: &str) -> crate::plot::Panel {
+    // ten periods of a 10 Hz mode, at most a tenth of the record
+    let width = (1.0f64).min(0.1 * time.len() as f64 * dt);
+    let r = zoom_range(residual, dt, width);
+    let at = time.get(r.start).copied().unwrap_or(0.0);
+    crate::plot::Panel {
+        title: format!("zoom where the declared model misses most ({at:.2} s to {:.2} s)", at + width),
+        x_desc: "time [s]".into(),
+        y_desc: y_desc.into(),
+        log_y: false,
+        series: series
+            .iter()
+            .map(|(label, y)| {
+                (label.to_string(), r.clone().filter(|&k| k < y.len()).map(|k| (time[k], y[k])).collect())
+            })
+            .collect(),
+    }
+}
+
+/// |Y/U| of a record on the lines its input excites (whole-record DFT; lines at least ten times
+/// the median line of the input: a sweep's band, a multisine's tones, not the leakage between), averaged in 1/12-octave bands: the record's frequency
+/// response beside the models' (`y` their outputs under the same input).
+fn frequency_response(u: &[f64], y: &[f64], dt: f64, f_max: f64) -> Vec<(f64, f64)> {
+    let n = u.len().min(y.len());
+    if n < 16 {
+        return Vec::new();
+    }
+    let (su, sy) = (ident::signal::rfft(&u[..n]), ident::signal::rfft(&y[..n]));
+    let df = 1.0 / (n as f64 * dt);
+    let mut mags: Vec<f64> = su.iter().skip(1).map(|c| c.norm()).collect();
+    mags.sort_by(|a, b| a.total_cmp(b));
+    let largest = mags.last().copied().unwrap_or(0.0);
+    let floor = (10.0 * mags[mags.len() / 2]).max(1e-3 * largest);
+    let mut bands: std::collections::BTreeMap<i64, (f64, f64, usize)> = std::collections::BTreeMap::new();
+    for (k, (a, b)) in su.iter().zip(&sy).enumerate().skip(1) {
+        let f = k as f64 * df;
+        if f > f_max || a.norm() < floor || a.norm() == 0.0 {
+            continue;
+        }
+        let band = (12.0 * f.log2()).floor() as i64;
+        let e = bands.entry(band).or_insert((0.0, 0.0, 0));
+        e.0 += f;
+        e.1 += b.norm() / a.norm();
+        e.2 += 1;
+    }
+    bands.values().map(|&(f, h, c)| (f / c as f64, h / c as f64)).collect()
+}
+
 /// The notes of a time-domain diagnosis: `none` chosen (nothing beats re-fitting `refitted`),
 /// a residual still far from white.
 fn fit_notes(effect: &str, refitted: &str, structured_residual: bool, error_after: f64) -> Vec<String> {
@@ -237,16 +296,36 @@ fn torsional(file: &Path, progress: &(dyn Fn(&str) + Sync)) -> anyhow::Result<Di
     // an SVG line of more points than a screen has pixels only costs memory: every k-th sample
     let stride = t.time_s.len().div_ceil(PLOT_POINTS).max(1);
     let pts = |y: &[f64]| t.time_s.iter().zip(y).step_by(stride).map(|(&a, &b)| (a, b)).collect::<Vec<_>>();
+    let with = format!("with {}", d.effect);
+    let u = &b.sweep.torque_nm;
     let panels = vec![
         crate::plot::Panel {
-            title: "M2 speed (offsets and drift removed)".into(),
+            title: "M2 speed, the whole record (offsets and drift removed)".into(),
             x_desc: "time [s]".into(),
             y_desc: "speed_m2 [rad/s]".into(),
             log_y: false,
             series: vec![
                 ("measured".into(), pts(&t.measured[0])),
                 ("declared model".into(), pts(&t.before[0])),
-                (format!("with {}", d.effect), pts(&t.after[0])),
+                (with.clone(), pts(&t.after[0])),
+            ],
+        },
+        zoom_panel(
+            &t.time_s,
+            &[("measured", &t.measured[0]), ("declared model", &t.before[0]), (&with, &t.after[0])],
+            &res_before,
+            dt,
+            "speed_m2 [rad/s]",
+        ),
+        crate::plot::Panel {
+            title: "frequency response, drive torque to M2 speed".into(),
+            x_desc: "frequency [Hz]".into(),
+            y_desc: "|speed_m2 / torque_drive| [rad/s/(N·m)]".into(),
+            log_y: true,
+            series: vec![
+                ("measured".into(), frequency_response(u, &t.measured[0], dt, 60.0)),
+                ("declared model".into(), frequency_response(u, &t.before[0], dt, 60.0)),
+                (with.clone(), frequency_response(u, &t.after[0], dt, 60.0)),
             ],
         },
         crate::plot::Panel {
@@ -255,9 +334,9 @@ fn torsional(file: &Path, progress: &(dyn Fn(&str) + Sync)) -> anyhow::Result<Di
             y_desc: "amplitude [rad/s]".into(),
             log_y: true,
             series: vec![
-                ("declared model".into(), spectrum(&res_before, dt, 60.0)),
-                (format!("with {}", d.effect), spectrum(&res_after, dt, 60.0)),
                 ("measured speed".into(), spectrum(&t.measured[0], dt, 60.0)),
+                ("declared model".into(), spectrum(&res_before, dt, 60.0)),
+                (with, spectrum(&res_after, dt, 60.0)),
             ],
         },
     ];
@@ -534,7 +613,18 @@ fn drive(file: &Path, progress: &(dyn Fn(&str) + Sync)) -> anyhow::Result<Diagno
         }
     }
     let model_toml = drive_model_toml(&d.model, &b)?;
+    // each output with its SI unit (the record's own units were converted on reading)
+    let rotational = b.line.domain == plant::Domain::Rotational;
+    let unit = |q: Option<plant::Quantity>| match (q.unwrap_or(plant::Quantity::Speed), rotational) {
+        (plant::Quantity::Position, true) => "rad",
+        (plant::Quantity::Position, false) => "m",
+        (plant::Quantity::Speed, true) => "rad/s",
+        (plant::Quantity::Speed, false) => "m/s",
+        (plant::Quantity::CouplingForce, true) => "N·m",
+        (plant::Quantity::CouplingForce, false) => "N",
+    };
     let names: Vec<String> = b.outputs.iter().map(|s| s.column.clone()).collect();
+    let axes: Vec<String> = b.outputs.iter().map(|s| format!("{} [{}]", s.column, unit(s.quantity))).collect();
     let t = &d.traces;
     let stride = t.time_s.len().div_ceil(PLOT_POINTS).max(1);
     let pts = |y: &[f64]| t.time_s.iter().zip(y).step_by(stride).map(|(&a, &b)| (a, b)).collect::<Vec<_>>();
@@ -542,7 +632,7 @@ fn drive(file: &Path, progress: &(dyn Fn(&str) + Sync)) -> anyhow::Result<Diagno
         Some(a) => format!("with {} at {a}", d.effect),
         None => format!("with {}", d.effect),
     };
-    let mut panels: Vec<crate::plot::Panel> = names
+    let mut panels: Vec<crate::plot::Panel> = axes
         .iter()
         .enumerate()
         .map(|(c, name)| crate::plot::Panel {
@@ -559,15 +649,43 @@ fn drive(file: &Path, progress: &(dyn Fn(&str) + Sync)) -> anyhow::Result<Diagno
         .collect();
     let res = |y: &[f64]| t.measured[0].iter().zip(y).map(|(a, b)| a - b).collect::<Vec<f64>>();
     let f_max = 0.5 / b.dt_s;
+    panels.insert(
+        1,
+        zoom_panel(
+            &t.time_s,
+            &[("measured", &t.measured[0]), ("declared model", &t.before[0]), (&label, &t.after[0])],
+            &res(&t.before[0]),
+            b.dt_s,
+            &axes[0],
+        ),
+    );
+    let u = &b.input_data[0];
     panels.push(crate::plot::Panel {
-        title: format!("residual spectrum ({})", names[0]),
+        title: format!("frequency response, {} to {}", b.inputs[0].column, b.outputs[0].column),
         x_desc: "frequency [Hz]".into(),
-        y_desc: "amplitude".into(),
+        y_desc: format!(
+            "|{} / {}| [{}/{}]",
+            b.outputs[0].column,
+            b.inputs[0].column,
+            unit(b.outputs[0].quantity),
+            if rotational { "N·m" } else { "N" }
+        ),
         log_y: true,
         series: vec![
+            ("measured".into(), frequency_response(u, &t.measured[0], b.dt_s, f_max)),
+            ("declared model".into(), frequency_response(u, &t.before[0], b.dt_s, f_max)),
+            (label.clone(), frequency_response(u, &t.after[0], b.dt_s, f_max)),
+        ],
+    });
+    panels.push(crate::plot::Panel {
+        title: format!("residual spectrum ({})", b.outputs[0].column),
+        x_desc: "frequency [Hz]".into(),
+        y_desc: format!("amplitude [{}]", unit(b.outputs[0].quantity)),
+        log_y: true,
+        series: vec![
+            ("measured".into(), spectrum(&t.measured[0], b.dt_s, f_max)),
             ("declared model".into(), spectrum(&res(&t.before[0]), b.dt_s, f_max)),
             (label, spectrum(&res(&t.after[0]), b.dt_s, f_max)),
-            ("measured".into(), spectrum(&t.measured[0], b.dt_s, f_max)),
         ],
     });
     Ok(Diagnosis {

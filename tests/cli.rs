@@ -416,3 +416,45 @@ fn the_readme_is_a_guide_on_files_in_the_repository() {
         assert!(found, "README uses {path}, which is missing");
     }
 }
+
+/// The diagnosis plot a person reads: the zoom where the declared model misses most and the
+/// frequency responses beside the whole record, one colour per role in every panel (the
+/// measurement black), tick labels without floating-point noise, a unit on every axis.
+#[test]
+fn the_diagnosis_plot_reads_as_a_plot() {
+    let d = common::scratch("cli", "plot");
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    for (bundle, svg) in [("examples/sweep/v1_sweep.toml", "sweep.svg"), ("examples/gear_bench/bench.toml", "gear.svg")]
+    {
+        let out = Command::new(env!("CARGO_BIN_EXE_rigtwin"))
+            .args(["diagnose", root.join(bundle).to_str().unwrap(), "--plot", d.join(svg).to_str().unwrap()])
+            .output()
+            .unwrap();
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        let text = std::fs::read_to_string(d.join(svg)).unwrap();
+        assert!(text.contains("zoom where the declared model misses most"), "{bundle}: no zoom panel");
+        assert!(text.contains("frequency response"), "{bundle}: no frequency response panel");
+        assert!(!text.contains("99999999") && !text.contains("00000001"), "{bundle}: tick labels with round-off");
+        // one colour per role in every panel: each series and its legend line in its role's
+        // colour (measured black, the declared model blue, the extended model red), so the
+        // count of lines in a colour is twice (series and legend) the panels showing that role;
+        // the measured series is drawn thin, so only its legend line is black and 2 px wide
+        let lines = |colour: &str, width: u8| {
+            text.matches(&format!("stroke=\"{colour}\" stroke-width=\"{width}\" points")).count()
+        };
+        let legends = |label: &str| text.lines().filter(|l| l.starts_with(label)).count();
+        let panels = legends("measured");
+        assert!(panels >= 4, "{bundle}: the measurement in every panel ({panels})");
+        assert_eq!(lines("#000000", 2), panels, "{bundle}: the measurement is black everywhere");
+        assert_eq!(
+            lines("#1F77B4", 2),
+            2 * legends("declared model"),
+            "{bundle}: the declared model is blue everywhere"
+        );
+        assert_eq!(lines("#D62728", 2), 2 * legends("with "), "{bundle}: the extended model is red everywhere");
+        // axis titles carry their units (plotters rotates the y title: it is its own <text>)
+        for axis in ["time [s]", "frequency [Hz]"] {
+            assert!(text.contains(axis), "{bundle}: no `{axis}` axis");
+        }
+    }
+}
