@@ -69,13 +69,21 @@ enum Command {
         #[arg(long, value_name = "DIR", default_value = "out")]
         out: PathBuf,
     },
-    /// Natural frequencies, mode shapes and the shuffle mode of one model.
+    /// Natural frequencies, damping ratios, mode shapes and each mode's kind: of the rig (its
+    /// chain, reduction or open differential) or of any drive model (`--params`).
     Modal {
         #[command(flatten)]
         rig: RigArgs,
-        /// Which model.
+        /// Which model of the rig.
         #[arg(long, value_enum, default_value_t = ModelKind::Differential)]
         model: ModelKind,
+        /// Any model instead of the rig: a rig file, a drive model (`diagnose --write-model`) or
+        /// a `drive_test` bundle's declared model.
+        #[arg(long, value_name = "FILE", conflicts_with = "rig")]
+        params: Option<PathBuf>,
+        /// Draw the mode shapes as SVG.
+        #[arg(long, value_name = "FILE.svg")]
+        plot: Option<PathBuf>,
     },
     /// Reduce the full chain after Rivin/Di (section 2.2).
     Reduce {
@@ -372,11 +380,35 @@ fn json_target(json: &Option<PathBuf>, inputs: Vec<PathBuf>) -> anyhow::Result<O
 
 fn run(cli: Cli) -> anyhow::Result<()> {
     match cli.command {
-        Command::Modal { rig, model } => {
-            let json = json_target(&rig.json, rig.rig.iter().cloned().collect())?;
-            let (r, variant) = load(&rig)?;
-            let rep = report::modal(&r, model, variant)?;
-            emit(json.as_ref(), &rep, &rep.human(12))?;
+        Command::Modal { rig, model, params, plot } => {
+            let inputs: Vec<PathBuf> =
+                rig.rig.iter().chain(&params).flat_map(|f| rigtwin::bundle::input_files(f)).collect();
+            let mut outs = Outputs::new(&inputs);
+            let json = rig.json.as_ref().map(|f| outs.file(f, "--json")).transpose()?;
+            let plot = plot.map(|f| outs.svg(&f, "--plot")).transpose()?;
+            let drive = match &params {
+                Some(f) => rigtwin::fmu_package::params_of_file(f)?.drive,
+                None => None,
+            };
+            match (drive, &params) {
+                (Some(m), Some(f)) => {
+                    let rep = report::modal_of_line(&f.display().to_string(), &m)?;
+                    if let Some(t) = &plot {
+                        rep.plot(t)?;
+                    }
+                    emit(json.as_ref(), &rep, &rep.human())?;
+                }
+                _ => {
+                    // a rig file given as --params is the rig
+                    let rig = RigArgs { rig: params.or(rig.rig.clone()), ..rig };
+                    let (r, variant) = load(&rig)?;
+                    let rep = report::modal(&r, model, variant)?;
+                    if let Some(t) = &plot {
+                        rep.plot(t)?;
+                    }
+                    emit(json.as_ref(), &rep, &rep.human(12))?;
+                }
+            }
         }
         Command::Reduce { rig, masses } => {
             let json = json_target(&rig.json, rig.rig.iter().cloned().collect())?;

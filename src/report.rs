@@ -133,6 +133,140 @@ pub fn modal(rig: &Rig, kind: ModelKind, variant: Variant) -> anyhow::Result<Mod
     })
 }
 
+/// `rigtwin modal --params` of a drive model (`drive_model` file or `drive_test` bundle).
+#[derive(Debug, Clone, Serialize)]
+pub struct LineModalReport {
+    /// The file.
+    pub model: String,
+    /// `rotational` or `translational`.
+    pub domain: plant::Domain,
+    /// Body names, the order of every mode shape.
+    pub dof_names: Vec<String>,
+    /// Undamped natural frequencies, Hz, ascending (rigid-body modes exactly 0).
+    pub frequencies_hz: Vec<f64>,
+    /// Each mode in words: `rigid body`, or which bodies swing against which.
+    pub mode_kinds: Vec<String>,
+    /// Mode shapes (largest component +1), one per frequency.
+    pub modes: Vec<Vec<f64>>,
+    /// Poles of the damped line (drag and coupling damping), one per conjugate pair.
+    pub poles: Vec<PoleReport>,
+    /// Effects of the model left out of the modal analysis (it is of the linear line: play
+    /// closed, friction off, dead times and lags are no mechanics).
+    pub left_out: Vec<String>,
+}
+
+/// Natural frequencies, damping ratios and mode shapes of any drive model's line.
+pub fn modal_of_line(name: &str, m: &plant::DriveModel) -> anyhow::Result<LineModalReport> {
+    let mech = m.line.model()?;
+    let modes = mech.modes()?;
+    let names: Vec<String> = m.line.bodies.iter().map(|b| b.name.clone()).collect();
+    let poles = mech
+        .state_space(&[])?
+        .damp()?
+        .into_iter()
+        .map(|p| PoleReport {
+            re_per_s: p.eigenvalue.re,
+            im_rad_per_s: p.eigenvalue.im,
+            natural_hz: p.natural_hz,
+            damped_hz: p.damped_hz,
+            damping_ratio: p.damping_ratio,
+        })
+        .collect();
+    Ok(LineModalReport {
+        model: name.to_string(),
+        domain: m.line.domain,
+        mode_kinds: modes.frequencies_hz.iter().zip(&modes.shapes).map(|(&f, s)| mode_in_words(f, s, &names)).collect(),
+        dof_names: names,
+        frequencies_hz: modes.frequencies_hz,
+        modes: modes.shapes.iter().map(|s| s.iter().copied().collect()).collect(),
+        poles,
+        left_out: m.effects.iter().map(|e| format!("{} at {}", e.name(), e.element(m))).collect(),
+    })
+}
+
+/// A mode in words: `rigid body` at 0 Hz, else the bodies that swing with the largest component
+/// against those that swing against it (components beyond a third of the largest count).
+fn mode_in_words(f_hz: f64, shape: &nalgebra::DVector<f64>, names: &[String]) -> String {
+    if f_hz == 0.0 {
+        return "rigid body".into();
+    }
+    let with: Vec<&str> = shape.iter().zip(names).filter(|(v, _)| **v >= 1.0 / 3.0).map(|(_, n)| n.as_str()).collect();
+    let against: Vec<&str> =
+        shape.iter().zip(names).filter(|(v, _)| **v <= -1.0 / 3.0).map(|(_, n)| n.as_str()).collect();
+    if against.is_empty() {
+        format!("{} against the rest", with.join(", "))
+    } else {
+        format!("{} against {}", with.join(", "), against.join(", "))
+    }
+}
+
+impl LineModalReport {
+    /// Human-readable form.
+    pub fn human(&self) -> String {
+        let mut s = String::new();
+        let _ = writeln!(s, "{} — {} line of {} bodies", self.model, words(&self.domain), self.dof_names.len());
+        let _ = writeln!(s, "  mode   f [Hz]      shape [{}]", self.dof_names.join(", "));
+        for (k, (f, shape)) in self.frequencies_hz.iter().zip(&self.modes).enumerate() {
+            let v: Vec<String> = shape.iter().map(|x| format!("{x:+.3}")).collect();
+            let _ = writeln!(s, "  f{:<4} {f:>8.3}   [{}]  {}", k + 1, v.join(", "), self.mode_kinds[k]);
+        }
+        let _ = writeln!(s, "  poles (damped):   natural [Hz]   damped [Hz]   damping ratio");
+        for p in &self.poles {
+            let z = p.damping_ratio.map_or("-".to_string(), |z| format!("{z:.4}"));
+            let _ = writeln!(s, "                    {:>10.3}   {:>10.3}   {z:>12}", p.natural_hz, p.damped_hz);
+        }
+        for e in &self.left_out {
+            let _ = writeln!(s, "  left out (not linear mechanics): {e}");
+        }
+        s
+    }
+
+    /// The mode shapes as a plot: each elastic mode's components over the bodies.
+    pub fn plot(&self, target: &crate::files::Target) -> anyhow::Result<()> {
+        let series = self
+            .frequencies_hz
+            .iter()
+            .zip(&self.modes)
+            .filter(|(f, _)| **f > 0.0)
+            .map(|(f, shape)| {
+                (format!("{f:.2} Hz"), shape.iter().enumerate().map(|(i, &v)| ((i + 1) as f64, v)).collect())
+            })
+            .collect();
+        let panel = crate::plot::Panel {
+            title: format!("mode shapes ({}: {})", "bodies", self.dof_names.join(", ")),
+            x_desc: "body [position in the line]".into(),
+            y_desc: "mode shape [largest component = 1]".into(),
+            log_y: false,
+            series,
+        };
+        crate::plot::lines(target, &format!("rigtwin modal {}", self.model), &[panel])
+    }
+}
+
+impl ModalReport {
+    /// The mode shapes as a plot: each elastic mode's components over the coordinates.
+    pub fn plot(&self, target: &crate::files::Target) -> anyhow::Result<()> {
+        let series = self
+            .frequencies_hz
+            .iter()
+            .zip(&self.modes)
+            .filter(|(f, _)| **f > 0.0)
+            .take(8)
+            .map(|(f, shape)| {
+                (format!("{f:.2} Hz"), shape.iter().enumerate().map(|(i, &v)| ((i + 1) as f64, v)).collect())
+            })
+            .collect();
+        let panel = crate::plot::Panel {
+            title: format!("mode shapes ({})", self.dof_names.join(", ")),
+            x_desc: "coordinate [position]".into(),
+            y_desc: "mode shape [largest component = 1]".into(),
+            log_y: false,
+            series,
+        };
+        crate::plot::lines(target, &format!("rigtwin modal {}", self.rig), &[panel])
+    }
+}
+
 /// Rivin/Di reduction of the rig's chain.
 pub fn reduction(rig: &Rig, variant: Variant, masses: usize) -> anyhow::Result<ReduceReport> {
     let rc = rig
