@@ -12,7 +12,14 @@ use crate::bundle::{load_bearing, load_torsional};
 /// The report (the JSON contract's keys first).
 #[derive(Debug, Clone, Serialize)]
 pub struct DiagnosisReport {
-    /// The chosen effect.
+    /// The answer in one word: `explained`, `declared_model_fits` or `not_explained`
+    /// (`ident::diagnose::verdict`); `not_explained` exits with code 3.
+    pub verdict: ident::diagnose::verdict::Verdict,
+    /// Why the verdict is not `explained` where a candidate was chosen: each parameter at or
+    /// beyond its physical bound.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub verdict_reasons: Vec<String>,
+    /// The chosen effect (with `not_explained`: the best candidate, not a finding).
     pub effect: String,
     /// Where it acts (`drive_test`: "body load", "coupling 2", "input 1").
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -224,6 +231,37 @@ fn frequency_response(u: &[f64], y: &[f64], dt: f64, f_max: f64) -> Vec<(f64, f6
     bands.values().map(|&(f, h, c)| (f / c as f64, h / c as f64)).collect()
 }
 
+/// Root mean square of `v`.
+fn rms(v: &[f64]) -> f64 {
+    (v.iter().map(|x| x * x).sum::<f64>() / v.len().max(1) as f64).sqrt()
+}
+
+/// The verdict of a diagnosis that chose `effect`, with the parameters of everything it found
+/// judged against the record's bounds (`ident::diagnose::verdict`, default settings).
+fn judge<'a>(
+    effect: &str,
+    structured_residual: bool,
+    parameters: impl Iterator<Item = &'a BTreeMap<String, f64>>,
+    scales: &ident::diagnose::verdict::RecordScales,
+) -> (ident::diagnose::verdict::Verdict, Vec<String>) {
+    use ident::diagnose::verdict::{out_of_bounds, verdict, BoundSettings, Verdict};
+    let mut reasons: Vec<String> = Vec::new();
+    if effect != "none" {
+        for p in parameters {
+            for r in out_of_bounds(p, scales, &BoundSettings::default()) {
+                if !reasons.contains(&r) {
+                    reasons.push(r);
+                }
+            }
+        }
+    }
+    let v = verdict(effect, structured_residual, &reasons);
+    if v == Verdict::NotExplained && reasons.is_empty() {
+        reasons.push("the residual is structured and no candidate explains it with physical parameters".into());
+    }
+    (v, reasons)
+}
+
 /// The notes of a time-domain diagnosis: `none` chosen (nothing beats re-fitting `refitted`),
 /// a residual still far from white.
 fn fit_notes(effect: &str, refitted: &str, structured_residual: bool, error_after: f64) -> Vec<String> {
@@ -340,8 +378,17 @@ fn torsional(file: &Path, progress: &(dyn Fn(&str) + Sync)) -> anyhow::Result<Di
             ],
         },
     ];
+    let scales = ident::diagnose::verdict::RecordScales {
+        max_force: b.sweep.torque_nm.iter().fold(0.0, |a: f64, v| a.max(v.abs())),
+        rms_speed: rms(&b.sweep.speed_m2_radps).max(rms(&b.sweep.speed_m3_radps)),
+        duration_s: b.sweep.torque_nm.len() as f64 * dt,
+    };
+    let judged = std::iter::once(&d.parameters).chain(d.effects.iter().map(|e| &e.parameters));
+    let (verdict, verdict_reasons) = judge(&d.effect, d.structured_residual, judged, &scales);
     Ok(Diagnosis {
         report: DiagnosisReport {
+            verdict,
+            verdict_reasons,
             effect: d.effect,
             at: d.at,
             parameters: d.parameters,
@@ -468,8 +515,17 @@ fn bearing(file: &Path, _progress: &(dyn Fn(&str) + Sync)) -> anyhow::Result<Dia
     let mut evidence = serde_json::to_value(&d.evidence)?;
     evidence["r2_before"] = serde_json::to_value(d.r2_before)?;
     evidence["r2_after"] = serde_json::to_value(d.r2_after)?;
+    let test = &b.tests[0];
+    let scales = ident::diagnose::verdict::RecordScales {
+        max_force: f64::INFINITY,
+        rms_speed: f64::INFINITY,
+        duration_s: test.force_x_n.len() as f64 * test.dt_s,
+    };
+    let (verdict, verdict_reasons) = judge(&d.effect, d.structured_residual, std::iter::once(&d.parameters), &scales);
     Ok(Diagnosis {
         report: DiagnosisReport {
+            verdict,
+            verdict_reasons,
             effect: d.effect,
             at: None,
             parameters: d.parameters,
@@ -526,6 +582,34 @@ pub fn human(r: &DiagnosisReport) -> String {
         None => effect_name(effect).to_string(),
     };
     let kind = r.kind.replace('_', " ");
+    if r.verdict == ident::diagnose::verdict::Verdict::NotExplained {
+        let mut s = format!(
+            "{kind}: NOT EXPLAINED — the record shows something no candidate explains with physical parameters\n"
+        );
+        for why in &r.verdict_reasons {
+            s += &format!("  {why}\n");
+        }
+        if r.effect != "none" {
+            s += &format!(
+                "  the best candidate, {}, is therefore no finding (its fit below is for inspection)\n",
+                named(&r.effect, r.at.as_ref())
+            );
+        }
+        s += &format!("  error {:.4} → {:.4}  ({})\n", r.error_before, r.error_after, r.error_definition);
+        s += "  candidates, best first:\n";
+        for c in &r.candidates {
+            s += &format!(
+                "    {:<36} error {:.4}  score {:>10.1}\n",
+                named(&c.effect, c.at.as_ref()),
+                c.error_after,
+                c.score
+            );
+        }
+        for n in &r.notes {
+            s += &format!("  note: {n}\n");
+        }
+        return s;
+    }
     let mut s = if r.effect == "none" {
         format!("{kind}: the declared model fits (no effect improves it clearly)\n")
     } else if r.effects.len() > 1 {
@@ -688,8 +772,29 @@ fn drive(file: &Path, progress: &(dyn Fn(&str) + Sync)) -> anyhow::Result<Diagno
             (label, spectrum(&res(&t.after[0]), b.dt_s, f_max)),
         ],
     });
+    // the largest force the inputs apply, through the gear stages at most (the product of the
+    // ratios above 1 along the line)
+    let gearing: f64 = b.line.couplings.iter().map(|c| c.ratio.abs().max(1.0)).product();
+    let speeds = b
+        .outputs
+        .iter()
+        .zip(&b.output_data)
+        .filter(|(s, _)| s.quantity.unwrap_or(plant::Quantity::Speed) == plant::Quantity::Speed);
+    let scales = ident::diagnose::verdict::RecordScales {
+        max_force: gearing * b.input_data.iter().flatten().fold(0.0, |a: f64, v| a.max(v.abs())),
+        rms_speed: speeds.map(|(_, y)| rms(y)).fold(f64::NAN, f64::max),
+        duration_s: b.input_data[0].len() as f64 * b.dt_s,
+    };
+    let scales = ident::diagnose::verdict::RecordScales {
+        // no speed measured: the smoothing speed is not judged
+        rms_speed: if scales.rms_speed.is_nan() { f64::INFINITY } else { scales.rms_speed },
+        ..scales
+    };
+    let (verdict, verdict_reasons) = judge(&d.effect, d.structured_residual, std::iter::once(&d.parameters), &scales);
     Ok(Diagnosis {
         report: DiagnosisReport {
+            verdict,
+            verdict_reasons,
             effect: d.effect.clone(),
             at: d.at.clone(),
             parameters: d.parameters.clone(),

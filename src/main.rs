@@ -622,7 +622,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             }
             emit(json.as_ref(), &rep.to_json(), &rep.human())?;
             if let Some(why) = rep.invalid() {
-                return Err(NotValid(why).into());
+                return Err(NotValid(format!("not valid: {why}")).into());
             }
         }
         Command::Diagnose { bundle, json, plot, write_model, save_signals } => {
@@ -640,8 +640,12 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             };
             let d = rigtwin::diagnosis::diagnose(&bundle, &progress)?;
             drop(busy);
-            if let Some(f) = &write_model {
-                rigtwin::files::write(f, d.model_toml.as_bytes())?;
+            let explained = d.report.verdict != ident::diagnose::verdict::Verdict::NotExplained;
+            match &write_model {
+                // a model with a parameter beyond its bound is no model of the rig
+                Some(_) if !explained => eprintln!("--write-model: not written, the record is not explained"),
+                Some(f) => rigtwin::files::write(f, d.model_toml.as_bytes())?,
+                None => {}
             }
             if let Some(f) = &save_signals {
                 rigtwin::files::write(f, d.signals_csv().as_bytes())?;
@@ -650,6 +654,9 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                 rigtwin::plot::lines(f, &format!("rigtwin diagnose {}", bundle.display()), &d.panels)?;
             }
             emit(json.as_ref(), &d.report, &rigtwin::diagnosis::human(&d.report))?;
+            if !explained {
+                return Err(NotValid(format!("not explained: {}", d.report.verdict_reasons.join("; "))).into());
+            }
         }
         Command::Check { bundle } => {
             out!("{}", rigtwin::bundle::summary(&bundle)?);
@@ -687,8 +694,8 @@ fn run(cli: Cli) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// A result that was computed and printed but cannot be trusted (the MPC ran on its fallback):
-/// exit code [`EXIT_NOT_VALID`].
+/// A result that was computed and printed but is no answer (the MPC ran on its fallback, the
+/// diagnosis did not explain the record): exit code [`EXIT_NOT_VALID`].
 #[derive(Debug)]
 struct NotValid(String);
 
@@ -712,7 +719,7 @@ fn main() -> ExitCode {
     match run(Cli::parse()) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) if e.is::<NotValid>() => {
-            eprintln!("not valid: {e:#}");
+            eprintln!("{e:#}");
             ExitCode::from(EXIT_NOT_VALID)
         }
         Err(e) => {

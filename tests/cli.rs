@@ -458,3 +458,46 @@ fn the_diagnosis_plot_reads_as_a_plot() {
         }
     }
 }
+
+/// A record the declared model and no candidate can explain (the example V1 sweep with two
+/// sines of 7.3 and 3.1 Hz added to M2's speed, which no effect of the input makes): the verdict
+/// is `not_explained` in text and JSON, the exit code 3, and no extended model is written.
+#[test]
+fn a_record_nothing_explains_is_said_to_be_not_explained() {
+    let d = common::scratch("cli", "not-explained");
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/variants");
+    let csv = std::fs::read_to_string(root.join("variant_V1.csv")).unwrap();
+    let mut out: Vec<String> = Vec::new();
+    for (i, line) in csv.lines().enumerate() {
+        if i == 0 {
+            out.push(line.into());
+            continue;
+        }
+        let mut c: Vec<String> = line.split(',').map(String::from).collect();
+        let t: f64 = c[0].parse().unwrap();
+        let w: f64 = c[2].parse().unwrap();
+        let tau = std::f64::consts::TAU;
+        c[2] = format!("{:e}", w + 0.5 * (tau * 7.3 * t).sin() + 0.3 * (tau * 3.1 * t + 1.0).sin());
+        out.push(c.join(","));
+    }
+    std::fs::write(d.join("disturbed.csv"), out.join("\n") + "\n").unwrap();
+    let toml =
+        std::fs::read_to_string(root.join("variant_V1.toml")).unwrap().replace("variant_V1.csv", "disturbed.csv");
+    std::fs::write(d.join("disturbed.toml"), toml).unwrap();
+    let run = |args: &[&str]| Command::new(env!("CARGO_BIN_EXE_rigtwin")).args(args).current_dir(&d).output().unwrap();
+    let r = run(&["diagnose", "disturbed.toml", "--write-model", "m.toml"]);
+    assert_eq!(r.status.code(), Some(3), "{}", String::from_utf8_lossy(&r.stderr));
+    assert!(String::from_utf8_lossy(&r.stdout).contains("NOT EXPLAINED"));
+    assert!(String::from_utf8_lossy(&r.stderr).contains("not explained"));
+    assert!(!d.join("m.toml").exists(), "no model written for an unexplained record");
+    let r = run(&["diagnose", "disturbed.toml", "--json"]);
+    assert_eq!(r.status.code(), Some(3));
+    let v: Value = serde_json::from_slice(&r.stdout).unwrap();
+    assert_eq!(v["verdict"], "not_explained", "{v}");
+    assert!(!v["verdict_reasons"].as_array().unwrap().is_empty());
+    // the undisturbed record is explained by the declared model re-fitted, or by an effect
+    let r = run(&["diagnose", root.join("variant_V1.toml").to_str().unwrap(), "--json"]);
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    let v: Value = serde_json::from_slice(&r.stdout).unwrap();
+    assert_ne!(v["verdict"], "not_explained", "{v}");
+}

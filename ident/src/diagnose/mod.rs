@@ -7,6 +7,7 @@ pub mod bearing;
 pub mod drive;
 mod lm;
 pub mod torsional;
+pub mod verdict;
 
 use std::collections::BTreeMap;
 
