@@ -76,14 +76,19 @@ pub struct EstimateReport {
     /// Model used.
     pub model: ModelChoice,
     /// kg m².
+    #[serde(rename = "j_drive_kgm2")]
     pub j_drive: f64,
     /// Nm/rad.
+    #[serde(rename = "c_short_Nm_per_rad")]
     pub c_short: f64,
     /// Nm/rad.
+    #[serde(rename = "c_long_Nm_per_rad")]
     pub c_long: f64,
     /// 95 % interval, kg m² (Monte Carlo where it solved, else linearised).
+    #[serde(rename = "j_drive_ci95_kgm2")]
     pub j_drive_ci95: Option<[f64; 2]>,
     /// 95 % interval, Nm/rad.
+    #[serde(rename = "c_short_ci95_Nm_per_rad")]
     pub c_short_ci95: Option<[f64; 2]>,
     /// "monte_carlo" or "linearised".
     pub ci_method: &'static str,
@@ -109,8 +114,10 @@ pub struct Comparison {
     /// Model.
     pub model: ModelChoice,
     /// kg m².
+    #[serde(rename = "j_drive_kgm2")]
     pub j_drive: Option<f64>,
     /// Nm/rad.
+    #[serde(rename = "c_short_Nm_per_rad")]
     pub c_short: Option<f64>,
     /// χ² of its fit.
     pub chi2: Option<f64>,

@@ -41,9 +41,9 @@ fn variant_bundles_parametrise_end_to_end() {
     assert_eq!(a["model"], "differential_with_side_gears", "{a}");
     let ja: Vec<f64> = a["j_drive_ci95_kgm2"].as_array().unwrap().iter().map(|x| x.as_f64().unwrap()).collect();
     assert!(ja[0] < 0.529 && 0.529 < ja[1], "{a}");
-    let (j, c) = (e["j_drive"].as_f64().unwrap(), e["c_short"].as_f64().unwrap());
-    let jci: Vec<f64> = e["j_drive_ci95"].as_array().unwrap().iter().map(|x| x.as_f64().unwrap()).collect();
-    let cci: Vec<f64> = e["c_short_ci95"].as_array().unwrap().iter().map(|x| x.as_f64().unwrap()).collect();
+    let (j, c) = (e["j_drive_kgm2"].as_f64().unwrap(), e["c_short_Nm_per_rad"].as_f64().unwrap());
+    let jci: Vec<f64> = e["j_drive_ci95_kgm2"].as_array().unwrap().iter().map(|x| x.as_f64().unwrap()).collect();
+    let cci: Vec<f64> = e["c_short_ci95_Nm_per_rad"].as_array().unwrap().iter().map(|x| x.as_f64().unwrap()).collect();
     assert!(jci[0] < j && j < jci[1] && cci[0] < c && c < cci[1]);
     // Physics, not numbers from the code: every informative pair is an independent solution
     // of the same rig; the open-differential model must make them agree (within 3 %), the
@@ -55,8 +55,8 @@ fn variant_bundles_parametrise_end_to_end() {
     for p in pairs {
         for s in p["solutions"].as_array().unwrap() {
             assert_eq!(s["shuffle"], true);
-            assert!((s["j_drive"].as_f64().unwrap() / j - 1.0).abs() < 0.03, "{p}");
-            assert!((s["c_short"].as_f64().unwrap() / c - 1.0).abs() < 0.03, "{p}");
+            assert!((s["j_drive_kgm2"].as_f64().unwrap() / j - 1.0).abs() < 0.03, "{p}");
+            assert!((s["c_short_Nm_per_rad"].as_f64().unwrap() / c - 1.0).abs() < 0.03, "{p}");
             n += 1;
         }
     }
@@ -96,8 +96,8 @@ fn typed_in_frequencies_reproduce_table_4_pairs() {
     assert_eq!(v1v4.as_array().unwrap().len(), 2);
     // Table 4 prints 0.736 and 7.570 kg m²; the two-decimal frequencies allow about ±10 %
     // and ±10 % there (see tests/parametrise.rs)
-    assert!((v1v4[0]["j_drive"].as_f64().unwrap() / 0.736 - 1.0).abs() < 0.1);
-    assert!((v1v4[1]["j_drive"].as_f64().unwrap() / 7.570 - 1.0).abs() < 0.1);
+    assert!((v1v4[0]["j_drive_kgm2"].as_f64().unwrap() / 0.736 - 1.0).abs() < 0.1);
+    assert!((v1v4[1]["j_drive_kgm2"].as_f64().unwrap() / 7.570 - 1.0).abs() < 0.1);
     assert_eq!(v1v4[1]["shuffle"], false);
 }
 

@@ -227,8 +227,8 @@ fn clean_data_gives_none_with_the_parameters_refitted() {
     };
     let d = run(&sweep(&truth, Truth { set_point_nm: 40.0, ..Default::default() }, 6), &declared());
     assert_eq!(d.effect, "none", "candidates: {:#?}", d.candidates);
-    within(&d.parameters, "j_drive", truth.j_drive, 0.02);
-    within(&d.parameters, "c_short", truth.c_short, 0.02);
+    within(&d.parameters, "j_drive_kgm2", truth.j_drive, 0.02);
+    within(&d.parameters, "c_short_Nm_per_rad", truth.c_short, 0.02);
     assert!(d.error_after < 0.5 * d.error_before);
 }
 

@@ -247,8 +247,8 @@ fn coulomb_friction_at_both_load_machines_about_zero_torque() {
     within(param(&d, "coulomb_friction", Some("M2 and M3"), "friction_M3_Nm"), 1.0, 0.2, "friction at M3");
     // and the declared mechanics stay where they were (within 5 %: the side gears' inertia
     // is in the truth's j_drive)
-    within(d.parameters["j_drive"], declared().j_drive, 0.05, "j_drive");
-    within(d.parameters["c_short"], declared().c_short, 0.05, "c_short");
+    within(d.parameters["j_drive_kgm2"], declared().j_drive, 0.05, "j_drive");
+    within(d.parameters["c_short_Nm_per_rad"], declared().c_short, 0.05, "c_short");
     halved_each_step(&d);
     each_effect_halves(&d);
 }
@@ -290,8 +290,8 @@ fn a_multisine_with_nothing_missing_gives_none_and_the_mechanics() {
     print_params(&d);
     assert_eq!(d.effect, "none", "{:#?}", d.candidates);
     assert!(d.effects.is_empty());
-    within(d.parameters["j_drive"], truth_rig.j_drive, 0.02, "j_drive");
-    within(d.parameters["c_short"], truth_rig.c_short, 0.02, "c_short");
+    within(d.parameters["j_drive_kgm2"], truth_rig.j_drive, 0.02, "j_drive");
+    within(d.parameters["c_short_Nm_per_rad"], truth_rig.c_short, 0.02, "c_short");
     assert!(d.error_after < 0.5 * d.error_before);
 }
 

@@ -105,10 +105,13 @@ pub struct Placement {
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct PairSolution {
     /// Drive inertia, kg m².
+    #[serde(rename = "j_drive_kgm2")]
     pub j_drive: f64,
     /// Short side-shaft stiffness, Nm/rad.
+    #[serde(rename = "c_short_Nm_per_rad")]
     pub c_short: f64,
     /// Long side-shaft stiffness, Nm/rad.
+    #[serde(rename = "c_long_Nm_per_rad")]
     pub c_long: f64,
     /// True when both measured frequencies are the model's shuffle frequency.
     pub shuffle: bool,
@@ -120,8 +123,10 @@ pub struct PairSolution {
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Confidence {
     /// kg m².
+    #[serde(rename = "j_drive_ci95_kgm2")]
     pub j_drive_ci95: [f64; 2],
     /// Nm/rad.
+    #[serde(rename = "c_short_ci95_Nm_per_rad")]
     pub c_short_ci95: [f64; 2],
 }
 
@@ -524,10 +529,13 @@ pub struct ExtendedEstimate {
     /// The extension.
     pub extension: Extension,
     /// Drive inertia J_drive of eq. (28) (the side gears beside it), kg m².
+    #[serde(rename = "j_drive_kgm2")]
     pub j_drive: f64,
     /// Short side-shaft stiffness, Nm/rad.
+    #[serde(rename = "c_short_Nm_per_rad")]
     pub c_short: f64,
     /// Long side-shaft stiffness, Nm/rad.
+    #[serde(rename = "c_long_Nm_per_rad")]
     pub c_long: f64,
     /// The extension's parameter ([`Extension::parameter`]).
     pub value: f64,
@@ -539,12 +547,15 @@ pub struct ExtendedEstimate {
     pub sigma_scale: f64,
     /// Linearised 95 % intervals of j_drive, c_short and the extension's parameter (null when
     /// the three are not separable at the estimate).
+    #[serde(rename = "j_drive_ci95_kgm2")]
     pub j_drive_ci95: Option<[f64; 2]>,
     /// Nm/rad.
+    #[serde(rename = "c_short_ci95_Nm_per_rad")]
     pub c_short_ci95: Option<[f64; 2]>,
     /// In the parameter's unit.
     pub value_ci95: Option<[f64; 2]>,
     /// Model − measured shuffle frequency per variant, Hz.
+    #[serde(rename = "residuals_hz")]
     pub residuals_hz: Vec<(Variant, f64)>,
 }
 

@@ -1244,8 +1244,8 @@ fn label(c: Candidate) -> String {
 
 fn declared_keys(m: &TorsionalModel) -> BTreeMap<String, f64> {
     let mut b = BTreeMap::new();
-    b.insert("j_drive".to_string(), m.rig.j_drive);
-    b.insert("c_short".to_string(), m.rig.c_short);
+    b.insert("j_drive_kgm2".to_string(), m.rig.j_drive);
+    b.insert("c_short_Nm_per_rad".to_string(), m.rig.c_short);
     b
 }
 
