@@ -582,7 +582,8 @@ pub fn human(r: &DiagnosisReport) -> String {
         None => effect_name(effect).to_string(),
     };
     let kind = r.kind.replace('_', " ");
-    if r.verdict == ident::diagnose::verdict::Verdict::NotExplained {
+    let explained = r.verdict != ident::diagnose::verdict::Verdict::NotExplained;
+    let mut s = if !explained {
         let mut s = format!(
             "{kind}: NOT EXPLAINED — the record shows something no candidate explains with physical parameters\n"
         );
@@ -595,22 +596,8 @@ pub fn human(r: &DiagnosisReport) -> String {
                 named(&r.effect, r.at.as_ref())
             );
         }
-        s += &format!("  error {:.4} → {:.4}  ({})\n", r.error_before, r.error_after, r.error_definition);
-        s += "  candidates, best first:\n";
-        for c in &r.candidates {
-            s += &format!(
-                "    {:<36} error {:.4}  score {:>10.1}\n",
-                named(&c.effect, c.at.as_ref()),
-                c.error_after,
-                c.score
-            );
-        }
-        for n in &r.notes {
-            s += &format!("  note: {n}\n");
-        }
-        return s;
-    }
-    let mut s = if r.effect == "none" {
+        s
+    } else if r.effect == "none" {
         format!("{kind}: the declared model fits (no effect improves it clearly)\n")
     } else if r.effects.len() > 1 {
         let all: Vec<String> = r.effects.iter().map(|e| named(&e.effect, e.at.as_ref())).collect();
@@ -621,7 +608,9 @@ pub fn human(r: &DiagnosisReport) -> String {
     let show = |p: &mut dyn Iterator<Item = (&String, &f64)>| {
         p.map(|(k, v)| crate::units::display(k, *v)).collect::<Vec<_>>().join(", ")
     };
-    if r.effects.len() > 1 {
+    if !explained {
+        // no parameter of an unexplained record is shown as a finding
+    } else if r.effects.len() > 1 {
         for e in &r.effects {
             s += &format!("  {}: {}\n", named(&e.effect, e.at.as_ref()), show(&mut e.parameters.iter()));
         }
@@ -636,7 +625,7 @@ pub fn human(r: &DiagnosisReport) -> String {
         }
     }
     s += &format!("  error {:.4} → {:.4}  ({})\n", r.error_before, r.error_after, r.error_definition);
-    if r.structured_residual {
+    if explained && r.structured_residual {
         s += "  the residual is still structured: something the candidates do not describe remains\n";
     }
     s += "  candidates, best first:\n";

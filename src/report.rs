@@ -103,23 +103,7 @@ pub fn modal(rig: &Rig, kind: ModelKind, variant: Variant) -> anyhow::Result<Mod
     let m = model(rig, kind, variant)?;
     let modes = m.modes()?;
     let kinds = m.layout.map(|l| modes.kinds(&l)).unwrap_or_else(|| vec![ModeKind::Other; modes.frequencies_hz.len()]);
-    let poles = if m.is_damped() {
-        let ss = m.state_space(&[])?;
-        Some(
-            ss.damp()?
-                .into_iter()
-                .map(|p| PoleReport {
-                    re_per_s: p.eigenvalue.re,
-                    im_rad_per_s: p.eigenvalue.im,
-                    natural_hz: p.natural_hz,
-                    damped_hz: p.damped_hz,
-                    damping_ratio: p.damping_ratio,
-                })
-                .collect(),
-        )
-    } else {
-        None
-    };
+    let poles = if m.is_damped() { Some(pole_reports(&m)?) } else { None };
     Ok(ModalReport {
         rig: rig.name.clone(),
         model: kind,
@@ -131,6 +115,46 @@ pub fn modal(rig: &Rig, kind: ModelKind, variant: Variant) -> anyhow::Result<Mod
         modes: modes.shapes.iter().map(|s| s.iter().copied().collect()).collect(),
         poles,
     })
+}
+
+/// The poles of a mechanical model's state space, one per conjugate pair.
+fn pole_reports(m: &MechanicalModel) -> anyhow::Result<Vec<PoleReport>> {
+    Ok(m.state_space(&[])?
+        .damp()?
+        .into_iter()
+        .map(|p| PoleReport {
+            re_per_s: p.eigenvalue.re,
+            im_rad_per_s: p.eigenvalue.im,
+            natural_hz: p.natural_hz,
+            damped_hz: p.damped_hz,
+            damping_ratio: p.damping_ratio,
+        })
+        .collect())
+}
+
+/// The elastic modes' shapes over the coordinates `names`, as one SVG panel (at most 8 modes).
+fn plot_mode_shapes(
+    target: &crate::files::Target,
+    title: &str,
+    names: &[String],
+    frequencies_hz: &[f64],
+    modes: &[Vec<f64>],
+) -> anyhow::Result<()> {
+    let series = frequencies_hz
+        .iter()
+        .zip(modes)
+        .filter(|(f, _)| **f > 0.0)
+        .take(8)
+        .map(|(f, shape)| (format!("{f:.2} Hz"), shape.iter().enumerate().map(|(i, &v)| ((i + 1) as f64, v)).collect()))
+        .collect();
+    let panel = crate::plot::Panel {
+        title: format!("mode shapes ({})", names.join(", ")),
+        x_desc: "coordinate [position in the line]".into(),
+        y_desc: "mode shape [largest component = 1]".into(),
+        log_y: false,
+        series,
+    };
+    crate::plot::lines(target, title, &[panel])
 }
 
 /// `rigtwin modal --params` of a drive model (`drive_model` file or `drive_test` bundle).
@@ -160,18 +184,7 @@ pub fn modal_of_line(name: &str, m: &plant::DriveModel) -> anyhow::Result<LineMo
     let mech = m.line.model()?;
     let modes = mech.modes()?;
     let names: Vec<String> = m.line.bodies.iter().map(|b| b.name.clone()).collect();
-    let poles = mech
-        .state_space(&[])?
-        .damp()?
-        .into_iter()
-        .map(|p| PoleReport {
-            re_per_s: p.eigenvalue.re,
-            im_rad_per_s: p.eigenvalue.im,
-            natural_hz: p.natural_hz,
-            damped_hz: p.damped_hz,
-            damping_ratio: p.damping_ratio,
-        })
-        .collect();
+    let poles = pole_reports(&mech)?;
     Ok(LineModalReport {
         model: name.to_string(),
         domain: m.line.domain,
@@ -223,47 +236,16 @@ impl LineModalReport {
 
     /// The mode shapes as a plot: each elastic mode's components over the bodies.
     pub fn plot(&self, target: &crate::files::Target) -> anyhow::Result<()> {
-        let series = self
-            .frequencies_hz
-            .iter()
-            .zip(&self.modes)
-            .filter(|(f, _)| **f > 0.0)
-            .map(|(f, shape)| {
-                (format!("{f:.2} Hz"), shape.iter().enumerate().map(|(i, &v)| ((i + 1) as f64, v)).collect())
-            })
-            .collect();
-        let panel = crate::plot::Panel {
-            title: format!("mode shapes ({}: {})", "bodies", self.dof_names.join(", ")),
-            x_desc: "body [position in the line]".into(),
-            y_desc: "mode shape [largest component = 1]".into(),
-            log_y: false,
-            series,
-        };
-        crate::plot::lines(target, &format!("rigtwin modal {}", self.model), &[panel])
+        let title = format!("rigtwin modal {}", self.model);
+        plot_mode_shapes(target, &title, &self.dof_names, &self.frequencies_hz, &self.modes)
     }
 }
 
 impl ModalReport {
     /// The mode shapes as a plot: each elastic mode's components over the coordinates.
     pub fn plot(&self, target: &crate::files::Target) -> anyhow::Result<()> {
-        let series = self
-            .frequencies_hz
-            .iter()
-            .zip(&self.modes)
-            .filter(|(f, _)| **f > 0.0)
-            .take(8)
-            .map(|(f, shape)| {
-                (format!("{f:.2} Hz"), shape.iter().enumerate().map(|(i, &v)| ((i + 1) as f64, v)).collect())
-            })
-            .collect();
-        let panel = crate::plot::Panel {
-            title: format!("mode shapes ({})", self.dof_names.join(", ")),
-            x_desc: "coordinate [position]".into(),
-            y_desc: "mode shape [largest component = 1]".into(),
-            log_y: false,
-            series,
-        };
-        crate::plot::lines(target, &format!("rigtwin modal {}", self.rig), &[panel])
+        let title = format!("rigtwin modal {}", self.rig);
+        plot_mode_shapes(target, &title, &self.dof_names, &self.frequencies_hz, &self.modes)
     }
 }
 
