@@ -242,6 +242,26 @@ fn blocks_in_words(blocks: &[usize]) -> String {
     format!("[{}] steps", parts.join(", "))
 }
 
+/// Why a closed-loop run's figures do not describe the MPC, if they do not: the QP missed its
+/// time limit in more than [`mpc::closed_loop::MAX_FALLBACK_SHARE`] of the `steps`, so the loop
+/// ran on the fallback plan.
+pub fn fallback_verdict(fallbacks: usize, steps: usize) -> Option<String> {
+    let share = fallbacks as f64 / steps.max(1) as f64;
+    (steps == 0 || share > mpc::closed_loop::MAX_FALLBACK_SHARE).then(|| {
+        format!(
+            "the QP missed its time limit in {fallbacks} of {steps} steps ({:.0} %): the loop ran on the fallback plan, so these figures do not describe the MPC; shorten --horizon, use more --blocks or raise --time-limit-us",
+            share * 100.0
+        )
+    })
+}
+
+/// The verdict keys every `rigtwin mpc` JSON document carries, whatever the model.
+fn verdict_keys(o: &mut serde_json::Map<String, serde_json::Value>, why: Option<String>, model_kind: &str) {
+    o.insert("verdict".into(), (if why.is_some() { "not_valid" } else { "valid" }).into());
+    o.insert("not_valid_because".into(), why.into());
+    o.insert("model_kind".into(), model_kind.into());
+}
+
 /// Rename `u0_error_nm` and `step_time_us` to the contract's spelling.
 impl MpcReport {
     /// JSON with the contract's keys (`u0_error_Nm`).
@@ -254,26 +274,14 @@ impl MpcReport {
             if let Some(e) = o.remove("sweep_peak_torque_deviation_nm") {
                 o.insert("sweep_peak_torque_deviation_Nm".into(), e);
             }
-            let why = self.invalid();
-            o.insert("verdict".into(), (if why.is_some() { "not_valid" } else { "valid" }).into());
-            o.insert("not_valid_because".into(), why.into());
+            verdict_keys(o, self.invalid(), "paper_rig");
         }
         v
     }
 
-    /// Why the figures do not describe the MPC, if they do not: the QP missed its time limit
-    /// in more than [`mpc::closed_loop::MAX_FALLBACK_SHARE`] of the steps, so the loop ran on
-    /// the fallback plan.
+    /// Why the figures do not describe the MPC, if they do not (see [`fallback_verdict`]).
     pub fn invalid(&self) -> Option<String> {
-        let share = self.fallbacks as f64 / self.steps.max(1) as f64;
-        (self.steps == 0 || share > mpc::closed_loop::MAX_FALLBACK_SHARE).then(|| {
-            format!(
-                "the QP missed its time limit in {} of {} steps ({:.0} %): the loop ran on the fallback plan, so these figures do not describe the MPC; shorten --horizon, use more --blocks or raise --time-limit-us",
-                self.fallbacks,
-                self.steps,
-                share * 100.0
-            )
-        })
+        fallback_verdict(self.fallbacks, self.steps)
     }
 
     /// Text for the terminal.
@@ -709,6 +717,8 @@ pub struct DriveMpcReport {
     pub step_time_us: Timing,
     /// Steps that used the fallback plan.
     pub fallbacks: usize,
+    /// Controller steps of the run.
+    pub steps: usize,
     /// Share of samples with an input at a hard bound.
     pub input_at_bound_share: f64,
     /// Where the run stopped because the loop diverged.
@@ -716,16 +726,34 @@ pub struct DriveMpcReport {
 }
 
 impl DriveMpcReport {
+    /// Why the figures do not describe the MPC, if they do not (see [`fallback_verdict`]).
+    pub fn invalid(&self) -> Option<String> {
+        fallback_verdict(self.fallbacks, self.steps)
+    }
+
+    /// JSON with the verdict keys every `rigtwin mpc` document carries.
+    pub fn to_json(&self) -> serde_json::Value {
+        let mut v = serde_json::to_value(self).expect("report serialises");
+        if let Some(o) = v.as_object_mut() {
+            verdict_keys(o, self.invalid(), "drive_model");
+        }
+        v
+    }
+
     /// Text for the terminal.
     pub fn human(&self) -> String {
-        let mut s = format!(
-            "MPC on the drive model: N = {} at {} ms; tracked {}, penalised {}, measured {}; |u| <= {:?}\n",
+        let mut s = match self.invalid() {
+            Some(why) => format!("NOT VALID: {why}\n"),
+            None => String::new(),
+        };
+        s += &format!(
+            "MPC on the drive model: N = {} at {} ms; tracked {}, penalised {}, measured {}; |u| <= [{}]\n",
             self.horizon,
             self.dt_s * 1e3,
             self.tracked.join(", "),
             if self.penalised.is_empty() { "nothing".to_string() } else { self.penalised.join(", ") },
             self.measured.join(", "),
-            self.input_max
+            self.input_max.iter().map(|v| crate::units::significant(*v, 4)).collect::<Vec<_>>().join(", ")
         );
         for n in &self.prediction {
             s += &format!("  prediction: {n}\n");
@@ -872,6 +900,7 @@ pub fn drive_report(
         peak_force,
         step_time_us: Timing { median, p99, max: times.iter().copied().fold(0.0, f64::max) },
         fallbacks: controller.fallbacks(),
+        steps: times.len(),
         input_at_bound_share,
         stopped,
     };

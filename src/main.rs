@@ -573,7 +573,10 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                 if let Some(f) = &plot {
                     rigtwin::control::plot_drive(f, &run, model.line.domain)?;
                 }
-                emit(json.as_ref(), &rep, &rep.human())?;
+                emit(json.as_ref(), &rep.to_json(), &rep.human())?;
+                if let Some(why) = rep.invalid() {
+                    return Err(NotValid(format!("not valid: {why}")).into());
+                }
                 return Ok(());
             }
             let truth = match &plant {

@@ -384,6 +384,12 @@ fn a_diagnosed_drive_model_runs_in_the_controller_as_written() {
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let v: Value = serde_json::from_slice(&out.stdout).unwrap();
     assert_eq!(v["schema_version"], 1);
+    // the keys every mpc document carries, whatever the model
+    assert_eq!((v["verdict"].as_str(), v["model_kind"].as_str()), (Some("valid"), Some("drive_model")), "{v}");
+    assert_eq!(v["steps"], 1000, "1 s at 1 ms");
+    let rig = run(&["mpc", "--duration", "0.2", "--json"]);
+    let r: Value = serde_json::from_slice(&rig.stdout).unwrap();
+    assert_eq!((r["verdict"].as_str(), r["model_kind"].as_str()), (Some("valid"), Some("paper_rig")), "{r}");
     let svg = std::fs::read_to_string(d.join("run.svg")).unwrap();
     assert!(svg.contains("<svg") && svg.contains("reference"), "the plot was drawn");
 }
