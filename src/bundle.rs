@@ -409,6 +409,20 @@ pub const SWEEP_SIGNALS: [(&str, Dimension); 4] = [
     ("speed_m3_radps", Dimension::AngularSpeed),
 ];
 
+/// Most samples a record may have per channel: 10 million (2.8 h at 1 kHz). A diagnosis holds
+/// about 90 bytes per sample and channel, so a four-channel record of this length needs about
+/// 3.6 GB; a longer one is refused before it is read whole (cut it, or decimate it).
+pub const MAX_SAMPLES: usize = 10_000_000;
+
+/// The refusal of a record longer than [`MAX_SAMPLES`].
+fn too_many_samples(path: &Path, n: impl std::fmt::Display) -> BundleError {
+    error(
+        path,
+        None,
+        format!("{n} samples per channel: rigtwin takes records of at most {MAX_SAMPLES} (cut the record to the part of interest, or decimate it)"),
+    )
+}
+
 /// Longest line of a CSV record, bytes: a header of thousands of named columns fits; a file
 /// without line breaks (or one long binary run) is refused after this many bytes, not held whole.
 pub const MAX_CSV_LINE_BYTES: usize = 1 << 20;
@@ -504,6 +518,9 @@ pub fn read_columns(path: &Path, names: &[&str]) -> Result<Vec<Vec<f64>>, Bundle
         .collect::<Result<_, _>>()?;
     let mut cols = vec![Vec::new(); names.len()];
     for (row, rec) in rdr.records().enumerate() {
+        if row >= MAX_SAMPLES {
+            return Err(too_many_samples(path, format!("more than {MAX_SAMPLES}")));
+        }
         let line = row + 2;
         let rec = rec.map_err(|e| match e.kind() {
             // the line reader's own message names its line
@@ -1051,6 +1068,9 @@ pub fn read_mat(path: &Path, names: &[&str]) -> Result<Vec<Vec<f64>>, BundleErro
         let Some(values) = values else {
             return Err(error(path, None, format!("variable `{name}` is not a real numeric array")));
         };
+        if values.len() > MAX_SAMPLES {
+            return Err(too_many_samples(path, values.len()));
+        }
         if let Some(k) = values.iter().position(|v| !v.is_finite()) {
             return Err(error(
                 path,
@@ -1153,6 +1173,9 @@ fn read_mdf_channels(path: &Path, names: &[&str]) -> Result<MdfChannels, BundleE
             let (dg, cg) = group_of(lead);
             let group = &f.data_groups()[dg].channel_groups[cg];
             let master = group.master_channel();
+            if group.sample_count > MAX_SAMPLES as u64 {
+                return Err(too_many_samples(path, group.sample_count));
+            }
             let record_bytes = group.record_size(0) as u64;
             if record_bytes > f.file_size() {
                 return Err(error(

@@ -342,8 +342,8 @@ fn an_mdf_group_claiming_records_larger_than_its_file_is_refused() {
     let mut b = std::fs::read(d.join("rec.mf4")).unwrap();
     let cg = b.windows(4).position(|w| w == b"##CG").expect("a channel group block");
     let links = u64::from_le_bytes(b[cg + 16..cg + 24].try_into().unwrap()) as usize;
-    let at = cg + 24 + 8 * links + 24;
-    b[at..at + 4].copy_from_slice(&0xFFFF_FFF0u32.to_le_bytes());
+    let data = cg + 24 + 8 * links;
+    b[data + 24..data + 28].copy_from_slice(&0xFFFF_FFF0u32.to_le_bytes());
     std::fs::write(d.join("rec.mf4"), b).unwrap();
     let sweep = std::fs::read_to_string(shared("v1_sweep_b.toml")).unwrap().replace("v1_sweep_b.csv", "rec.mf4")
         + "\n[columns]\ntorque_drive_Nm = { channel = \"trq\", unit = \"Nm\" }\n\
@@ -355,6 +355,25 @@ fn an_mdf_group_claiming_records_larger_than_its_file_is_refused() {
     .unwrap();
     for cmd in ["check", "diagnose"] {
         refused(&d, &[cmd, "rec.toml"], &["rec.mf4", "4294967280 bytes", "corrupt"]);
+    }
+}
+
+#[test]
+fn a_record_longer_than_rigtwin_takes_is_refused_while_it_is_read() {
+    // 10 000 001 rows of the shortest CSV: refused at the row past the bound, with the data
+    // segment capped at 1 GiB: the 10 million rows kept as four f64 columns are 320 MB, and a
+    // growing vector holds up to twice its length while it grows (a small multiple of it)
+    let d = scratch("long-record", &SWEEP);
+    let mut csv = b"time_s,torque_drive_Nm,speed_m2_radps,speed_m3_radps\n".to_vec();
+    csv.reserve(8 * 10_000_001);
+    for _ in 0..10_000_001 {
+        csv.extend_from_slice(b"0,0,0,0\n");
+    }
+    std::fs::write(d.join("v1_sweep_b.csv"), csv).unwrap();
+    let r = run_limited(&d, &["check", "v1_sweep_b.toml"], 120, Some(1 << 30));
+    assert_eq!(r.code, Some(1), "{}", r.stderr);
+    for w in ["v1_sweep_b.csv", "more than 10000000 samples", "at most 10000000"] {
+        assert!(r.stderr.contains(w), "`{w}` missing in {}", r.stderr);
     }
 }
 
