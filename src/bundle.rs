@@ -466,21 +466,14 @@ impl<R: std::io::Read> std::io::Read for TextLines<R> {
             } else {
                 continue;
             };
+            // the good bytes before the fault first, the fault with the next read
+            if i == 0 {
+                return Err(std::io::Error::new(std::io::ErrorKind::InvalidData, fault));
+            }
             self.fault = Some(fault);
-            return self.read_fault_after(i);
+            return Ok(i);
         }
         Ok(n)
-    }
-}
-
-impl<R: std::io::Read> TextLines<R> {
-    /// The `good` bytes before a fault, or the fault itself when there are none.
-    fn read_fault_after(&mut self, good: usize) -> std::io::Result<usize> {
-        if good > 0 {
-            return Ok(good);
-        }
-        let fault = self.fault.take().unwrap_or_default();
-        Err(std::io::Error::new(std::io::ErrorKind::InvalidData, fault))
     }
 }
 

@@ -932,10 +932,8 @@ pub struct DriveRun {
 /// Draws a drive model's run: tracked outputs with their reference, penalised forces, inputs.
 pub fn plot_drive(target: &crate::files::Target, run: &DriveRun, domain: plant::Domain) -> anyhow::Result<()> {
     use crate::plot::{lines, Panel};
-    let (speed, force) = match domain {
-        plant::Domain::Rotational => ("rad/s", "N·m"),
-        plant::Domain::Translational => ("m/s", "N"),
-    };
+    let speed = crate::units::quantity_unit(plant::Quantity::Speed, domain);
+    let force = crate::units::quantity_unit(plant::Quantity::CouplingForce, domain);
     let of = |rows: &[Vec<f64>], j: usize| run.time_s.iter().zip(rows).map(|(&t, y)| (t, y[j])).collect::<Vec<_>>();
     let reference: Vec<(f64, f64)> =
         run.time_s.iter().map(|&t| (t, if t >= run.step_at_s { run.reference } else { 0.0 })).collect();

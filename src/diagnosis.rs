@@ -4,7 +4,7 @@
 use std::collections::BTreeMap;
 use std::path::Path;
 
-use ident::diagnose::CandidateScore;
+use ident::diagnose::{rms, CandidateScore};
 use serde::Serialize;
 
 use crate::bundle::{load_bearing, load_torsional};
@@ -229,11 +229,6 @@ fn frequency_response(u: &[f64], y: &[f64], dt: f64, f_max: f64) -> Vec<(f64, f6
         e.2 += 1;
     }
     bands.values().map(|&(f, h, c)| (f / c as f64, h / c as f64)).collect()
-}
-
-/// Root mean square of `v`.
-fn rms(v: &[f64]) -> f64 {
-    (v.iter().map(|x| x * x).sum::<f64>() / v.len().max(1) as f64).sqrt()
 }
 
 /// The verdict of a diagnosis that chose `effect`, with the parameters of everything it found
@@ -592,7 +587,7 @@ pub fn human(r: &DiagnosisReport) -> String {
         }
         if r.effect != "none" {
             s += &format!(
-                "  the best candidate, {}, is therefore no finding (its fit below is for inspection)\n",
+                "  the best candidate, {}, is therefore no finding (its error is among the candidates below)\n",
                 named(&r.effect, r.at.as_ref())
             );
         }
@@ -687,15 +682,8 @@ fn drive(file: &Path, progress: &(dyn Fn(&str) + Sync)) -> anyhow::Result<Diagno
     }
     let model_toml = drive_model_toml(&d.model, &b)?;
     // each output with its SI unit (the record's own units were converted on reading)
-    let rotational = b.line.domain == plant::Domain::Rotational;
-    let unit = |q: Option<plant::Quantity>| match (q.unwrap_or(plant::Quantity::Speed), rotational) {
-        (plant::Quantity::Position, true) => "rad",
-        (plant::Quantity::Position, false) => "m",
-        (plant::Quantity::Speed, true) => "rad/s",
-        (plant::Quantity::Speed, false) => "m/s",
-        (plant::Quantity::CouplingForce, true) => "N·m",
-        (plant::Quantity::CouplingForce, false) => "N",
-    };
+    let domain = b.line.domain;
+    let unit = |q: Option<plant::Quantity>| crate::units::quantity_unit(q.unwrap_or(plant::Quantity::Speed), domain);
     let names: Vec<String> = b.outputs.iter().map(|s| s.column.clone()).collect();
     let axes: Vec<String> = b.outputs.iter().map(|s| format!("{} [{}]", s.column, unit(s.quantity))).collect();
     let t = &d.traces;
@@ -741,7 +729,7 @@ fn drive(file: &Path, progress: &(dyn Fn(&str) + Sync)) -> anyhow::Result<Diagno
             b.outputs[0].column,
             b.inputs[0].column,
             unit(b.outputs[0].quantity),
-            if rotational { "N·m" } else { "N" }
+            crate::units::quantity_unit(plant::Quantity::CouplingForce, domain)
         ),
         log_y: true,
         series: vec![

@@ -99,16 +99,6 @@ pub enum Target {
     Stdout,
 }
 
-impl Target {
-    /// The file or device written.
-    pub fn path(&self) -> &Path {
-        match self {
-            Target::File(p) | Target::Device(p) => p,
-            Target::Stdout => Path::new("-"),
-        }
-    }
-}
-
 /// Where `path` writes to: a symbolic link is followed to the file it names (also when that
 /// file does not exist yet, so a dangling link is written through, not replaced), an existing
 /// file is canonical, a new name is its canonical folder joined with the name.
@@ -194,21 +184,16 @@ impl Outputs {
     /// Checks `path` as the output of `option` and claims it.
     pub fn file(&mut self, path: &Path, option: &str) -> anyhow::Result<Target> {
         let target = output(path, option, &self.inputs)?;
-        if target == Target::Stdout {
-            if let Some((_, other)) = self.claimed.iter().find(|(p, _)| p == Path::new("-")) {
-                anyhow::bail!("{option} -: {other} writes to standard output too; give one of them a file");
-            }
-            self.claimed.push((PathBuf::from("-"), option.to_string()));
+        // standard output is claimed as `-`; a device may be written by several
+        let claim = match &target {
+            Target::File(resolved) => resolved.clone(),
+            Target::Stdout => PathBuf::from("-"),
+            Target::Device(_) => return Ok(target),
+        };
+        if let Some((_, other)) = self.claimed.iter().find(|(p, _)| *p == claim) {
+            anyhow::bail!("{option} {}: {other} writes there too; give each output its own file", path.display());
         }
-        if let Target::File(resolved) = &target {
-            if let Some((_, other)) = self.claimed.iter().find(|(p, _)| p == resolved) {
-                anyhow::bail!(
-                    "{option} {}: {other} writes this file too; give each output its own file",
-                    path.display()
-                );
-            }
-            self.claimed.push((resolved.clone(), option.to_string()));
-        }
+        self.claimed.push((claim, option.to_string()));
         Ok(target)
     }
 

@@ -259,6 +259,20 @@ mod tests {
     }
 }
 
+/// The SI unit of a drive line's quantity as text shows it (`rad/s`, `N·m`; `m/s`, `N` on a
+/// linear axis): plot axes and labels.
+pub fn quantity_unit(q: plant::Quantity, domain: plant::Domain) -> &'static str {
+    let rotational = domain == plant::Domain::Rotational;
+    match (q, rotational) {
+        (plant::Quantity::Position, true) => "rad",
+        (plant::Quantity::Position, false) => "m",
+        (plant::Quantity::Speed, true) => "rad/s",
+        (plant::Quantity::Speed, false) => "m/s",
+        (plant::Quantity::CouplingForce, true) => "N·m",
+        (plant::Quantity::CouplingForce, false) => "N",
+    }
+}
+
 /// Report keys (their unit as a suffix, as in the JSON) as a person reads them: the name without
 /// the suffix and the value with its unit, in engineering form — `delay_s` 0.0055 → `delay 5.50
 /// ms`, `c_short` 1478.27 → `c_short 1478.3 N·m/rad`, `backlash_rad` 0.00274 → `backlash 2.740

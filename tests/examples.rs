@@ -1,6 +1,8 @@
 //! The example bundles shipped in `examples/`: they are what `examples/make_examples.rs` writes
 //! (byte for byte), and the README's journeys on them give the truth the generator put in —
-//! numbers from the generator's source, not from the code under test.
+//! numbers from the generator's source, not from the code under test. These records come from
+//! rigtwin's own simulator, so these are checks of the journeys, not a validation of the
+//! diagnosis: that is `tests/diagnose*.rs`, on records of integrators that share no code with it.
 
 use std::path::{Path, PathBuf};
 use std::process::Command;

@@ -32,7 +32,7 @@ pub const LM_REL_TOL: f64 = 1e-5;
 pub const FRICTION_SMOOTHING_FRACTION: f64 = 0.01;
 
 /// Root mean square of `v`.
-pub(crate) fn rms(v: &[f64]) -> f64 {
+pub fn rms(v: &[f64]) -> f64 {
     (v.iter().map(|x| x * x).sum::<f64>() / v.len() as f64).sqrt()
 }
 
