@@ -131,42 +131,94 @@ pub struct Timing {
     pub max: f64,
 }
 
-/// Shuffle figures of both controllers.
+/// A figure of the MPC's run beside the PI baseline's (`None`: the model has no baseline; only
+/// the paper rig's speed loops have one).
 #[derive(Debug, Clone, Serialize)]
-pub struct Shuffle {
+pub struct Compared<T> {
     /// With the MPC.
-    pub mpc: StepFigures,
+    pub mpc: T,
     /// With the PI speed loops.
-    pub baseline: StepFigures,
+    pub baseline: Option<T>,
+}
+
+/// The controller's signals, read from its settings by one rule for every model.
+#[derive(Debug, Clone, Serialize)]
+pub struct Signals {
+    /// The controller's inputs.
+    pub inputs: Vec<String>,
+    /// Outputs and inputs with a reference.
+    pub tracked: Vec<String>,
+    /// Forces weighted without a reference (whose oscillation is penalised).
+    pub penalised: Vec<String>,
+    /// Measured outputs.
+    pub measured: Vec<String>,
+    /// Each input's hard bound |u| ≤ (see `units.force`).
+    pub input_max: Vec<f64>,
+}
+
+impl Signals {
+    /// The signals of `settings`, `forces` being the model's force outputs.
+    pub fn of(settings: &MpcSettings, forces: &[String]) -> Signals {
+        let outputs = |keep: &dyn Fn(&mpc::settings::OutputSettings) -> bool| {
+            settings.outputs.iter().filter(|o| keep(o)).map(|o| o.name.clone()).collect::<Vec<_>>()
+        };
+        let mut tracked = outputs(&|o| o.tracked);
+        tracked.extend(settings.inputs.iter().filter(|u| u.tracked).map(|u| u.name.clone()));
+        Signals {
+            inputs: settings.inputs.iter().map(|u| u.name.clone()).collect(),
+            tracked,
+            penalised: outputs(&|o| !o.tracked && o.weight > 0.0 && forces.contains(&o.name)),
+            measured: outputs(&|o| o.noise_std.is_some()),
+            input_max: settings.inputs.iter().map(|u| u.max_nm.abs().max(u.min_nm.abs())).collect(),
+        }
+    }
+}
+
+/// The step run: what steps, the signal the figures are taken from, and the figures.
+#[derive(Debug, Clone, Serialize)]
+pub struct StepResponse {
+    /// What steps: an input (the paper rig's drive torque) or `reference` (every tracked
+    /// speed's reference of a drive model).
+    pub stepped: String,
+    /// Height of the step (in `units.force` for an input, `units.speed` for a reference).
+    pub step: f64,
+    /// When it steps, s.
+    pub at_s: f64,
     /// The signal the figures are taken from.
     pub signal: String,
-    /// Drive-torque step, Nm.
-    pub step_nm: f64,
     /// Settling band, relative to the step height.
     pub settling_band: f64,
+    /// Overshoot and settling time.
+    pub figures: Compared<StepFigures>,
+    /// The signal at the end: the mean of the run's last 10 % (NaN when the run stopped).
+    pub final_value: Compared<f64>,
 }
 
-/// Why each step run stopped early (`None`: it ran to the end).
+/// The mean of the last 10 % of `values` (NaN when the run `stopped`).
+fn final_mean(values: impl ExactSizeIterator<Item = f64>, stopped: bool) -> f64 {
+    let n = values.len();
+    let tail = (n / 10).max(1);
+    if stopped || n == 0 {
+        return f64::NAN;
+    }
+    values.skip(n - tail).sum::<f64>() / tail as f64
+}
+
+/// The units of the figures whose unit depends on the model's domain.
 #[derive(Debug, Clone, Serialize)]
-pub struct Stopped {
-    /// The MPC's run.
-    pub mpc: Option<String>,
-    /// The PI baseline's run.
-    pub baseline: Option<String>,
+pub struct Units {
+    /// Of speeds and the tracking error: rad/s or m/s.
+    pub speed: &'static str,
+    /// Of forces, inputs and their bounds: N.m or N.
+    pub force: &'static str,
 }
 
-/// A pair of figures.
-#[derive(Debug, Clone, Serialize)]
-pub struct Pair {
-    /// With the MPC.
-    pub mpc: f64,
-    /// With the PI speed loops.
-    pub baseline: f64,
-}
-
-/// What `rigtwin mpc` prints.
+/// What `rigtwin mpc` prints, the same for every model (the paper rig against its PI baseline,
+/// a drive model alone).
 #[derive(Debug, Clone, Serialize)]
 pub struct MpcReport {
+    /// `paper_rig` or `drive_model`.
+    pub model_kind: &'static str,
     /// Prediction horizon, steps of `dt_s`.
     pub horizon: usize,
     /// Sample time, s.
@@ -185,37 +237,48 @@ pub struct MpcReport {
     pub step_time_us: Timing,
     /// Interior-point iterations per step: mean.
     pub qp_iterations_mean: f64,
-    /// Largest number of heap allocations in one step after the first.
-    pub allocations_per_step: u64,
-    /// Heap allocations in the first step.
-    pub allocations_first_step: u64,
+    /// Largest number of heap allocations in one step after the first (`None`: not counted).
+    pub allocations_per_step: Option<u64>,
+    /// Heap allocations in the first step (`None`: not counted).
+    pub allocations_first_step: Option<u64>,
     /// Steps that fell back to the shifted plan.
     pub fallbacks: usize,
     /// Controller steps of the timed run.
     pub steps: usize,
-    /// Largest |u₀ − u₀*| over the checked steps, Nm (u₀* from the same QP solved to 1e-12);
-    /// none when no step could be checked (each fell back).
-    pub u0_error_nm: Option<f64>,
-    /// Steps checked for `u0_error_nm`.
+    /// Largest |u₀ − u₀*| over the checked steps, in `units.force` (u₀* from the same QP
+    /// solved to 1e-12); none when no step could be checked (each fell back).
+    pub u0_error: Option<f64>,
+    /// Steps checked for `u0_error`.
     pub u0_checked_steps: usize,
-    /// Shuffle after the drive-torque step.
-    pub shuffle: Shuffle,
-    /// RMS load-speed error (both machines), rad/s.
-    pub speed_error_rms_radps: Pair,
+    /// The controller's signals.
+    pub signals: Signals,
+    /// The step run's figures.
+    pub step_response: StepResponse,
+    /// RMS error of the tracked speeds from their references, in `units.speed`.
+    pub tracking_error_rms: Compared<f64>,
+    /// Largest |penalised force| of the step run, in `units.force`.
+    pub peak_penalised_force: Compared<f64>,
+    /// Share of the step run's samples with an input at a hard bound.
+    pub input_at_bound_share: Compared<f64>,
+    /// Where a step run stopped because the loop diverged (`None`: it ran to the end).
+    pub stopped: Compared<Option<String>>,
     /// What the prediction includes and leaves out of the model's effects.
     pub prediction: Vec<String>,
     /// The effects of the plant the loop was closed on.
     pub plant_effects: String,
     /// The effects of the model the controller was designed on.
     pub model_effects: String,
-    /// Where a step run stopped because the loop diverged.
-    pub stopped: Stopped,
-    /// Share of the step run's samples with an input at a hard bound.
-    pub input_at_bound_share: Pair,
-    /// Sweep only: largest deviation of the short side-shaft torque from its quasi-static
-    /// share of the drive torque (half of it) during the sweep, Nm.
+    /// The domain's units.
+    pub units: Units,
+    /// The paper rig's sweep only: largest deviation of the short side-shaft torque from its
+    /// quasi-static share of the drive torque (half of it) during the sweep, N·m.
     #[serde(skip_serializing_if = "Option::is_none")]
-    pub sweep_peak_torque_deviation_nm: Option<Pair>,
+    pub sweep_peak_torque_deviation_nm: Option<Compared<f64>>,
+}
+
+/// Largest |value| of the columns `which` over the samples `rows`.
+fn peak_abs(rows: &[Vec<f64>], which: &[usize]) -> f64 {
+    rows.iter().flat_map(|y| which.iter().map(move |&j| y[j].abs())).fold(0.0, f64::max)
 }
 
 /// Move blocks as a person reads them: `1, 2, 4, 43` or `200 × 1` (runs of one length folded).
@@ -255,26 +318,17 @@ pub fn fallback_verdict(fallbacks: usize, steps: usize) -> Option<String> {
     })
 }
 
-/// The verdict keys every `rigtwin mpc` JSON document carries, whatever the model.
-fn verdict_keys(o: &mut serde_json::Map<String, serde_json::Value>, why: Option<String>, model_kind: &str) {
-    o.insert("verdict".into(), (if why.is_some() { "not_valid" } else { "valid" }).into());
-    o.insert("not_valid_because".into(), why.into());
-    o.insert("model_kind".into(), model_kind.into());
-}
-
-/// Rename `u0_error_nm` and `step_time_us` to the contract's spelling.
 impl MpcReport {
-    /// JSON with the contract's keys (`u0_error_Nm`).
+    /// JSON with the verdict keys every `rigtwin mpc` document carries.
     pub fn to_json(&self) -> serde_json::Value {
         let mut v = serde_json::to_value(self).expect("report serialises");
         if let Some(o) = v.as_object_mut() {
-            if let Some(e) = o.remove("u0_error_nm") {
-                o.insert("u0_error_Nm".into(), e);
-            }
             if let Some(e) = o.remove("sweep_peak_torque_deviation_nm") {
                 o.insert("sweep_peak_torque_deviation_Nm".into(), e);
             }
-            verdict_keys(o, self.invalid(), "paper_rig");
+            let why = self.invalid();
+            o.insert("verdict".into(), (if why.is_some() { "not_valid" } else { "valid" }).into());
+            o.insert("not_valid_because".into(), why.into());
         }
         v
     }
@@ -290,20 +344,10 @@ impl MpcReport {
         if let Some(why) = self.invalid() {
             s += &format!("NOT VALID: {why}\n");
         }
+        let (speed, force) = (self.units.speed, self.units.force);
+        let what = if self.model_kind == "paper_rig" { "the open-differential rig" } else { "the drive model" };
         s += &format!(
-            "designed on a model with effects: {}; closed on a plant with effects: {}\n",
-            self.model_effects, self.plant_effects
-        );
-        for n in &self.prediction {
-            s += &format!("  prediction: {n}\n");
-        }
-        for (who, why) in [("MPC", &self.stopped.mpc), ("PI", &self.stopped.baseline)] {
-            if let Some(w) = why {
-                s += &format!("  {who} loop UNSTABLE: stopped {w}\n");
-            }
-        }
-        s += &format!(
-            "MPC on the open-differential rig: N = {} at {} ms, {} QP, move blocks {} → QP {} variables × {} constraints\n",
+            "MPC on {what}: N = {} at {} ms, {} QP, move blocks {} → QP {} variables × {} constraints\n",
             self.horizon,
             self.dt_s * 1e3,
             crate::report::words(&self.formulation),
@@ -311,53 +355,96 @@ impl MpcReport {
             self.qp_variables,
             self.qp_constraints
         );
+        let g = &self.signals;
+        let list = |v: &[String]| if v.is_empty() { "nothing".to_string() } else { v.join(", ") };
         s += &format!(
-            "  controller step ({} run): median {:.1} µs, p99 {:.1} µs, max {:.1} µs; {:.1} QP iterations; {} allocation(s) per step; {} fallback(s)\n",
+            "  tracked {}; penalised {}; measured {}; |u| <= [{}] {force}\n",
+            list(&g.tracked),
+            list(&g.penalised),
+            list(&g.measured),
+            g.input_max.iter().map(|v| crate::units::significant(*v, 4)).collect::<Vec<_>>().join(", ")
+        );
+        s += &format!(
+            "  designed on a model with effects: {}; closed on a plant with effects: {}\n",
+            self.model_effects, self.plant_effects
+        );
+        for n in &self.prediction {
+            s += &format!("  prediction: {n}\n");
+        }
+        let baseline = format!("PI ({PI_BANDWIDTH_HZ} Hz speed loops)");
+        for (who, why) in [("MPC", Some(&self.stopped.mpc)), (baseline.as_str(), self.stopped.baseline.as_ref())] {
+            if let Some(Some(w)) = why {
+                s += &format!("  {who} loop UNSTABLE: stopped {w}\n");
+            }
+        }
+        let alloc = self.allocations_per_step.map_or("not counted".to_string(), |a| a.to_string());
+        s += &format!(
+            "  controller step ({} run): median {:.1} µs, p99 {:.1} µs, max {:.1} µs; {:.1} QP iterations; allocations per step: {alloc}; {} fallback(s) in {} steps\n",
             crate::report::words(&self.scenario),
             self.step_time_us.median,
             self.step_time_us.p99,
             self.step_time_us.max,
             self.qp_iterations_mean,
-            self.allocations_per_step,
-            self.fallbacks
+            self.fallbacks,
+            self.steps
         );
-        s += &match self.u0_error_nm {
+        s += &match self.u0_error {
             Some(e) => format!(
-                "  first input vs the exact optimum: max |u0 − u0*| = {e:.2e} Nm over {} steps\n",
+                "  first input vs the exact optimum: max |u0 − u0*| = {e:.2e} {force} over {} steps\n",
                 self.u0_checked_steps
             ),
             None => "  first input vs the exact optimum: not checked (every checked step fell back)\n".to_string(),
         };
+        let r = &self.step_response;
+        let (step_unit, stepped) = if r.stepped == "reference" {
+            (speed, "the tracked speeds' references".to_string())
+        } else {
+            (force, r.stepped.clone())
+        };
         s += &format!(
-            "  shuffle after a {} Nm drive-torque step ({}; settling band ±{:.0} %):\n",
-            self.shuffle.step_nm,
-            self.shuffle.signal,
-            self.shuffle.settling_band * 100.0
+            "  step of {} {step_unit} in {stepped} at {} s, seen on {} (settling band ±{:.0} %):\n",
+            crate::units::significant(r.step, 4),
+            r.at_s,
+            r.signal,
+            r.settling_band * 100.0
         );
         s += &format!(
-            "    MPC:      overshoot {:5.1} %, settling time {:.3} s\n",
-            self.shuffle.mpc.overshoot * 100.0,
-            self.shuffle.mpc.settling_time_s
+            "    {:<22} {:>9} {:>9} {:>10} {:>16} {:>17} {:>9}\n",
+            "", "overshoot", "settling", "final", "RMS track. err.", "peak |pen. force|", "at bound"
         );
-        s += &format!(
-            "    PI ({} Hz speed loops): overshoot {:5.1} %, settling time {:.3} s\n",
-            PI_BANDWIDTH_HZ,
-            self.shuffle.baseline.overshoot * 100.0,
-            self.shuffle.baseline.settling_time_s
+        let row = |who: &str, f: &StepFigures, end: f64, rms: f64, peak: f64, share: f64| {
+            format!(
+                "    {who:<22} {:>7.1} % {:>7.3} s {:>10} {:>16} {:>17} {:>7.1} %\n",
+                f.overshoot * 100.0,
+                f.settling_time_s,
+                crate::units::significant(end, 4),
+                format!("{rms:.4} {speed}"),
+                format!("{peak:.2} {force}"),
+                share * 100.0
+            )
+        };
+        s += &row(
+            "MPC",
+            &r.figures.mpc,
+            r.final_value.mpc,
+            self.tracking_error_rms.mpc,
+            self.peak_penalised_force.mpc,
+            self.input_at_bound_share.mpc,
         );
-        s += &format!(
-            "  RMS load-speed error: MPC {:.4} rad/s, PI {:.4} rad/s\n",
-            self.speed_error_rms_radps.mpc, self.speed_error_rms_radps.baseline
-        );
-        s += &format!(
-            "  samples with an input at a hard bound: MPC {:.1} %, PI {:.1} %\n",
-            self.input_at_bound_share.mpc * 100.0,
-            self.input_at_bound_share.baseline * 100.0
-        );
+        if let (Some(f), Some(end), Some(rms), Some(peak), Some(share)) = (
+            &r.figures.baseline,
+            r.final_value.baseline,
+            self.tracking_error_rms.baseline,
+            self.peak_penalised_force.baseline,
+            self.input_at_bound_share.baseline,
+        ) {
+            s += &row(&baseline, f, end, rms, peak, share);
+        }
         if let Some(p) = &self.sweep_peak_torque_deviation_nm {
             s += &format!(
-                "  sweep: peak side-shaft torque deviation from half the drive torque: MPC {:.2} Nm, PI {:.2} Nm\n",
-                p.mpc, p.baseline
+                "  sweep: peak side-shaft torque deviation from half the drive torque: MPC {:.2} N·m, PI {:.2} N·m\n",
+                p.mpc,
+                p.baseline.unwrap_or(f64::NAN)
             );
         }
         s
@@ -520,9 +607,18 @@ pub fn report(
             .map(|(y, &time)| (y[sig.short_shaft] - 0.5 * scenario.drive_torque(time)).abs())
             .fold(0.0, f64::max)
     };
+    // the rig's forces are its side-shaft torques, T_…
+    let forces: Vec<String> = ss.output_names.iter().filter(|n| n.starts_with("T_")).cloned().collect();
+    let signals = Signals::of(settings, &forces);
+    let penalised: Vec<usize> =
+        signals.penalised.iter().filter_map(|n| ss.output_names.iter().position(|o| o == n)).collect();
+    let both =
+        |f: &dyn Fn(&mpc::closed_loop::Trace) -> f64| Compared { mpc: f(&step.mpc), baseline: Some(f(&step.baseline)) };
     let times_us: Vec<f64> = run.step_times_s.iter().map(|t| t * 1e6).collect();
     let (median, p99) = median_p99(&times_us);
+    let step_scenario = Scenario::new(ScenarioKind::Step);
     let rep = MpcReport {
+        model_kind: "paper_rig",
         horizon: settings.horizon,
         dt_s: settings.dt_s,
         formulation: settings.formulation,
@@ -532,27 +628,32 @@ pub fn report(
         scenario: kind,
         step_time_us: Timing { median, p99, max: times_us.iter().copied().fold(0.0, f64::max) },
         qp_iterations_mean: run.iterations.iter().map(|&i| i as f64).sum::<f64>() / run.iterations.len().max(1) as f64,
-        allocations_per_step: run.step_allocations.iter().skip(1).copied().max().unwrap_or(0),
-        allocations_first_step: run.step_allocations.first().copied().unwrap_or(0),
+        allocations_per_step: allocations.map(|_| run.step_allocations.iter().skip(1).copied().max().unwrap_or(0)),
+        allocations_first_step: allocations.map(|_| run.step_allocations.first().copied().unwrap_or(0)),
         fallbacks: run.fallbacks,
         steps: run.step_times_s.len(),
-        u0_error_nm: (checked > 0).then_some(u0_error),
+        u0_error: (checked > 0).then_some(u0_error),
         u0_checked_steps: checked,
-        shuffle: Shuffle {
-            mpc: fig(&step.mpc),
-            baseline: fig(&step.baseline),
+        step_response: StepResponse {
+            stepped: ss.input_names[sig.inputs[1]].clone(),
+            step: step_scenario.torque_nm,
+            at_s: step_scenario.start_s,
             signal: ss.output_names[sig.short_shaft].clone(),
-            step_nm: Scenario::new(ScenarioKind::Step).torque_nm,
             settling_band: SETTLING_BAND,
+            figures: Compared { mpc: fig(&step.mpc), baseline: Some(fig(&step.baseline)) },
+            final_value: both(&|t| final_mean(t.outputs.iter().map(|y| y[sig.short_shaft]), t.stopped.is_some())),
         },
-        speed_error_rms_radps: Pair { mpc: speed_rms(&run.mpc), baseline: speed_rms(&run.baseline) },
+        tracking_error_rms: Compared { mpc: speed_rms(&run.mpc), baseline: Some(speed_rms(&run.baseline)) },
+        peak_penalised_force: both(&|t| peak_abs(&t.outputs, &penalised)),
+        input_at_bound_share: both(&at_bounds),
+        stopped: Compared { mpc: step.mpc.stopped.clone(), baseline: Some(step.baseline.stopped.clone()) },
+        signals,
         prediction: prediction.notes.clone(),
         plant_effects: effects_in_words(truth),
         model_effects: effects_in_words(params),
-        stopped: Stopped { mpc: step.mpc.stopped.clone(), baseline: step.baseline.stopped.clone() },
-        input_at_bound_share: Pair { mpc: at_bounds(&step.mpc), baseline: at_bounds(&step.baseline) },
+        units: Units { speed: "rad/s", force: "N.m" },
         sweep_peak_torque_deviation_nm: (kind == ScenarioKind::Sweep)
-            .then(|| Pair { mpc: sweep_dev(&run.mpc), baseline: sweep_dev(&run.baseline) }),
+            .then(|| Compared { mpc: sweep_dev(&run.mpc), baseline: Some(sweep_dev(&run.baseline)) }),
     };
     Ok((rep, run))
 }
@@ -685,119 +786,44 @@ impl Plant for DrivePlant {
     }
 }
 
-/// What `rigtwin mpc` prints for a drive model: a step of the tracked speeds' references
-/// from rest.
-#[derive(Debug, Clone, Serialize)]
-pub struct DriveMpcReport {
-    /// Prediction horizon, steps of `dt_s`.
-    pub horizon: usize,
-    /// Sample time, s.
-    pub dt_s: f64,
-    /// The controller's signals: tracked outputs, tracked inputs, penalised forces, measured.
-    pub tracked: Vec<String>,
-    /// Coupling forces whose oscillation is penalised.
-    pub penalised: Vec<String>,
-    /// Measured outputs.
-    pub measured: Vec<String>,
-    /// The input bounds, in input order (N·m or N).
-    pub input_max: Vec<f64>,
-    /// What the prediction leaves out of the model's effects.
-    pub prediction: Vec<String>,
-    /// Height of the reference step of every tracked speed (rad/s or m/s), at 0.05 s.
-    pub step: f64,
-    /// The first tracked speed's response.
-    pub response: StepFigures,
-    /// The first tracked speed at the end: the mean of the run's last 10 %.
-    pub final_value: f64,
-    /// RMS error of the tracked speeds after the step.
-    pub tracking_error_rms: f64,
-    /// Largest |penalised force| during the run.
-    pub peak_force: f64,
-    /// One controller step, µs.
-    pub step_time_us: Timing,
-    /// Steps that used the fallback plan.
-    pub fallbacks: usize,
-    /// Controller steps of the run.
-    pub steps: usize,
-    /// Share of samples with an input at a hard bound.
-    pub input_at_bound_share: f64,
-    /// Where the run stopped because the loop diverged.
-    pub stopped: Option<String>,
+/// The command line's choices for the controller, applied alike to every model's settings.
+#[derive(Debug, Clone, Copy)]
+pub struct Tuning {
+    /// Number of move blocks (`mpc::exponential_blocks`); 0: every step free.
+    pub blocks: usize,
+    /// QP formulation.
+    pub formulation: mpc::Formulation,
+    /// The real-time QP's time limit, s.
+    pub time_limit_s: f64,
 }
 
-impl DriveMpcReport {
-    /// Why the figures do not describe the MPC, if they do not (see [`fallback_verdict`]).
-    pub fn invalid(&self) -> Option<String> {
-        fallback_verdict(self.fallbacks, self.steps)
-    }
-
-    /// JSON with the verdict keys every `rigtwin mpc` document carries.
-    pub fn to_json(&self) -> serde_json::Value {
-        let mut v = serde_json::to_value(self).expect("report serialises");
-        if let Some(o) = v.as_object_mut() {
-            verdict_keys(o, self.invalid(), "drive_model");
-        }
-        v
-    }
-
-    /// Text for the terminal.
-    pub fn human(&self) -> String {
-        let mut s = match self.invalid() {
-            Some(why) => format!("NOT VALID: {why}\n"),
-            None => String::new(),
-        };
-        s += &format!(
-            "MPC on the drive model: N = {} at {} ms; tracked {}, penalised {}, measured {}; |u| <= [{}]\n",
-            self.horizon,
-            self.dt_s * 1e3,
-            self.tracked.join(", "),
-            if self.penalised.is_empty() { "nothing".to_string() } else { self.penalised.join(", ") },
-            self.measured.join(", "),
-            self.input_max.iter().map(|v| crate::units::significant(*v, 4)).collect::<Vec<_>>().join(", ")
-        );
-        for n in &self.prediction {
-            s += &format!("  prediction: {n}\n");
-        }
-        if let Some(w) = &self.stopped {
-            s += &format!("  loop UNSTABLE: stopped {w}\n");
-        }
-        s += &format!(
-            "  reference step of {} at 0.05 s: final {:.4}, overshoot {:.1} %, settling time {:.3} s (band ±{:.0} %), RMS tracking error {:.4}\n",
-            self.step,
-            self.final_value,
-            self.response.overshoot * 100.0,
-            self.response.settling_time_s,
-            SETTLING_BAND * 100.0,
-            self.tracking_error_rms
-        );
-        s += &format!(
-            "  peak |penalised force| {:.4}; controller step median {:.1} µs, p99 {:.1} µs, max {:.1} µs; {} fallback(s); inputs at a bound {:.1} % of samples\n",
-            self.peak_force,
-            self.step_time_us.median,
-            self.step_time_us.p99,
-            self.step_time_us.max,
-            self.fallbacks,
-            self.input_at_bound_share * 100.0
-        );
-        s
+impl Tuning {
+    /// Applies the choices to `s` and checks the result.
+    pub fn apply(&self, s: &mut MpcSettings) -> anyhow::Result<()> {
+        s.move_blocks = if self.blocks == 0 { Vec::new() } else { mpc::exponential_blocks(s.horizon, self.blocks) };
+        s.formulation = self.formulation;
+        s.solver.time_limit_s = self.time_limit_s;
+        s.validate().map_err(|e| anyhow::anyhow!("--horizon/--blocks/--time-limit-us: {e}"))
     }
 }
 
 /// The MPC of a drive model with its `[mpc]` section, in closed loop on `truth` (as the FMU
 /// integrates it) from rest: every tracked speed's reference steps by `step` at 0.05 s (tracked
-/// inputs' references stay 0), for 1 s.
+/// inputs' references stay 0), for 1 s. The first input is checked against the exact optimum
+/// every [`CHECK_EVERY`] steps and the allocations counted, as for the paper rig.
 pub fn drive_report(
     model: &plant::DriveModel,
     truth: &plant::DriveModel,
     section: &mpc::MpcSection,
     horizon: usize,
-    time_limit_s: f64,
+    tuning: &Tuning,
     step: f64,
-) -> anyhow::Result<(DriveMpcReport, DriveRun)> {
+    allocations: Option<fn() -> u64>,
+) -> anyhow::Result<(MpcReport, DriveRun)> {
     let ss = model.control_state_space()?;
     let delays = model.input_delays_s();
     let mut settings = section.drive_settings(&ss.input_names, &ss.output_names, horizon)?;
-    settings.solver.time_limit_s = time_limit_s;
+    tuning.apply(&mut settings)?;
     let mut prediction = Vec::new();
     for e in &model.effects {
         match e {
@@ -825,26 +851,36 @@ pub fn drive_report(
     let samples = (1.0 / dt).round() as usize;
     let k_step = (0.05 / dt).round() as usize;
     let tracked: Vec<usize> = names.iter().filter_map(|n| ss.output_names.iter().position(|o| o == n)).collect();
-    let penalised: Vec<String> = settings
-        .outputs
-        .iter()
-        .filter(|o| !o.tracked && !o.name.starts_with(['w', 'v']))
-        .map(|o| o.name.clone())
-        .collect();
-    let penalised_idx: Vec<usize> =
-        penalised.iter().filter_map(|n| ss.output_names.iter().position(|o| o == n)).collect();
+    let signals = Signals::of(&settings, &model.coupling_force_names());
+    let penalised: Vec<usize> =
+        signals.penalised.iter().filter_map(|n| ss.output_names.iter().position(|o| o == n)).collect();
     let (mut trace, mut times) = (Vec::with_capacity(samples), Vec::with_capacity(samples));
-    let mut inputs = Vec::with_capacity(samples);
+    let (mut inputs, mut iterations, mut allocs) =
+        (Vec::with_capacity(samples), Vec::with_capacity(samples), Vec::with_capacity(samples));
     let mut stopped = None;
+    let (mut u0_error, mut checked) = (0.0f64, 0);
     let mut r = vec![0.0; names.len()];
     for k in 0..samples {
         let y = plant.outputs().to_vec();
         for (i, n) in names.iter().enumerate() {
             r[i] = if k >= k_step && ss.output_names.contains(n) { step } else { 0.0 };
         }
+        let before = allocations.map(|f| f());
         let (u, info) = controller.step(&y, &r);
-        let u = u.to_vec();
+        if let (Some(f), Some(b)) = (allocations, before) {
+            allocs.push(f() - b);
+        }
+        let (u, fallback) = (u.to_vec(), info.fallback);
         times.push(info.elapsed_s * 1e6);
+        iterations.push(info.solve.iterations as f64);
+        if k.is_multiple_of(CHECK_EVERY) && !fallback {
+            let exact = controller
+                .exact_first_input()
+                .map_err(|e| anyhow::anyhow!("reference solve of the exact optimum failed: {e}"))?;
+            let rt = controller.planned_first_input();
+            u0_error = rt.iter().zip(&exact).map(|(a, b)| (a - b).abs()).fold(u0_error, f64::max);
+            checked += 1;
+        }
         trace.push(y);
         inputs.push(u.clone());
         if let Err(e) = mpc::closed_loop::advance(&mut plant, &u) {
@@ -856,53 +892,77 @@ pub fn drive_report(
         (Some(&j), None) => step_figures(&trace.iter().map(|y| y[j]).collect::<Vec<_>>(), k_step, dt, SETTLING_BAND),
         _ => StepFigures { overshoot: f64::NAN, settling_time_s: f64::NAN },
     };
-    let final_value = match tracked.first() {
-        Some(&j) if stopped.is_none() => {
-            let tail = &trace[trace.len() - trace.len() / 10..];
-            tail.iter().map(|y| y[j]).sum::<f64>() / tail.len() as f64
-        }
-        _ => f64::NAN,
-    };
     let after = &trace[k_step.min(trace.len())..];
-    let tracking_error_rms = if tracked.is_empty() || after.is_empty() {
+    let tracking_error_rms = if tracked.is_empty() || after.is_empty() || stopped.is_some() {
         f64::NAN
     } else {
         (after.iter().map(|y| tracked.iter().map(|&j| (y[j] - step).powi(2)).sum::<f64>()).sum::<f64>()
             / (after.len() * tracked.len()) as f64)
             .sqrt()
     };
-    let peak_force = trace.iter().flat_map(|y| penalised_idx.iter().map(move |&j| y[j].abs())).fold(0.0, f64::max);
     let (median, p99) = median_p99(&times);
     let input_at_bound_share = mpc::closed_loop::share_at_bounds(&inputs, &settings, &ss.input_names);
+    let (speed, force) = match model.line.domain {
+        plant::Domain::Rotational => ("rad/s", "N.m"),
+        plant::Domain::Translational => ("m/s", "N"),
+    };
+    let effects = |m: &plant::DriveModel| {
+        if m.effects.is_empty() {
+            "none".to_string()
+        } else {
+            m.effects.iter().map(|e| format!("{} at {}", e.name(), e.element(m))).collect::<Vec<_>>().join(", ")
+        }
+    };
+    let report = MpcReport {
+        model_kind: "drive_model",
+        horizon,
+        dt_s: dt,
+        formulation: settings.formulation,
+        move_blocks: settings.blocks(),
+        qp_variables: controller.qp().nvars(),
+        qp_constraints: controller.qp().nrows(),
+        scenario: ScenarioKind::Step,
+        step_time_us: Timing { median, p99, max: times.iter().copied().fold(0.0, f64::max) },
+        qp_iterations_mean: iterations.iter().sum::<f64>() / iterations.len().max(1) as f64,
+        allocations_per_step: allocations.map(|_| allocs.iter().skip(1).copied().max().unwrap_or(0)),
+        allocations_first_step: allocations.map(|_| allocs.first().copied().unwrap_or(0)),
+        fallbacks: controller.fallbacks(),
+        steps: times.len(),
+        u0_error: (checked > 0).then_some(u0_error),
+        u0_checked_steps: checked,
+        step_response: StepResponse {
+            stepped: "reference".into(),
+            step,
+            at_s: k_step as f64 * dt,
+            signal: tracked.first().map_or("nothing tracked".into(), |&j| ss.output_names[j].clone()),
+            settling_band: SETTLING_BAND,
+            figures: Compared { mpc: response, baseline: None },
+            final_value: Compared {
+                mpc: tracked.first().map_or(f64::NAN, |&j| final_mean(trace.iter().map(|y| y[j]), stopped.is_some())),
+                baseline: None,
+            },
+        },
+        tracking_error_rms: Compared { mpc: tracking_error_rms, baseline: None },
+        peak_penalised_force: Compared { mpc: peak_abs(&trace, &penalised), baseline: None },
+        input_at_bound_share: Compared { mpc: input_at_bound_share, baseline: None },
+        stopped: Compared { mpc: stopped, baseline: None },
+        signals,
+        prediction,
+        plant_effects: effects(truth),
+        model_effects: effects(model),
+        units: Units { speed, force },
+        sweep_peak_torque_deviation_nm: None,
+    };
     let run = DriveRun {
         time_s: (0..trace.len()).map(|k| k as f64 * dt).collect(),
         output_names: ss.output_names.clone(),
         input_names: ss.input_names.clone(),
-        tracked: tracked.clone(),
-        penalised: penalised_idx.clone(),
+        tracked,
+        penalised,
         reference: step,
         step_at_s: k_step as f64 * dt,
         outputs: trace,
         inputs,
-    };
-    let report = DriveMpcReport {
-        horizon,
-        dt_s: dt,
-        tracked: names,
-        penalised,
-        measured: settings.outputs.iter().filter(|o| o.noise_std.is_some()).map(|o| o.name.clone()).collect(),
-        input_max: settings.inputs.iter().map(|u| u.max_nm).collect(),
-        prediction,
-        step,
-        response,
-        final_value,
-        tracking_error_rms,
-        peak_force,
-        step_time_us: Timing { median, p99, max: times.iter().copied().fold(0.0, f64::max) },
-        fallbacks: controller.fallbacks(),
-        steps: times.len(),
-        input_at_bound_share,
-        stopped,
     };
     Ok((report, run))
 }

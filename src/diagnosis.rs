@@ -309,9 +309,9 @@ fn torsional(file: &Path, progress: &(dyn Fn(&str) + Sync)) -> anyhow::Result<Di
     for c in d.candidates.iter().filter(|c| c.implausible) {
         let at = c.at.as_ref().map(|a| format!(" at {a}")).unwrap_or_default();
         notes.push(format!(
-            "{}{at} not chosen: it re-fits j_drive or c_short beyond a factor {} of the declared values (error {:.4})",
+            "{}{at} not chosen: it moves what the declared model measured (the drive's total inertia, the stiffness between drive and load machines) beyond a factor {} (error {:.4})",
             c.effect,
-            ident::diagnose::torsional::PLAUSIBLE_REFIT_FACTOR,
+            ident::diagnose::torsional::DECLARED_TOLERANCE_FACTOR,
             c.error_after
         ));
     }
@@ -379,7 +379,12 @@ fn torsional(file: &Path, progress: &(dyn Fn(&str) + Sync)) -> anyhow::Result<Di
         duration_s: b.sweep.torque_nm.len() as f64 * dt,
     };
     let judged = std::iter::once(&d.parameters).chain(d.effects.iter().map(|e| &e.parameters));
-    let (verdict, verdict_reasons) = judge(&d.effect, d.structured_residual, judged, &scales);
+    let (mut verdict, mut verdict_reasons) = judge(&d.effect, d.structured_residual, judged, &scales);
+    if let Some(why) = &d.distorted {
+        verdict = ident::diagnose::verdict::Verdict::NotExplained;
+        verdict_reasons.retain(|r| !r.starts_with("the residual is structured"));
+        verdict_reasons.insert(0, why.clone());
+    }
     Ok(Diagnosis {
         report: DiagnosisReport {
             verdict,

@@ -38,14 +38,13 @@ pub fn library() -> anyhow::Result<std::borrow::Cow<'static, [u8]>> {
 }
 
 /// The FMU parameter set of a rig: its reduced model and variant, its drive-path effects, and
-/// its bearing if it describes one (else the identified squeeze-film damper of the default).
+/// its bearing block if it describes one.
 pub fn params_of_rig(rig: &Rig) -> anyhow::Result<FmuParams> {
     rig.effects.validate().map_err(|e| anyhow::anyhow!("{}: {e}", rig.name))?;
-    let default = FmuParams::default();
     Ok(FmuParams {
         powertrain: rig.model.clone(),
         variant: rig.variant,
-        bearing: rig.bearing.clone().unwrap_or(default.bearing),
+        bearing: rig.bearing.clone(),
         effects: rig.effects,
         drive: None,
         controller: None,

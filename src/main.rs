@@ -550,6 +550,14 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                 Some(f) => rigtwin::control::mpc_section_of_file(f)?,
                 None => mpc::MpcSection::default(),
             };
+            let tuning = rigtwin::control::Tuning {
+                blocks,
+                formulation: match formulation {
+                    FormulationArg::Condensed => mpc::Formulation::Condensed,
+                    FormulationArg::Sparse => mpc::Formulation::Sparse,
+                },
+                time_limit_s: time_limit_us * 1e-6,
+            };
             if let Some(model) = &p.drive {
                 // a drive model: its [mpc] section, a reference step from rest
                 let truth = match &plant {
@@ -567,9 +575,16 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                         "--export-qp: the QP export compares the paper rig's QPs with OSQP and DAQP; {model_name} is a drive model"
                     );
                 }
-                let (rep, run) =
-                    rigtwin::control::drive_report(model, &truth, &section, horizon, time_limit_us * 1e-6, step)
-                        .map_err(|e| anyhow::anyhow!("{model_name}: {e:#}"))?;
+                let (rep, run) = rigtwin::control::drive_report(
+                    model,
+                    &truth,
+                    &section,
+                    horizon,
+                    &tuning,
+                    step,
+                    Some(mpc::alloc_counter::allocations),
+                )
+                .map_err(|e| anyhow::anyhow!("{model_name}: {e:#}"))?;
                 if let Some(f) = &plot {
                     rigtwin::control::plot_drive(f, &run, model.line.domain)?;
                 }
@@ -593,13 +608,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                 None => p.clone(),
             };
             let mut settings = section.rig_settings(horizon).map_err(|e| anyhow::anyhow!("{model_name}: {e}"))?;
-            settings.move_blocks = if blocks == 0 { Vec::new() } else { mpc::exponential_blocks(horizon, blocks) };
-            settings.formulation = match formulation {
-                FormulationArg::Condensed => mpc::Formulation::Condensed,
-                FormulationArg::Sparse => mpc::Formulation::Sparse,
-            };
-            settings.solver.time_limit_s = time_limit_us * 1e-6;
-            settings.validate().map_err(|e| anyhow::anyhow!("--horizon/--blocks/--time-limit-us: {e}"))?;
+            tuning.apply(&mut settings)?;
             let kind = match scenario {
                 ScenarioArg::Step => mpc::closed_loop::ScenarioKind::Step,
                 ScenarioArg::Sweep => mpc::closed_loop::ScenarioKind::Sweep,

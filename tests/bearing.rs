@@ -268,9 +268,9 @@ fn sfd_bundle_gives_a_squeeze_film_damper_of_the_slides_size() {
     assert!(kc["K_N_per_m"][0][0].as_f64().unwrap() < 0.0, "KC mimics the inertia with a negative stiffness");
     let warnings = kc["warnings"].to_string();
     assert!(warnings.contains("KCM") && warnings.contains("inertia"), "{warnings}");
-    // the FMU's default bearing is this identification (KCM, full coupling, IVFM) of sfd_shake,
+    // the FMU's squeeze-film bearing is this identification (KCM, full coupling, IVFM) of sfd_shake,
     // with the bundle's support: the numbers in fmu/src/params.rs are not typed in by hand
-    let default = rigtwin_fmu::FmuParams::default().bearing;
+    let default = rigtwin_fmu::params::sfd_bearing();
     for (key, table) in [
         ("K_N_per_m", default.element.k_n_per_m),
         ("C_Ns_per_m", default.element.c_ns_per_m),

@@ -507,3 +507,34 @@ fn a_record_nothing_explains_is_said_to_be_not_explained() {
     let v: Value = serde_json::from_slice(&r.stdout).unwrap();
     assert_ne!(v["verdict"], "not_explained", "{v}");
 }
+
+/// The paper rig's FMU has no bearing block (importers warned of its unconnected forces); a rig
+/// file with a `[bearing]` section, as the diagnosis of a shake test writes it, brings the
+/// block's variables at the value references they always had.
+#[test]
+fn the_bearing_block_is_in_the_fmu_only_where_the_rig_has_one() {
+    let d = common::scratch("cli", "bearing_fmu");
+    let model = d.join("with_bearing.toml");
+    let out = rigtwin(&["diagnose", "examples/bearing/shake.toml", "--write-model", model.to_str().unwrap()]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let describe = |params: Option<&Path>, dir: &str| {
+        let dir = d.join(dir);
+        let mut args = vec!["fmu", "--descriptions", dir.to_str().unwrap(), "--out", d.to_str().unwrap()];
+        if let Some(p) = params {
+            args.extend(["--params", p.to_str().unwrap()]);
+        }
+        let out = rigtwin(&args);
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        std::fs::read_to_string(dir.join("fmi3/modelDescription.xml")).unwrap()
+    };
+    let plain = describe(None, "plain");
+    assert!(!plain.contains("bearing"), "the paper rig has no bearing block");
+    let with = describe(Some(&model), "with");
+    for (name, vr) in [("bearing.K_xx", 12), ("bearing.x", 37), ("bearing.F_x", 51)] {
+        assert!(with.contains(&format!("name=\"{name}\" valueReference=\"{vr}\"")), "{name} at {vr}");
+    }
+    // the variables both have keep their value references
+    for line in plain.lines().filter(|l| l.contains(" name=\"") && l.contains("valueReference=")) {
+        assert!(with.contains(line.trim()), "{line}");
+    }
+}

@@ -408,23 +408,26 @@ fn mpc_on_a_drive_model() {
     let f = |v: &serde_json::Value, k: &str| v[k].as_f64().unwrap_or(f64::NAN);
     for (params, plant) in [("declared.toml", "declared.toml"), ("delayed.toml", "delayed.toml")] {
         let v = json(&["--params", params, "--plant", plant]);
-        eprintln!("{params} on {plant}: {}", v["response"]);
-        assert_eq!(v["tracked"], serde_json::json!(["w_load"]));
-        assert!(v["stopped"].is_null(), "{v}");
+        let r = &v["step_response"];
+        eprintln!("{params} on {plant}: {r}");
+        assert_eq!(v["signals"]["tracked"], serde_json::json!(["w_load"]));
+        assert!(v["stopped"]["mpc"].is_null(), "{v}");
         // offset-free: the disturbance estimate takes up the drags
-        assert!((f(&v, "final_value") - 10.0).abs() < 0.05, "{params}: final {}", v["final_value"]);
-        assert!(f(&v["response"], "overshoot") < 0.05, "{params}: {}", v["response"]);
+        let end = r["final_value"]["mpc"].as_f64().unwrap_or(f64::NAN);
+        assert!((end - 10.0).abs() < 0.05, "{params}: final {end}");
+        assert!(f(&r["figures"]["mpc"], "overshoot") < 0.05, "{params}: {r}");
         assert_eq!(v["fallbacks"], 0);
     }
     let with_delay = json(&["--params", "delayed.toml"]);
     assert!(with_delay["prediction"].to_string().contains("input-delay states"), "{}", with_delay["prediction"]);
     let blind = json(&["--params", "declared.toml", "--plant", "delayed.toml"]);
-    eprintln!("declared model on the delayed plant: {}", blind["response"]);
+    let response = |v: &serde_json::Value| v["step_response"]["figures"]["mpc"].clone();
+    eprintln!("declared model on the delayed plant: {}", response(&blind));
     assert!(
-        f(&blind["response"], "overshoot") > 4.0 * f(&with_delay["response"], "overshoot").max(0.01),
+        f(&response(&blind), "overshoot") > 4.0 * f(&response(&with_delay), "overshoot").max(0.01),
         "{} vs {}",
-        blind["response"],
-        with_delay["response"]
+        response(&blind),
+        response(&with_delay)
     );
     // refusals
     std::fs::write(dir.join("unbounded.toml"), model("")).unwrap();

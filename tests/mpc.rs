@@ -17,6 +17,22 @@ fn rigtwin(args: &[&str]) -> std::process::Output {
     Command::new(env!("CARGO_BIN_EXE_rigtwin")).args(args).output().unwrap()
 }
 
+/// Every key path of a JSON document, objects only (the value `null` and a nested object count
+/// as the same shape: `null` stands for a figure the model does not have).
+fn keys(v: &serde_json::Value) -> Vec<String> {
+    let mut out = Vec::new();
+    if let Some(o) = v.as_object() {
+        for (k, x) in o {
+            out.push(k.clone());
+            if x.is_object() && x.as_object().unwrap().keys().all(|n| n != "mpc") {
+                out.extend(keys(x).into_iter().map(|s| format!("{k}.{s}")));
+            }
+        }
+    }
+    out.sort();
+    out
+}
+
 /// The contract's keys, and figures checked against what is known without the controller:
 /// the PI baseline settles on the open differential's static split (the side shaft ends at
 /// 20 Nm whichever controller), the MPC damps the shuffle better than the PI loops, the first
@@ -32,12 +48,29 @@ fn json_contract_and_figures() {
         assert!(v["step_time_us"][key].as_f64().unwrap() > 0.0);
     }
     assert!(v["allocations_per_step"].as_u64().is_some());
-    let u0 = v["u0_error_Nm"].as_f64().unwrap();
+    assert_eq!(v["units"]["force"], "N.m");
+    let u0 = v["u0_error"].as_f64().unwrap();
     assert!(u0 < 1e-2, "u0 error {u0} Nm");
-    let (m, b) = (&v["shuffle"]["mpc"], &v["shuffle"]["baseline"]);
+    let r = &v["step_response"];
+    assert_eq!(r["stepped"], "M_drive");
+    // the open differential splits the drive torque's 40 N·m step in half, whoever controls
+    for who in ["mpc", "baseline"] {
+        let end = r["final_value"][who].as_f64().unwrap();
+        assert!((end - 20.0).abs() < 0.2, "{who}: the short side shaft ends at {end} N·m");
+    }
+    let (m, b) = (&r["figures"]["mpc"], &r["figures"]["baseline"]);
     let f = |x: &serde_json::Value, k: &str| x[k].as_f64().unwrap();
     assert!(f(m, "overshoot") < 0.5 * f(b, "overshoot"), "{m} vs {b}");
     assert!(f(m, "settling_time_s") < 0.5 * f(b, "settling_time_s"), "{m} vs {b}");
+
+    // a drive model's document has the same keys, with null where it has no PI baseline
+    let out =
+        rigtwin(&["mpc", "--params", "examples/gear_bench/bench.toml", "--json", "-", "--time-limit-us", "100000"]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let d: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(keys(&d), keys(&v), "one shape for the paper rig and a drive model");
+    assert_eq!((&d["model_kind"], &v["model_kind"]), (&"drive_model".into(), &"paper_rig".into()));
+    assert!(d["step_response"]["figures"]["baseline"].is_null() && d["u0_error"].as_f64().unwrap() < 1e-2, "{d}");
 
     let bad = rigtwin(&["mpc", "--horizon", "0"]);
     assert!(!bad.status.success());

@@ -565,7 +565,7 @@ fn an_mpc_that_only_falls_back_says_its_figures_are_not_valid() {
     assert_eq!(r.code, Some(3), "exit code 3 (not valid): {}", r.stderr);
     let v: serde_json::Value = serde_json::from_str(&r.stdout).unwrap();
     assert_eq!(v["verdict"], "not_valid");
-    assert!(v["u0_error_Nm"].is_null(), "no u0 error without a checked step: {}", v["u0_error_Nm"]);
+    assert!(v["u0_error"].is_null(), "no u0 error without a checked step: {}", v["u0_error"]);
     assert!(r.stderr.contains("fallback"), "{}", r.stderr);
     // the same run in text says so first
     let r = run_in(&d, &args[..args.len() - 1], 120);

@@ -1,5 +1,6 @@
 //! Cost of one co-simulation step of the rigtwin FMU, in-process through its C API, beside a C
-//! reference doing the same 10-state zero-order-hold step (compiled here with gcc -O2).
+//! reference doing the same zero-order-hold step (6 states: the paper rig; compiled here with
+//! gcc -O2).
 
 use std::ffi::CString;
 use std::hint::black_box;
@@ -7,7 +8,7 @@ use std::process::Command;
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use rigtwin_fmu::fmi3::*;
-use rigtwin_fmu::model::{Model, NU, NX_BASE as NX};
+use rigtwin_fmu::model::{Model, NU};
 use rigtwin_fmu::variables::VR_TWIST;
 use rigtwin_fmu::FmuParams;
 
@@ -39,7 +40,7 @@ fn fmu_step(c: &mut Criterion) {
     }
     let mut t = 0.0;
     let (mut ev, mut term, mut early, mut last) = (false, false, false, 0.0);
-    c.bench_function("fmi3DoStep (h = 1 ms, 10 states, in-process)", |b| {
+    c.bench_function("fmi3DoStep (h = 1 ms, 6 states, in-process)", |b| {
         b.iter(|| {
             let s = unsafe { fmi3DoStep(inst, black_box(t), 1e-3, true, &mut ev, &mut term, &mut early, &mut last) };
             t += 1e-3;
@@ -59,6 +60,7 @@ fn fmu_step(c: &mut Criterion) {
         return;
     }
     let mut m = Model::new(&p).unwrap();
+    let nx = m.nx();
     let (ad, bd) = m.discretisation(1e-3).unwrap();
     let (ad, bd): (Vec<f64>, Vec<f64>) = (ad.transpose().as_slice().to_vec(), bd.transpose().as_slice().to_vec()); // row-major
     unsafe {
@@ -66,14 +68,14 @@ fn fmu_step(c: &mut Criterion) {
         let step: libloading::Symbol<
             unsafe extern "C" fn(i32, i32, *const f64, *const f64, *mut f64, *const f64, *mut f64),
         > = lib.get(b"reference_step").unwrap();
-        let mut x = vec![0.0; NX];
+        let mut x = vec![0.0; nx];
         x[1] = 0.01;
         let u = [0.0; NU];
-        let mut scratch = vec![0.0; NX];
-        c.bench_function("C reference step (gcc -O2, same 10-state ZOH matrices)", |b| {
+        let mut scratch = vec![0.0; nx];
+        c.bench_function("C reference step (gcc -O2, same 6-state ZOH matrices)", |b| {
             b.iter(|| {
                 step(
-                    NX as i32,
+                    nx as i32,
                     NU as i32,
                     ad.as_ptr(),
                     bd.as_ptr(),

@@ -74,7 +74,10 @@ fn start(p: &FmuParams, values: &[f64], slot: Slot) -> Option<String> {
 /// history is pruned there).
 fn rig_description(p: &FmuParams) -> (String, bool) {
     let e = &p.effects;
-    let mut desc = String::from("Open-differential powertrain of a HIL test rig (Hübner & Prokop, Vehicles 2026) and a bearing K/C/M block on its support (San Andrés 2011)");
+    let mut desc = String::from("Open-differential powertrain of a HIL test rig (Hübner & Prokop, Vehicles 2026)");
+    if p.bearing.is_some() {
+        desc += " and a bearing K/C/M block on its support (San Andrés 2011)";
+    }
     let on: Vec<&str> = [
         (e.time_delay_s > 0.0, "dead time of the drive torque"),
         (e.actuator_lag_s > 0.0, "actuator lag"),

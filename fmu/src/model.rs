@@ -1,5 +1,5 @@
 //! The FMU's dynamics: the open-differential powertrain with its drive-path effects
-//! (`plant::effects::Powertrain`) beside the bearing block (4 states). The physics is written in
+//! (`plant::effects::Powertrain`) beside the bearing block (4 states) where the rig has one. The physics is written in
 //! absolute angles x (the powertrain's coordinates); the FMU's continuous states are z = T x, the
 //! same vector with the drive's angle replaced by the side shafts' twist 2φ_drive − φ_m2 − φ_m3
 //! and the motor's angle by the compliance's twist φ_motor − φ_drive (bounded states, see
@@ -22,8 +22,6 @@ use plant::integrate::{PiecewiseRk4, PiecewiseSmooth};
 pub const NU: usize = 5;
 /// Index of the drive torque among the inputs (the one the dead time acts on).
 pub const DRIVE_INPUT: usize = 1;
-/// Number of states of the FMU without effects.
-pub const NX_BASE: usize = 10;
 
 /// The model of one parameter set and its discretisations.
 #[derive(Debug, Clone)]
@@ -89,8 +87,10 @@ impl Model {
             return Err("a drive model's parameter set is built by `drive::DriveDynamics`".into());
         }
         let powertrain = Powertrain::new(&p.powertrain, p.variant, &p.effects).map_err(|e| e.to_string())?;
-        let br = p.bearing.state_space().map_err(|e| e.to_string())?;
+        let br = p.bearing.as_ref().map(|b| b.state_space()).transpose().map_err(|e| e.to_string())?;
         let table = Table::new(p);
+        // the bearing block's states are next to the powertrain's speeds (`variables::STATES`)
+        let bearing_at = table.states.iter().position(|&s| s == 6);
         let nx = table.nx();
         let map: Vec<usize> = powertrain_states(&p.effects)
             .iter()
@@ -112,8 +112,10 @@ impl Model {
                     torque[(k, fi)] = pc[(k, i)];
                 }
             }
-            a.view_mut((6, 6), (4, 4)).copy_from(&br.a);
-            b.view_mut((6, 3), (4, 2)).copy_from(&br.b);
+            if let (Some(br), Some(k)) = (&br, bearing_at) {
+                a.view_mut((k, k), (4, 4)).copy_from(&br.a);
+                b.view_mut((k, 3), (4, 2)).copy_from(&br.b);
+            }
             (a, b, torque)
         };
         let (a_x, b_x, torque_x) = assemble(true);
@@ -145,7 +147,8 @@ impl Model {
         let max_piece_s = longest_exact_piece(&a, &b)?;
         // the powertrain's RK4 step (the diagnosis's), shorter only where the bearing block is
         // faster than it resolves (h·|λ|max ≤ 0.5)
-        let bearing_rate = br.a.complex_eigenvalues().iter().map(|l| l.norm()).fold(0.0, f64::max);
+        let bearing_rate =
+            br.as_ref().map_or(0.0, |br| br.a.complex_eigenvalues().iter().map(|l| l.norm()).fold(0.0, f64::max));
         let (coarse, fine) = powertrain.rk4_steps_s();
         let coarse = coarse.min(plant::drive::RK4_STEP_TIMES_RATE / bearing_rate.max(1e-300));
         let rk = PiecewiseRk4::new(nx, coarse, fine);
@@ -521,29 +524,35 @@ mod tests {
 
     #[test]
     fn shuffle_and_bearing_poles_survive_the_assembly() {
-        let p = FmuParams::default();
+        let p = FmuParams::with_sfd_bearing();
         let m = Model::new(&p).unwrap();
         let poles = plant::damp(&m.a).unwrap();
         let f_shuffle = p.powertrain.open_differential(p.variant).unwrap().modes().unwrap().frequencies_hz[2];
         assert!(poles.iter().any(|q| (q.natural_hz - f_shuffle).abs() < 0.01 * f_shuffle), "{poles:?}");
         // bearing on its support: ω² ≈ (K + Kh)/(M + Mh) along x
-        let k = p.bearing.element.k_n_per_m[0][0] + p.bearing.support.k_x;
-        let mass = p.bearing.element.m_kg[0][0] + p.bearing.support.m_x;
+        let b = p.bearing.as_ref().unwrap();
+        let k = b.element.k_n_per_m[0][0] + b.support.k_x;
+        let mass = b.element.m_kg[0][0] + b.support.m_x;
         let f_b = (k / mass).sqrt() / (2.0 * std::f64::consts::PI);
         assert!(poles.iter().any(|q| (q.natural_hz - f_b).abs() < 0.05 * f_b), "{poles:?}");
+        // the paper rig alone has the powertrain's six states and no pole near the bearing's
+        let rig = Model::new(&FmuParams::default()).unwrap();
+        assert_eq!(rig.nx(), 6);
+        let poles = plant::damp(&rig.a).unwrap();
+        assert!(poles.iter().all(|q| (q.natural_hz - f_b).abs() > 0.5 * f_b), "{poles:?}");
     }
 
     #[test]
     fn two_half_steps_are_one_step() {
-        let mut m = Model::new(&FmuParams::default()).unwrap();
+        let mut m = Model::new(&FmuParams::with_sfd_bearing()).unwrap();
         let u = DVector::from_vec(vec![1.0, 10.0, -2.0, 50.0, -20.0]);
-        let mut x1 = DVector::from_element(NX_BASE, 1e-3);
+        let mut x1 = DVector::from_element(10, 1e-3);
         let mut x2 = x1.clone();
         let d = DelayLine::default();
         m.step(&mut x1, &u, 0.0, 2e-3, &d).unwrap();
         m.step(&mut x2, &u, 0.0, 1e-3, &d).unwrap();
         m.step(&mut x2, &u, 1e-3, 1e-3, &d).unwrap();
-        for i in 0..NX_BASE {
+        for i in 0..10 {
             assert_relative_eq!(x1[i], x2[i], max_relative = 1e-9, epsilon = 1e-15);
         }
     }

@@ -13,8 +13,10 @@ pub struct FmuParams {
     pub powertrain: RigParams,
     /// Rig variant (where the additional spring is mounted).
     pub variant: Variant,
-    /// The bearing block on its support.
-    pub bearing: BearingModel,
+    /// The bearing block on its support, where the rig has one: its forces are inputs, its
+    /// displacements and velocities states and outputs. Without it the FMU has none of them.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub bearing: Option<BearingModel>,
     /// Drive-path effects (dead time, actuator lag, backlash, drive compliance), all off by
     /// default; the ones on add parameters and states to the FMU.
     #[serde(default)]
@@ -32,43 +34,56 @@ pub struct FmuParams {
 
 impl Default for FmuParams {
     /// The embedded default rig (`plant::paper::rig`: the paper's V1/V2 parameter set, Table 4,
-    /// with the shaft damping and load drag declared in the example bundles) and the
-    /// squeeze-film damper identified from `sfd_shake` (KCM, full coupling, IVFM;
-    /// `tests/bearing.rs` re-identifies it and compares).
+    /// with the shaft damping and load drag declared in the example bundles), without a bearing
+    /// block (the paper's rig has none).
     fn default() -> Self {
         let rig = paper::rig();
         FmuParams {
             powertrain: rig.model,
             variant: rig.variant,
-            bearing: BearingModel {
-                element: Coefficients {
-                    k_n_per_m: [
-                        [399_494.641_414_391_9, 1_662.949_771_836_502_4],
-                        [501.096_480_048_138_5, 499_519.175_816_695_4],
-                    ],
-                    c_ns_per_m: [
-                        [2_627.271_959_527_591_7, 0.099_358_503_747_976_04],
-                        [-1.079_536_341_524_340_4, 2_802.539_190_846_918],
-                    ],
-                    m_kg: [
-                        [5.443_161_690_440_772, 0.011_049_102_197_932_373],
-                        [0.000_121_998_052_471_661_81, 5.891_483_860_386_054],
-                    ],
-                },
-                support: Support {
-                    k_x: 3_677_663.527_559_055_5,
-                    k_y: 3_852_790.362_204_725,
-                    c_x: 1_225.887_842_519_685_1,
-                    c_y: 1_313.451_259_842_52,
-                    m_x: 18.143_694_800_000_002,
-                    m_y: 18.143_694_800_000_002,
-                },
-                table: None,
-            },
+            bearing: None,
             effects: DriveEffects::default(),
             drive: None,
             controller: None,
         }
+    }
+}
+
+impl FmuParams {
+    /// The default rig with the squeeze-film damper identified from `sfd_shake` (KCM, full
+    /// coupling, IVFM; `tests/bearing.rs` re-identifies it and compares) as its bearing block.
+    pub fn with_sfd_bearing() -> Self {
+        FmuParams { bearing: Some(sfd_bearing()), ..FmuParams::default() }
+    }
+}
+
+/// The squeeze-film damper identified from `sfd_shake` on its support (see
+/// [`FmuParams::with_sfd_bearing`]).
+pub fn sfd_bearing() -> BearingModel {
+    BearingModel {
+        element: Coefficients {
+            k_n_per_m: [
+                [399_494.641_414_391_9, 1_662.949_771_836_502_4],
+                [501.096_480_048_138_5, 499_519.175_816_695_4],
+            ],
+            c_ns_per_m: [
+                [2_627.271_959_527_591_7, 0.099_358_503_747_976_04],
+                [-1.079_536_341_524_340_4, 2_802.539_190_846_918],
+            ],
+            m_kg: [
+                [5.443_161_690_440_772, 0.011_049_102_197_932_373],
+                [0.000_121_998_052_471_661_81, 5.891_483_860_386_054],
+            ],
+        },
+        support: Support {
+            k_x: 3_677_663.527_559_055_5,
+            k_y: 3_852_790.362_204_725,
+            c_x: 1_225.887_842_519_685_1,
+            c_y: 1_313.451_259_842_52,
+            m_x: 18.143_694_800_000_002,
+            m_y: 18.143_694_800_000_002,
+        },
+        table: None,
     }
 }
 
@@ -78,7 +93,7 @@ mod tests {
 
     #[test]
     fn json_round_trip_keeps_the_token() {
-        let p = FmuParams::default();
+        let p = FmuParams::with_sfd_bearing();
         let back: FmuParams = serde_json::from_str(&serde_json::to_string(&p).unwrap()).unwrap();
         assert_eq!(back, p);
         assert_eq!(crate::token(&back), crate::token(&p));

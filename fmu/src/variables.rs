@@ -119,12 +119,39 @@ pub struct RigParameter {
     pub description: &'static str,
     /// Accepted values.
     pub constraint: Constraint,
-    /// Whether a parameter set with these effects has it (`None`: always).
-    pub present: Option<fn(&plant::effects::DriveEffects) -> bool>,
+    /// Which parameter sets have it.
+    pub present: Presence,
     /// Its value in a parameter set.
     pub get: fn(&FmuParams) -> f64,
     /// Sets it in a parameter set.
     pub set: fn(&mut FmuParams, f64),
+}
+
+/// Which of the rig's parameter sets have a parameter.
+#[derive(Clone, Copy)]
+pub enum Presence {
+    /// Every one, at a fixed value reference.
+    Always,
+    /// Those with a bearing block, at a fixed value reference (kept free without one).
+    Bearing,
+    /// Those whose effects make this true; after every fixed row.
+    Effect(fn(&plant::effects::DriveEffects) -> bool),
+}
+
+impl Presence {
+    /// Whether the row has a fixed value reference (kept free when the row is absent).
+    fn fixed(self) -> bool {
+        !matches!(self, Presence::Effect(_))
+    }
+
+    /// Whether parameter set `p` has the row.
+    fn in_set(self, p: &FmuParams) -> bool {
+        match self {
+            Presence::Always => true,
+            Presence::Bearing => p.bearing.is_some(),
+            Presence::Effect(on) => on(&p.effects),
+        }
+    }
 }
 
 impl std::fmt::Debug for RigParameter {
@@ -134,13 +161,28 @@ impl std::fmt::Debug for RigParameter {
 }
 
 macro_rules! rig_param {
+    ($name:literal, $unit:literal, $desc:literal, $c:ident, bearing |$b:ident| $field:expr) => {
+        RigParameter {
+            name: $name,
+            unit: $unit,
+            description: $desc,
+            constraint: Constraint::$c,
+            present: Presence::Bearing,
+            get: |p: &FmuParams| p.bearing.as_ref().map_or(0.0, |$b| $field),
+            set: |p: &mut FmuParams, v: f64| {
+                if let Some($b) = p.bearing.as_mut() {
+                    $field = v;
+                }
+            },
+        }
+    };
     ($name:literal, $unit:literal, $desc:literal, $c:ident, |$p:ident| $field:expr) => {
         RigParameter {
             name: $name,
             unit: $unit,
             description: $desc,
             constraint: Constraint::$c,
-            present: None,
+            present: Presence::Always,
             get: |$p: &FmuParams| $field,
             set: |$p: &mut FmuParams, v: f64| $field = v,
         }
@@ -151,7 +193,7 @@ macro_rules! rig_param {
             unit: $unit,
             description: $desc,
             constraint: Constraint::$c,
-            present: Some(|$e: &plant::effects::DriveEffects| $on),
+            present: Presence::Effect(|$e: &plant::effects::DriveEffects| $on),
             get: |$p: &FmuParams| $field,
             set: |$p: &mut FmuParams, v: f64| $field = v,
         }
@@ -177,7 +219,7 @@ pub const PARAMETERS: &[RigParameter] = &[
         unit: "N.m/rad",
         description: "stiffness of the long side shaft",
         constraint: Constraint::Positive,
-        present: None,
+        present: Presence::Always,
         get: |p| p.powertrain.c_long(),
         // after c_short (the rows are applied in order): the ratio follows both
         set: |p, v| {
@@ -193,7 +235,7 @@ pub const PARAMETERS: &[RigParameter] = &[
         unit: "kg.m2",
         description: "M2-side inertia with the additional spring mounted",
         constraint: Constraint::Positive,
-        present: None,
+        present: Presence::Always,
         get: |p| p.powertrain.j_m2_delta.unwrap_or(p.powertrain.j_m2),
         set: |p, v| p.powertrain.j_m2_delta = Some(v),
     },
@@ -202,7 +244,7 @@ pub const PARAMETERS: &[RigParameter] = &[
         unit: "kg.m2",
         description: "M3-side inertia with the additional spring mounted",
         constraint: Constraint::Positive,
-        present: None,
+        present: Presence::Always,
         get: |p| p.powertrain.j_m3_delta.unwrap_or(p.powertrain.j_m3),
         set: |p, v| p.powertrain.j_m3_delta = Some(v),
     },
@@ -211,24 +253,24 @@ pub const PARAMETERS: &[RigParameter] = &[
     rig_param!("load_drag", "N.m.s/rad", "speed-proportional drag of each load machine", NonNegative, |p| p
         .powertrain
         .load_drag),
-    rig_param!("bearing.K_xx", "N/m", "bearing stiffness xx", Finite, |p| p.bearing.element.k_n_per_m[0][0]),
-    rig_param!("bearing.K_xy", "N/m", "bearing stiffness xy", Finite, |p| p.bearing.element.k_n_per_m[0][1]),
-    rig_param!("bearing.K_yx", "N/m", "bearing stiffness yx", Finite, |p| p.bearing.element.k_n_per_m[1][0]),
-    rig_param!("bearing.K_yy", "N/m", "bearing stiffness yy", Finite, |p| p.bearing.element.k_n_per_m[1][1]),
-    rig_param!("bearing.C_xx", "N.s/m", "bearing damping xx", Finite, |p| p.bearing.element.c_ns_per_m[0][0]),
-    rig_param!("bearing.C_xy", "N.s/m", "bearing damping xy", Finite, |p| p.bearing.element.c_ns_per_m[0][1]),
-    rig_param!("bearing.C_yx", "N.s/m", "bearing damping yx", Finite, |p| p.bearing.element.c_ns_per_m[1][0]),
-    rig_param!("bearing.C_yy", "N.s/m", "bearing damping yy", Finite, |p| p.bearing.element.c_ns_per_m[1][1]),
-    rig_param!("bearing.M_xx", "kg", "bearing added mass xx", Finite, |p| p.bearing.element.m_kg[0][0]),
-    rig_param!("bearing.M_xy", "kg", "bearing added mass xy", Finite, |p| p.bearing.element.m_kg[0][1]),
-    rig_param!("bearing.M_yx", "kg", "bearing added mass yx", Finite, |p| p.bearing.element.m_kg[1][0]),
-    rig_param!("bearing.M_yy", "kg", "bearing added mass yy", Finite, |p| p.bearing.element.m_kg[1][1]),
-    rig_param!("bearing.support.k_x", "N/m", "support stiffness x", NonNegative, |p| p.bearing.support.k_x),
-    rig_param!("bearing.support.k_y", "N/m", "support stiffness y", NonNegative, |p| p.bearing.support.k_y),
-    rig_param!("bearing.support.c_x", "N.s/m", "support damping x", NonNegative, |p| p.bearing.support.c_x),
-    rig_param!("bearing.support.c_y", "N.s/m", "support damping y", NonNegative, |p| p.bearing.support.c_y),
-    rig_param!("bearing.support.m_x", "kg", "support effective mass x", Positive, |p| p.bearing.support.m_x),
-    rig_param!("bearing.support.m_y", "kg", "support effective mass y", Positive, |p| p.bearing.support.m_y),
+    rig_param!("bearing.K_xx", "N/m", "bearing stiffness xx", Finite, bearing | b | b.element.k_n_per_m[0][0]),
+    rig_param!("bearing.K_xy", "N/m", "bearing stiffness xy", Finite, bearing | b | b.element.k_n_per_m[0][1]),
+    rig_param!("bearing.K_yx", "N/m", "bearing stiffness yx", Finite, bearing | b | b.element.k_n_per_m[1][0]),
+    rig_param!("bearing.K_yy", "N/m", "bearing stiffness yy", Finite, bearing | b | b.element.k_n_per_m[1][1]),
+    rig_param!("bearing.C_xx", "N.s/m", "bearing damping xx", Finite, bearing | b | b.element.c_ns_per_m[0][0]),
+    rig_param!("bearing.C_xy", "N.s/m", "bearing damping xy", Finite, bearing | b | b.element.c_ns_per_m[0][1]),
+    rig_param!("bearing.C_yx", "N.s/m", "bearing damping yx", Finite, bearing | b | b.element.c_ns_per_m[1][0]),
+    rig_param!("bearing.C_yy", "N.s/m", "bearing damping yy", Finite, bearing | b | b.element.c_ns_per_m[1][1]),
+    rig_param!("bearing.M_xx", "kg", "bearing added mass xx", Finite, bearing | b | b.element.m_kg[0][0]),
+    rig_param!("bearing.M_xy", "kg", "bearing added mass xy", Finite, bearing | b | b.element.m_kg[0][1]),
+    rig_param!("bearing.M_yx", "kg", "bearing added mass yx", Finite, bearing | b | b.element.m_kg[1][0]),
+    rig_param!("bearing.M_yy", "kg", "bearing added mass yy", Finite, bearing | b | b.element.m_kg[1][1]),
+    rig_param!("bearing.support.k_x", "N/m", "support stiffness x", NonNegative, bearing | b | b.support.k_x),
+    rig_param!("bearing.support.k_y", "N/m", "support stiffness y", NonNegative, bearing | b | b.support.k_y),
+    rig_param!("bearing.support.c_x", "N.s/m", "support damping x", NonNegative, bearing | b | b.support.c_x),
+    rig_param!("bearing.support.c_y", "N.s/m", "support damping y", NonNegative, bearing | b | b.support.c_y),
+    rig_param!("bearing.support.m_x", "kg", "support effective mass x", Positive, bearing | b | b.support.m_x),
+    rig_param!("bearing.support.m_y", "kg", "support effective mass y", Positive, bearing | b | b.support.m_y),
     rig_param!("drive.time_delay", "s", "dead time of the drive torque", Positive,
         if |e| e.time_delay_s > 0.0, |p| p.effects.time_delay_s),
     rig_param!("drive.actuator_lag", "s", "time constant of a first-order lag of the drive torque", Positive,
@@ -295,6 +337,9 @@ pub const DERIVATIVES: [(usize, &str, &str); 9] = [
     (12, "der(M_drive_lagged)", "N.m/s"),
 ];
 
+/// [`STATES`] indices of the bearing block's states (a rig with a bearing block has them).
+const BEARING_STATES: [usize; 4] = [6, 7, 8, 9];
+
 /// States that are the derivative of another: (index in [`STATES`], the index of its derivative).
 const STATE_DERIVATIVES: [(usize, usize); 4] = [(0, 3), (2, 5), (6, 8), (7, 9)];
 
@@ -348,6 +393,9 @@ pub struct Table {
     pub derivative_state: Vec<Option<usize>>,
     /// Per state (state-vector order): its nominal.
     pub nominal: Vec<f64>,
+    /// Number of input slots (a rig without a bearing block keeps the bearing forces' slots,
+    /// unlisted and at zero).
+    pub input_slots: usize,
 }
 
 /// [`STATES`] indices of a powertrain's states (`plant::effects::Powertrain` order: angles,
@@ -373,95 +421,102 @@ impl Table {
         if let Some(m) = &p.drive {
             return Table::of_drive(m);
         }
+        Table::of_rig(p)
+    }
+
+    /// The paper rig's table. The fixed rows keep their value references whether or not the
+    /// parameter set has them (a rig without a bearing block leaves the bearing's free), so
+    /// that a user's SSP file points at the same variables; the effects' rows follow.
+    fn of_rig(p: &FmuParams) -> Table {
         let e = &p.effects;
+        let bearing = p.bearing.is_some();
         let compliant = e.compliance_stiffness_nm_per_rad > 0.0;
-        let params: Vec<usize> =
-            (0..PARAMETERS.len()).filter(|&i| PARAMETERS[i].present.is_none_or(|on| on(e))).collect();
-        let mut states: Vec<usize> = (0..10).collect();
-        states.extend(powertrain_states(e).into_iter().filter(|&s| s >= 10));
-        let mut v = vec![time_row()];
-        let push =
-            |v: &mut Vec<Variable>, name: &'static str, kind, causality, slot, unit, description: &'static str| {
-                let vr = v.len() as u32;
-                let constraint = match slot {
-                    Slot::Param(i) => PARAMETERS[i].constraint,
-                    _ => Constraint::Finite,
-                };
-                v.push(Variable {
-                    vr,
-                    name: name.into(),
-                    kind,
-                    causality,
-                    slot,
-                    unit,
-                    description: description.into(),
-                    constraint,
-                });
-            };
-        let float = Kind::Float64;
-        // the always-present variables first, at fixed value references
-        for &i in params.iter().filter(|&&i| PARAMETERS[i].present.is_none()) {
-            let r = &PARAMETERS[i];
-            push(&mut v, r.name, float, Causality::Parameter, Slot::Param(i), r.unit, r.description);
+        let mut states: Vec<usize> = (0..6).collect();
+        if bearing {
+            states.extend(BEARING_STATES);
         }
-        push(
-            &mut v,
-            "variant",
-            Kind::Int32,
+        states.extend(powertrain_states(e).into_iter().filter(|&s| s >= 10));
+        let mut rows = Rows { v: vec![time_row()], next_vr: 1 };
+        // the fixed rows first, at fixed value references
+        for (i, r) in PARAMETERS.iter().enumerate().filter(|(_, r)| r.present.fixed()) {
+            let row = (Causality::Parameter, Slot::Param(i), r.unit, r.description, r.constraint);
+            rows.push_if(r.present.in_set(p), r.name, Kind::Float64, row);
+        }
+        let variant = (
             Causality::Parameter,
             Slot::Variant,
             "",
             "rig variant: 1 original, 2 spring both sides, 3 right (M3), 4 left (M2)",
+            Constraint::Finite,
         );
-        let derivative_rows = |v: &mut Vec<Variable>, states: &[usize], which: &[usize]| {
+        rows.push_if(true, "variant", Kind::Int32, variant);
+        let state_row = |rows: &mut Rows, s: usize| {
+            let (name, unit, description, _) = STATES[s];
+            let k = states.iter().position(|&x| x == s);
+            let row = (Causality::Output, Slot::State(k.unwrap_or(0)), unit, description, Constraint::Finite);
+            rows.push_if(k.is_some(), name, Kind::Float64, row);
+        };
+        let derivative_rows = |rows: &mut Rows, which: &[usize], fixed: bool| {
             for &(s, name, unit) in DERIVATIVES.iter().filter(|d| which.contains(&d.0)) {
-                if let Some(k) = states.iter().position(|&x| x == s) {
-                    push(v, name, float, Causality::Local, Slot::Derivative(k), unit, "state derivative");
+                let k = states.iter().position(|&x| x == s);
+                let row =
+                    (Causality::Local, Slot::Derivative(k.unwrap_or(0)), unit, "state derivative", Constraint::Finite);
+                if fixed || k.is_some() {
+                    rows.push_if(k.is_some(), name, Kind::Float64, row);
                 }
             }
         };
-        let state_row = |v: &mut Vec<Variable>, k: usize| {
-            let (name, unit, description, _) = STATES[states[k]];
-            push(v, name, float, Causality::Output, Slot::State(k), unit, description);
-        };
-        let angle_row = |v: &mut Vec<Variable>, i: usize| {
+        let angle_row = |rows: &mut Rows, i: usize| {
             let (name, description) = ANGLES[i];
-            push(v, name, float, Causality::Output, Slot::Angle(i), "rad", description);
+            rows.push_if(
+                true,
+                name,
+                Kind::Float64,
+                (Causality::Output, Slot::Angle(i), "rad", description, Constraint::Finite),
+            );
         };
         // the value references of the absolute angles (phi_drive among them) are those of the
         // rigtwin versions whose states they were; the twist states come after the inputs
-        state_row(&mut v, 0);
-        angle_row(&mut v, 0);
-        for k in 2..10 {
-            state_row(&mut v, k);
+        state_row(&mut rows, 0);
+        angle_row(&mut rows, 0);
+        for s in 2..10 {
+            state_row(&mut rows, s);
         }
-        derivative_rows(&mut v, &states, &[3, 4, 5, 8, 9]);
+        derivative_rows(&mut rows, &[3, 4, 5, 8, 9], true);
         for (i, &(name, description)) in TORQUES.iter().enumerate() {
-            push(&mut v, name, float, Causality::Output, Slot::Torque(i), "N.m", description);
+            rows.push_if(
+                true,
+                name,
+                Kind::Float64,
+                (Causality::Output, Slot::Torque(i), "N.m", description, Constraint::Finite),
+            );
         }
         for (i, &(name, unit, description)) in INPUTS.iter().enumerate() {
-            push(&mut v, name, float, Causality::Input, Slot::Input(i), unit, description);
+            let row = (Causality::Input, Slot::Input(i), unit, description, Constraint::Finite);
+            rows.push_if(i < 3 || bearing, name, Kind::Float64, row);
         }
-        state_row(&mut v, 1);
-        derivative_rows(&mut v, &states, &[1]);
+        state_row(&mut rows, 1);
+        derivative_rows(&mut rows, &[1], true);
         // then the effects'
-        for &i in params.iter().filter(|&&i| PARAMETERS[i].present.is_some()) {
-            let r = &PARAMETERS[i];
-            push(&mut v, r.name, float, Causality::Parameter, Slot::Param(i), r.unit, r.description);
+        for (i, r) in PARAMETERS.iter().enumerate().filter(|(_, r)| !r.present.fixed() && r.present.in_set(p)) {
+            let row = (Causality::Parameter, Slot::Param(i), r.unit, r.description, r.constraint);
+            rows.push_if(true, r.name, Kind::Float64, row);
         }
         if compliant {
-            angle_row(&mut v, 1);
+            angle_row(&mut rows, 1);
         }
-        for k in 10..states.len() {
-            state_row(&mut v, k);
+        for s in 10..STATES.len() {
+            if states.contains(&s) {
+                state_row(&mut rows, s);
+            }
         }
-        derivative_rows(&mut v, &states, &[10, 11, 12]);
+        derivative_rows(&mut rows, &[10, 11, 12], false);
         let derivative_state = states
             .iter()
             .map(|s| STATE_DERIVATIVES.iter().find(|d| d.0 == *s).and_then(|d| states.iter().position(|&x| x == d.1)))
             .collect();
         let nominal = states.iter().map(|&s| STATES[s].3).collect();
-        Table { variables: v, states, derivative_state, nominal }
+        Table { variables: rows.v, states, derivative_state, nominal, input_slots: INPUTS.len() }
     }
 
     /// The table of a drive model: its parameters (`plant::DriveModel::parameter_list`), its
@@ -530,7 +585,8 @@ impl Table {
             push(name, Causality::Input, Slot::Input(j), f, description, Constraint::Finite);
         }
         let derivative_state = (0..nx).map(|k| (k < n).then_some(k + n)).collect();
-        Table { variables: v, states: Vec::new(), derivative_state, nominal: vec![1.0; nx] }
+        let input_slots = m.inputs.len();
+        Table { variables: v, states: Vec::new(), derivative_state, nominal: vec![1.0; nx], input_slots }
     }
 
     /// The table of the controller FMU (`crate::controller`): its tunable settings, the
@@ -550,7 +606,13 @@ impl Table {
         for (i, &(name, description)) in OUTPUTS.iter().enumerate() {
             push(name, Causality::Output, Slot::Command(i), "N.m", description, Constraint::Finite);
         }
-        Table { variables: v, states: Vec::new(), derivative_state: Vec::new(), nominal: Vec::new() }
+        Table {
+            variables: v,
+            states: Vec::new(),
+            derivative_state: Vec::new(),
+            nominal: Vec::new(),
+            input_slots: INPUTS.len(),
+        }
     }
 
     /// Number of continuous states.
@@ -563,9 +625,9 @@ impl Table {
         self.nominal.iter().copied()
     }
 
-    /// The variable with value reference `vr`: value references are the table's indices.
+    /// The variable with value reference `vr` (the rows are in value-reference order).
     pub fn lookup(&self, vr: u32) -> Option<&Variable> {
-        self.variables.get(vr as usize)
+        self.variables.binary_search_by_key(&vr, |v| v.vr).ok().map(|i| &self.variables[i])
     }
 
     /// The variable of `slot`.
@@ -573,9 +635,33 @@ impl Table {
         self.variables.iter().find(|v| v.slot == slot)
     }
 
-    /// Number of inputs.
+    /// Number of input slots.
     pub fn nu(&self) -> usize {
-        self.variables.iter().filter(|v| v.causality == Causality::Input).count()
+        self.input_slots
+    }
+}
+
+/// A table being written: its rows and the next value reference.
+struct Rows {
+    v: Vec<Variable>,
+    next_vr: u32,
+}
+
+impl Rows {
+    /// Appends the row (causality, slot, unit, description, constraint) at the next value
+    /// reference if `present`; that value reference is taken either way.
+    fn push_if(
+        &mut self,
+        present: bool,
+        name: &'static str,
+        kind: Kind,
+        (causality, slot, unit, description, constraint): (Causality, Slot, &'static str, &'static str, Constraint),
+    ) {
+        if present {
+            let (name, description) = (name.into(), description.into());
+            self.v.push(Variable { vr: self.next_vr, name, kind, causality, slot, unit, description, constraint });
+        }
+        self.next_vr += 1;
     }
 }
 
@@ -700,7 +786,9 @@ pub fn parameter_set(like: &FmuParams, v: &[f64], variant: i32) -> Result<FmuPar
         other => return Err(format!("`variant` = {other}: expected 1, 2, 3 or 4")),
     };
     let mut p = FmuParams { variant, drive: None, controller: None, ..like.clone() };
-    p.bearing.table = None;
+    if let Some(b) = p.bearing.as_mut() {
+        b.table = None;
+    }
     for (r, &value) in PARAMETERS.iter().zip(v) {
         (r.set)(&mut p, value);
     }
@@ -723,10 +811,10 @@ mod tests {
 
     #[test]
     fn value_references_are_unique_and_all_found() {
-        let t = Table::new(&FmuParams::default());
+        let t = Table::new(&FmuParams::with_sfd_bearing());
         assert_eq!(t.nx(), 10);
         for (i, v) in t.variables.iter().enumerate() {
-            assert_eq!(v.vr as usize, i, "value references are the table's indices");
+            assert_eq!(v.vr as usize, i, "with a bearing block the value references are the table's indices");
             assert_eq!(t.lookup(v.vr), Some(v));
         }
         assert_eq!(t.lookup(999), None);
@@ -743,6 +831,24 @@ mod tests {
         assert_eq!(t.lookup(VR_STATE + 3).unwrap().name, "w_m2");
     }
 
+    /// Without a bearing block (the paper rig's default) the bearing's parameters, states,
+    /// derivatives and forces are absent and every other variable keeps its value reference.
+    #[test]
+    fn a_rig_without_a_bearing_keeps_the_other_value_references() {
+        let with = Table::new(&FmuParams::with_sfd_bearing());
+        let without = Table::new(&FmuParams::default());
+        assert_eq!(without.nx(), 6);
+        assert_eq!(without.nu(), 5, "the forces' slots stay, unlisted");
+        let kept: Vec<(u32, &str)> =
+            with.variables.iter().filter(|v| !v.name.contains("bearing")).map(|v| (v.vr, v.name.as_ref())).collect();
+        let got: Vec<(u32, &str)> = without.variables.iter().map(|v| (v.vr, v.name.as_ref())).collect();
+        assert_eq!(got, kept);
+        assert_eq!(with.variables.len() - without.variables.len(), 18 + 4 + 2 + 2);
+        // the states after the bearing's move up in the state vector, their names stay
+        assert_eq!(without.lookup(VR_TWIST).unwrap().slot, Slot::State(1));
+        assert_eq!(without.lookup(VR_STATE + 3).unwrap().slot, Slot::State(3));
+    }
+
     #[test]
     fn effects_add_their_parameters_and_states_after_the_rest() {
         let mut p = FmuParams::default();
@@ -750,7 +856,7 @@ mod tests {
         p.effects.actuator_lag_s = 0.004;
         p.effects.compliance_stiffness_nm_per_rad = 2000.0;
         let t = Table::new(&p);
-        assert_eq!(t.nx(), 13);
+        assert_eq!(t.nx(), base.nx() + 3);
         assert_eq!(&t.variables[..base.variables.len()], &base.variables[..]);
         let names: Vec<&str> = t.variables[base.variables.len()..].iter().map(|v| v.name.as_ref()).collect();
         assert_eq!(
@@ -769,9 +875,10 @@ mod tests {
             ]
         );
         // the twists' and the lagged torque's derivatives are computed; φ_m2's is w_m2
-        assert_eq!(t.derivative_state[10], None);
-        assert_eq!(t.derivative_state[12], None);
-        assert_eq!(t.derivative_state[0], Some(3));
+        let at = |s: usize| t.states.iter().position(|&x| x == s).unwrap();
+        assert_eq!(t.derivative_state[at(10)], None);
+        assert_eq!(t.derivative_state[at(12)], None);
+        assert_eq!(t.derivative_state[at(0)], Some(at(3)));
     }
 
     /// Friction brings its three frictions' rows that are on and the smoothing speed, after

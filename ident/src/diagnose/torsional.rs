@@ -48,6 +48,9 @@ pub struct TorsionalModel {
 /// The diagnosis of one record.
 #[derive(Debug, Clone, Serialize)]
 pub struct TorsionalDiagnosis {
+    /// Why the answer is no finding although it fits: its re-fit moved what the declared model
+    /// measured beyond [`DECLARED_TOLERANCE_FACTOR`] (`None`: it did not).
+    pub distorted: Option<String>,
     /// The first effect found (`none` if none).
     pub effect: String,
     /// The machine it acts at, if at one.
@@ -108,6 +111,9 @@ struct Problem<'a> {
     /// Friction smoothing speed: [`FRICTION_SMOOTHING_FRACTION`] of the load machines' RMS
     /// speed, rad/s.
     smoothing: f64,
+    /// ln of the declared model's [`cage_stiffness`] (what a spring in series is compared
+    /// with, [`Fit::plausible`]).
+    cage_stiffness_ln: f64,
     /// Short-time spectra of the speeds (both channels), their measured magnitudes and norm (0
     /// where the record is too short for frames).
     spectrogram: Spectrogram,
@@ -278,7 +284,33 @@ pub enum Candidate {
     CoulombFriction(Machine),
 }
 
+/// What an effect may move of the quantities the declared model measured (its total drive
+/// inertia and the stiffness between the drive and the load machines).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Moves {
+    /// Neither: the effect adds a force, a delay or damping, the mechanics stay.
+    Nothing,
+    /// The effect puts a spring in series with the side shafts (and splits the drive's
+    /// inertia, whose total stays): the declared model measured the series stiffness, or the
+    /// shafts' alone where the drive's inertia sits after the spring, so the shafts may be as
+    /// stiff as the series combination allows.
+    SeriesSpring,
+}
+
 impl Candidate {
+    /// What the effect may move of the declared model's measured quantities (the rule
+    /// [`Fit::plausible`] applies alike to every effect).
+    pub fn may_move(self) -> Moves {
+        match self {
+            Candidate::DriveCompliance => Moves::SeriesSpring,
+            Candidate::ShaftDamping
+            | Candidate::TimeDelay
+            | Candidate::ActuatorLag
+            | Candidate::Backlash
+            | Candidate::CoulombFriction(_) => Moves::Nothing,
+        }
+    }
+
     /// Every candidate.
     pub const ALL: [Candidate; 9] = [
         Candidate::ShaftDamping,
@@ -483,10 +515,21 @@ pub const BACKLASH_FINE_STEPS: usize = 10;
 /// (`Powertrain::rk4_steps_s`: h·rate ≤ 0.5) resolve, four per millisecond.
 pub const MAX_FRICTION_RATE: f64 = 0.5 / (2.0 * plant::effects::BACKLASH_STEP_S);
 
-/// A re-fitted j_drive or c_short more than this factor from its declared value is
-/// implausible: such a candidate imitates a missing effect by distorting the declared
-/// mechanics and is not chosen (reported with `implausible`).
-pub const PLAUSIBLE_REFIT_FACTOR: f64 = 1.3;
+/// How far a quantity the declared model measured may be off in a candidate's re-fit, as a
+/// factor: the total inertia of the drive, and the stiffness between the drive and the load
+/// machines the declared model saw (what each effect may move is [`Candidate::may_move`]). A
+/// candidate beyond it imitates a missing effect by distorting the declared mechanics and is
+/// not chosen (reported with `implausible`).
+pub const DECLARED_TOLERANCE_FACTOR: f64 = 1.3;
+
+/// The stiffness of both side shafts seen at the differential's cage against the load
+/// machines held still, N·m/rad: each shaft carries T for the cage's 2T and the cage turns by
+/// the mean of their twists, so k = 2T / ((T/c_left + T/c_right)/2) = 4 / (1/c_left + 1/c_right).
+/// It scales with c_short (c_long keeps its ratio), which is how the re-fit moves it.
+pub fn cage_stiffness(rig: &RigParams, variant: Variant) -> Option<f64> {
+    let e = rig.effective(variant).ok()?;
+    Some(4.0 / (1.0 / e.c_left + 1.0 / e.c_right))
+}
 
 /// Most RK4 steps per sample within a smooth piece of a candidate with play or friction: a
 /// model needing more has a time scale below an eighth of the sample time (a lag, an overdamped
@@ -568,9 +611,29 @@ impl Fit {
         self.cost.sqrt()
     }
 
-    /// Whether the re-fitted j_drive and c_short stay within [`PLAUSIBLE_REFIT_FACTOR`].
-    fn plausible(&self) -> bool {
-        self.x[..2].iter().all(|v| v.abs() <= PLAUSIBLE_REFIT_FACTOR.ln())
+    /// Whether the re-fit keeps what the declared model measured within
+    /// [`DECLARED_TOLERANCE_FACTOR`], each effect moving only what [`Candidate::may_move`]
+    /// allows: the drive's total inertia always stays; c_short stays unless an effect puts a
+    /// spring in series, and then the declared stiffness lies between the series combination
+    /// (all of the drive's inertia before the spring) and the shafts' alone (none of it):
+    /// a spring in series can neither stiffen the series nor soften the shafts.
+    fn plausible(&self, p: &Problem) -> bool {
+        let tol = DECLARED_TOLERANCE_FACTOR.ln();
+        if self.x[0].abs() > tol {
+            return false;
+        }
+        // ln of the stiffness the declared model may have seen, relative to the declared
+        // one: (the lowest, the highest)
+        let mut seen = (self.x[1], self.x[1]);
+        let mut at = 2;
+        for c in &self.effects {
+            if c.may_move() == Moves::SeriesSpring {
+                let (spring, shafts) = (self.x[at] - p.cage_stiffness_ln, self.x[1]);
+                seen = (-((-spring).exp() + (-shafts).exp()).ln(), shafts);
+            }
+            at += c.own_len();
+        }
+        seen.0 <= tol && seen.1 >= -tol
     }
 
     /// This fit as a step of the selection's path.
@@ -647,9 +710,11 @@ pub fn diagnose(
     spectrogram.magnitudes(&measured[1], &mut measured_spectra);
     let spectra_norm = measured_spectra.iter().map(|v| v * v).sum::<f64>().sqrt();
     let spectra_norm = if spectra_norm.is_finite() { spectra_norm } else { 0.0 };
+    let cage_stiffness_ln = cage_stiffness(rig, variant).map_or(f64::NAN, f64::ln);
     let problem = Problem {
         sweep,
         declared: rig.clone(),
+        cage_stiffness_ln,
         variant,
         speed0,
         measured,
@@ -716,7 +781,7 @@ pub fn diagnose(
         // implausible model (one followed a round ahead) also from the declared ones
         let mut bases: Vec<Vec<f64>> = Vec::new();
         let bent = base.x[..2].iter().any(|v| v.abs() > PROFILE_BENT_LN);
-        if base.effects.is_empty() || (c == Candidate::Backlash && bent) || !base.plausible() {
+        if base.effects.is_empty() || (c == Candidate::Backlash && bent) || !base.plausible(&problem) {
             let mut x = base.x.clone();
             x[..2].fill(0.0);
             bases.push(x);
@@ -728,7 +793,7 @@ pub fn diagnose(
         // lacks), that effect re-seated from its own starts too, with the declared j_drive and
         // c_short: its value was fitted without the candidate that explains the rest
         if let [own] = base.effects[..] {
-            if !base.plausible() {
+            if !base.plausible(&problem) {
                 for s in own.starts(&problem, shuffle_hz) {
                     let mut x = base.x.clone();
                     x[..2].fill(0.0);
@@ -812,7 +877,7 @@ pub fn diagnose(
             cost: f64::INFINITY,
             score: f64::INFINITY,
         });
-        if !best.cost.is_finite() || best.plausible() {
+        if !best.cost.is_finite() || best.plausible(&problem) {
             return best;
         }
         // The fit bent j_drive or c_short beyond the plausible factor: the candidate is fitted
@@ -866,7 +931,10 @@ pub fn diagnose(
         });
         let fits: Vec<Fit> = polished.into_iter().filter(|f| f.cost.is_finite()).chain(std::iter::once(b)).collect();
         let lowest = |plausible: bool| {
-            fits.iter().filter(|f| !plausible || f.plausible()).min_by(|a, b| a.cost.total_cmp(&b.cost)).cloned()
+            fits.iter()
+                .filter(|f| !plausible || f.plausible(&problem))
+                .min_by(|a, b| a.cost.total_cmp(&b.cost))
+                .cloned()
         };
         lowest(true).or_else(|| lowest(false)).expect("the accepted fit is there")
     };
@@ -900,7 +968,7 @@ pub fn diagnose(
     // the best fit of `fits` (plausible or not) that beats `base` clearly
     let best_beating = |fits: &[Fit], base: &Fit, plausible: bool| -> Option<Fit> {
         fits.iter()
-            .filter(|f| f.cost.is_finite() && f.plausible() == plausible && f.beats(base))
+            .filter(|f| f.cost.is_finite() && f.plausible(&problem) == plausible && f.beats(base))
             .min_by(|a, b| a.score.total_cmp(&b.score))
             .cloned()
     };
@@ -921,7 +989,7 @@ pub fn diagnose(
             let refitted = each_left_out(&current);
             let weakest = refitted
                 .iter()
-                .filter(|w| w.cost.is_finite() && w.plausible() && !current.beats(w))
+                .filter(|w| w.cost.is_finite() && w.plausible(&problem) && !current.beats(w))
                 .min_by(|a, b| a.score.total_cmp(&b.score));
             match weakest {
                 Some(w) => {
@@ -1039,7 +1107,7 @@ pub fn diagnose(
             let swapped: Vec<Fit> = super::on_two_workers(trials.len(), &|t| swap(&current, trials[t].0, trials[t].1));
             let best = swapped
                 .into_iter()
-                .filter(|f| f.cost.is_finite() && f.plausible() && f.score < current.score)
+                .filter(|f| f.cost.is_finite() && f.plausible(&problem) && f.score < current.score)
                 .min_by(|a, b| a.score.total_cmp(&b.score));
             match best {
                 Some(b) => {
@@ -1067,7 +1135,7 @@ pub fn diagnose(
     let runner_up = main
         .first_round
         .iter()
-        .filter(|f| f.cost.is_finite() && f.plausible() && f.beats(&none))
+        .filter(|f| f.cost.is_finite() && f.plausible(&problem) && f.beats(&none))
         .filter(|f| f.effects.iter().all(|c| !main.current.effects.iter().any(|m| m.overlaps(*c))))
         .min_by(|a, b| a.score.total_cmp(&b.score))
         .cloned();
@@ -1145,7 +1213,7 @@ pub fn diagnose(
             error_after: f.error(),
             score: f.score,
             fitted_parameters: f.x.len(),
-            implausible: !f.plausible(),
+            implausible: !f.plausible(&problem),
         }
     };
     let mut candidates: Vec<CandidateScore> =
@@ -1164,7 +1232,8 @@ pub fn diagnose(
             error_after: none.error(),
             score: none.score + n_eff.max(2.0).ln(),
             fitted_parameters: none.x.len() + 1,
-            implausible: false,
+            // it is the re-fitted declared model, judged as that
+            implausible: !none.plausible(&problem),
         });
     }
     candidates.sort_by(|a, b| a.score.total_cmp(&b.score));
@@ -1199,7 +1268,16 @@ pub fn diagnose(
         before: sim0,
         after,
     };
+    // the answer's re-fit of the declared mechanics, judged by the rule every candidate is
+    let distorted = (!current.plausible(&problem)).then(|| {
+        format!(
+            "the model fits only with the declared mechanics moved beyond a factor {DECLARED_TOLERANCE_FACTOR} (j_drive ×{:.3}, c_short ×{:.3} of the declared values)",
+            current.x[0].exp(),
+            current.x[1].exp()
+        )
+    });
     Ok(TorsionalDiagnosis {
+        distorted,
         effect: effects.first().map_or_else(|| "none".to_string(), |e| e.effect.clone()),
         at: effects.first().and_then(|e| e.at.clone()),
         parameters,
