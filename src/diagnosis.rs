@@ -26,6 +26,11 @@ pub struct DiagnosisReport {
     pub at: Option<String>,
     /// Its fitted parameters (SI; the declared ones re-fitted beside them).
     pub parameters: BTreeMap<String, f64>,
+    /// Other solutions that fit as well as `parameters` (BIC within
+    /// `ident::diagnose::torsional::EQUIVALENT_BIC`), each with its error: when there are any,
+    /// the record does not determine the parameters.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub equivalents: Vec<BTreeMap<String, f64>>,
     /// Every effect found, in the order found (`torsional_sweep`: forward selection; the first
     /// is `effect`/`parameters`).
     #[serde(skip_serializing_if = "Vec::is_empty")]
@@ -309,7 +314,7 @@ fn torsional(file: &Path, progress: &(dyn Fn(&str) + Sync)) -> anyhow::Result<Di
     for c in d.candidates.iter().filter(|c| c.implausible) {
         let at = c.at.as_ref().map(|a| format!(" at {a}")).unwrap_or_default();
         notes.push(format!(
-            "{}{at} not chosen: it moves what the declared model measured (the drive's total inertia, the stiffness between drive and load machines) beyond a factor {} (error {:.4})",
+            "{}{at} not chosen: it re-fits j_drive or c_short beyond a factor {} of the declared values (error {:.4})",
             c.effect,
             ident::diagnose::torsional::DECLARED_TOLERANCE_FACTOR,
             c.error_after
@@ -392,6 +397,7 @@ fn torsional(file: &Path, progress: &(dyn Fn(&str) + Sync)) -> anyhow::Result<Di
             effect: d.effect,
             at: d.at,
             parameters: d.parameters,
+            equivalents: d.equivalents,
             effects: d.effects,
             search: if same_steps { Vec::new() } else { d.search },
             path: d.path,
@@ -529,6 +535,7 @@ fn bearing(file: &Path, _progress: &(dyn Fn(&str) + Sync)) -> anyhow::Result<Dia
             effect: d.effect,
             at: None,
             parameters: d.parameters,
+            equivalents: Vec::new(),
             effects: vec![],
             path: vec![],
             search: vec![],
@@ -608,6 +615,13 @@ pub fn human(r: &DiagnosisReport) -> String {
     let show = |p: &mut dyn Iterator<Item = (&String, &f64)>| {
         p.map(|(k, v)| crate::units::display(k, *v)).collect::<Vec<_>>().join(", ")
     };
+    if explained && !r.equivalents.is_empty() {
+        s += &format!(
+            "  the record does NOT DETERMINE the parameters: {} other fit(s) as good (BIC within {}); one solution:\n",
+            r.equivalents.len(),
+            ident::diagnose::torsional::EQUIVALENT_BIC
+        );
+    }
     if !explained {
         // no parameter of an unexplained record is shown as a finding
     } else if r.effects.len() > 1 {
@@ -623,6 +637,9 @@ pub fn human(r: &DiagnosisReport) -> String {
         for (k, v) in &r.parameters {
             s += &format!("  {}\n", crate::units::display(k, *v));
         }
+    }
+    for e in r.equivalents.iter().filter(|_| explained) {
+        s += &format!("  as good: {}\n", show(&mut e.iter()));
     }
     s += &format!("  error {:.4} → {:.4}  ({})\n", r.error_before, r.error_after, r.error_definition);
     if explained && r.structured_residual {
@@ -780,6 +797,7 @@ fn drive(file: &Path, progress: &(dyn Fn(&str) + Sync)) -> anyhow::Result<Diagno
             effect: d.effect.clone(),
             at: d.at.clone(),
             parameters: d.parameters.clone(),
+            equivalents: Vec::new(),
             effects: vec![],
             path: vec![],
             search: vec![],

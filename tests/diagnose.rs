@@ -221,8 +221,7 @@ fn drive_compliance_is_found() {
 /// with j_drive and c_short moved to a fraction of their values (the case that was reported as
 /// `none` with c_short at a tenth and exit 0): that is never a finding. Either the compliance
 /// is found with its stiffness, or the answer says the declared mechanics had to move.
-/// Written after the plausibility rule moved to what the declared model measured, run once:
-/// on this record (seed 21) the compliance's search ends at its 100 Hz bound and the answer is
+/// On this record (seed 21) the compliance's search ends at its 100 Hz bound and the answer is
 /// the flagged `none`.
 #[test]
 fn a_motor_heavy_drive_compliance_is_never_a_confident_none() {
@@ -253,6 +252,71 @@ fn a_motor_heavy_drive_compliance_is_never_a_confident_none() {
         let none = d.candidates.iter().find(|c| c.effect == "none").unwrap();
         assert!(none.implausible, "the re-fitted declared model is marked: {none:?}");
     }
+}
+
+/// Motor-heavy compliances (most of the drive's inertia on the motor side), the first
+/// record kind: the shuffle falls far below the declared model's, and a re-fit of the declared
+/// model alone bends j_drive and c_short to a fraction of their values (reported as `none`,
+/// exit 0, before). The contract is the issue's: the parameters are right (stiffness and shafts
+/// to a fifth, share to 0.125), or the report says they are no finding (the declared mechanics
+/// had to move: NOT EXPLAINED) or not determined (equally good fits listed). Seeds 47–51 were
+/// seen while the search for equally good fits was written; 52–54 were written after. Measured:
+/// the compliance is found and right for seeds 48, 51, 54 (1017, 1244, 999 N·m/rad for 900,
+/// 1200, 1000); the other five end as the flagged `none` (the compliance's grid, 1.2–8 times
+/// the declared shuffle, misses their valleys: finding them is left); no confident wrong answer.
+const MOTOR_HEAVY: [(f64, f64, f64, u64); 8] = [
+    (400.0, 0.8, 1.0, 47),
+    (900.0, 0.75, 1.25, 48),
+    (700.0, 0.8, 1.0, 49),
+    (500.0, 0.65, 1.15, 50),
+    (1200.0, 0.7, 1.0, 51),
+    (800.0, 0.75, 1.1, 52),
+    (450.0, 0.7, 1.0, 53),
+    (1000.0, 0.75, 1.2, 54),
+];
+
+#[test]
+fn motor_heavy_compliances_are_right_or_said_to_be_undetermined() {
+    let mut misses = Vec::new();
+    for (k, f, shafts, seed) in MOTOR_HEAVY {
+        let d = motor_heavy(k, f, shafts, seed);
+        let p = &d.parameters;
+        let near = |key: &str, truth: f64, tol: f64| p.get(key).is_some_and(|v| (v - truth).abs() <= tol);
+        let right = d.effect == "drive_compliance"
+            && near("stiffness_Nm_per_rad", k, 0.2 * k)
+            && near("motor_fraction", f, 0.125)
+            && near("c_short_Nm_per_rad", declared().c_short * shafts, 0.2 * declared().c_short * shafts);
+        let said = !d.equivalents.is_empty() || d.distorted.is_some();
+        if !(right || said) {
+            misses.push(seed);
+        }
+    }
+    const MISSES: [u64; 0] = [];
+    assert_eq!(misses, MISSES, "records with a confident wrong answer (by seed)");
+}
+
+/// The diagnosis of a sweep of the declared rig with its shafts × `shafts` and a compliance
+/// (`k`, motor share `f`).
+fn motor_heavy(k: f64, f: f64, shafts: f64, seed: u64) -> torsional::TorsionalDiagnosis {
+    let mut truth = declared();
+    truth.c_short *= shafts;
+    truth.c_long = truth.c_long.map(|c| c * shafts);
+    let effects = plant::effects::DriveEffects {
+        compliance_stiffness_nm_per_rad: k,
+        compliance_motor_fraction: f,
+        ..Default::default()
+    };
+    let modes = plant::effects::Powertrain::new(&truth, Variant::V1, &effects).unwrap().frequencies_hz();
+    assert!(*modes.last().unwrap() < 30.0, "modes {modes:?} Hz: the upper one outside the sweep");
+    let d = run(
+        &sweep(&truth, Truth { compliance: Some((k, f)), set_point_nm: 40.0, ..Default::default() }, seed),
+        &declared(),
+    );
+    eprintln!(
+        "k {k} f {f} shafts ×{shafts}: {} {:?} equivalents {:?} distorted {:?} error {:.4} → {:.4}",
+        d.effect, d.parameters, d.equivalents, d.distorted, d.error_before, d.error_after
+    );
+    d
 }
 
 #[test]

@@ -48,6 +48,10 @@ pub struct TorsionalModel {
 /// The diagnosis of one record.
 #[derive(Debug, Clone, Serialize)]
 pub struct TorsionalDiagnosis {
+    /// Other solutions that fit the record as well as the answer (BIC within
+    /// [`EQUIVALENT_BIC`]) with its parameters elsewhere: each one's parameters and error. When
+    /// there are any, the record does not determine the answer's parameters.
+    pub equivalents: Vec<BTreeMap<String, f64>>,
     /// Why the answer is no finding although it fits: its re-fit moved what the declared model
     /// measured beyond [`DECLARED_TOLERANCE_FACTOR`] (`None`: it did not).
     pub distorted: Option<String>,
@@ -111,9 +115,6 @@ struct Problem<'a> {
     /// Friction smoothing speed: [`FRICTION_SMOOTHING_FRACTION`] of the load machines' RMS
     /// speed, rad/s.
     smoothing: f64,
-    /// ln of the declared model's [`cage_stiffness`] (what a spring in series is compared
-    /// with, [`Fit::plausible`]).
-    cage_stiffness_ln: f64,
     /// Short-time spectra of the speeds (both channels), their measured magnitudes and norm (0
     /// where the record is too short for frames).
     spectrogram: Spectrogram,
@@ -284,33 +285,7 @@ pub enum Candidate {
     CoulombFriction(Machine),
 }
 
-/// What an effect may move of the quantities the declared model measured (its total drive
-/// inertia and the stiffness between the drive and the load machines).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Moves {
-    /// Neither: the effect adds a force, a delay or damping, the mechanics stay.
-    Nothing,
-    /// The effect puts a spring in series with the side shafts (and splits the drive's
-    /// inertia, whose total stays): the declared model measured the series stiffness, or the
-    /// shafts' alone where the drive's inertia sits after the spring, so the shafts may be as
-    /// stiff as the series combination allows.
-    SeriesSpring,
-}
-
 impl Candidate {
-    /// What the effect may move of the declared model's measured quantities (the rule
-    /// [`Fit::plausible`] applies alike to every effect).
-    pub fn may_move(self) -> Moves {
-        match self {
-            Candidate::DriveCompliance => Moves::SeriesSpring,
-            Candidate::ShaftDamping
-            | Candidate::TimeDelay
-            | Candidate::ActuatorLag
-            | Candidate::Backlash
-            | Candidate::CoulombFriction(_) => Moves::Nothing,
-        }
-    }
-
     /// Every candidate.
     pub const ALL: [Candidate; 9] = [
         Candidate::ShaftDamping,
@@ -465,10 +440,10 @@ impl Candidate {
             }
             // stiffness placing the uncoupled motor-cage mode at 1.2 to 8 times the shuffle,
             // motor shares 0.3, 0.5, 0.7: the fit's valleys are narrow in frequency
-            Candidate::DriveCompliance => (0..12)
+            Candidate::DriveCompliance => (0..COMPLIANCE_GRID_STEPS)
                 .flat_map(|i| {
-                    let r = 1.2 * (8.0f64 / 1.2).powf(i as f64 / 11.0);
-                    [0.3f64, 0.5, 0.7].map(move |f| (r, f))
+                    let r = 1.2 * (8.0f64 / 1.2).powf(i as f64 / (COMPLIANCE_GRID_STEPS - 1) as f64);
+                    COMPLIANCE_GRID_SHARES.map(move |f| (r, f))
                 })
                 .map(|(r, f)| {
                     let w = 2.0 * std::f64::consts::PI * shuffle_hz * r;
@@ -483,6 +458,47 @@ impl Candidate {
                 .collect(),
         }
     }
+}
+
+/// Steps of the compliance's grid of uncoupled motor-cage frequencies, 1.2 to 8 times the
+/// declared shuffle frequency.
+pub const COMPLIANCE_GRID_STEPS: usize = 12;
+/// Motor shares of the compliance's grid.
+pub const COMPLIANCE_GRID_SHARES: [f64; 3] = [0.3, 0.5, 0.7];
+
+/// Local minima of the compliance's grid refined per motor share in the search for equivalent
+/// solutions (the lowest first).
+pub const COMPLIANCE_MINIMA: usize = 1;
+
+/// Indices into the compliance's starts (frequency-major: [`COMPLIANCE_GRID_STEPS`] ×
+/// `COMPLIANCE_GRID_SHARES`) worth refining, given their `costs`: per motor share, the lowest
+/// [`COMPLIANCE_MINIMA`] local minima of the cost along the frequency.
+fn compliance_minima(costs: &[f64]) -> Vec<usize> {
+    let shares = COMPLIANCE_GRID_SHARES.len();
+    let steps = costs.len() / shares;
+    let mut out = Vec::new();
+    for s in 0..shares {
+        let at = |i: usize| costs[i * shares + s];
+        let mut minima: Vec<usize> = (0..steps)
+            .filter(|&i| at(i).is_finite() && (i == 0 || at(i - 1) >= at(i)) && (i + 1 == steps || at(i + 1) >= at(i)))
+            .collect();
+        minima.sort_by(|&a, &b| at(a).total_cmp(&at(b)));
+        out.extend(minima.into_iter().take(COMPLIANCE_MINIMA).map(|i| i * shares + s));
+    }
+    out
+}
+
+/// Two fits whose BIC differ by at most this fit a record equally well (Kass & Raftery 1995:
+/// a difference below 2 is "not worth more than a bare mention").
+pub const EQUIVALENT_BIC: f64 = 2.0;
+/// Two fits' compliance stiffnesses this far apart (ln: 25 %) are different solutions.
+pub const EQUIVALENT_APART_LN: f64 = 0.223_143_551_314_209_7;
+/// Two fits' motor shares this far apart are different solutions.
+pub const EQUIVALENT_APART_SHARE: f64 = 0.1;
+
+/// The logistic function, 1/(1 + e^−v) (the compliance's motor share from its logit).
+fn logistic(v: f64) -> f64 {
+    1.0 / (1.0 + (-v).exp())
 }
 
 /// Lowest high-pass corner, Hz.
@@ -515,21 +531,11 @@ pub const BACKLASH_FINE_STEPS: usize = 10;
 /// (`Powertrain::rk4_steps_s`: h·rate ≤ 0.5) resolve, four per millisecond.
 pub const MAX_FRICTION_RATE: f64 = 0.5 / (2.0 * plant::effects::BACKLASH_STEP_S);
 
-/// How far a quantity the declared model measured may be off in a candidate's re-fit, as a
-/// factor: the total inertia of the drive, and the stiffness between the drive and the load
-/// machines the declared model saw (what each effect may move is [`Candidate::may_move`]). A
-/// candidate beyond it imitates a missing effect by distorting the declared mechanics and is
-/// not chosen (reported with `implausible`).
+/// A re-fitted j_drive or c_short more than this factor from its declared value is
+/// implausible: such a candidate imitates a missing effect by distorting the declared
+/// mechanics and is not chosen (reported with `implausible`); an answer that needs it is no
+/// finding ([`TorsionalDiagnosis::distorted`]).
 pub const DECLARED_TOLERANCE_FACTOR: f64 = 1.3;
-
-/// The stiffness of both side shafts seen at the differential's cage against the load
-/// machines held still, N·m/rad: each shaft carries T for the cage's 2T and the cage turns by
-/// the mean of their twists, so k = 2T / ((T/c_left + T/c_right)/2) = 4 / (1/c_left + 1/c_right).
-/// It scales with c_short (c_long keeps its ratio), which is how the re-fit moves it.
-pub fn cage_stiffness(rig: &RigParams, variant: Variant) -> Option<f64> {
-    let e = rig.effective(variant).ok()?;
-    Some(4.0 / (1.0 / e.c_left + 1.0 / e.c_right))
-}
 
 /// Most RK4 steps per sample within a smooth piece of a candidate with play or friction: a
 /// model needing more has a time scale below an eighth of the sample time (a lag, an overdamped
@@ -611,29 +617,10 @@ impl Fit {
         self.cost.sqrt()
     }
 
-    /// Whether the re-fit keeps what the declared model measured within
-    /// [`DECLARED_TOLERANCE_FACTOR`], each effect moving only what [`Candidate::may_move`]
-    /// allows: the drive's total inertia always stays; c_short stays unless an effect puts a
-    /// spring in series, and then the declared stiffness lies between the series combination
-    /// (all of the drive's inertia before the spring) and the shafts' alone (none of it):
-    /// a spring in series can neither stiffen the series nor soften the shafts.
-    fn plausible(&self, p: &Problem) -> bool {
-        let tol = DECLARED_TOLERANCE_FACTOR.ln();
-        if self.x[0].abs() > tol {
-            return false;
-        }
-        // ln of the stiffness the declared model may have seen, relative to the declared
-        // one: (the lowest, the highest)
-        let mut seen = (self.x[1], self.x[1]);
-        let mut at = 2;
-        for c in &self.effects {
-            if c.may_move() == Moves::SeriesSpring {
-                let (spring, shafts) = (self.x[at] - p.cage_stiffness_ln, self.x[1]);
-                seen = (-((-spring).exp() + (-shafts).exp()).ln(), shafts);
-            }
-            at += c.own_len();
-        }
-        seen.0 <= tol && seen.1 >= -tol
+    /// Whether the re-fit keeps j_drive and c_short within [`DECLARED_TOLERANCE_FACTOR`] of
+    /// their declared values.
+    fn plausible(&self) -> bool {
+        self.x[..2].iter().all(|v| v.abs() <= DECLARED_TOLERANCE_FACTOR.ln())
     }
 
     /// This fit as a step of the selection's path.
@@ -710,11 +697,9 @@ pub fn diagnose(
     spectrogram.magnitudes(&measured[1], &mut measured_spectra);
     let spectra_norm = measured_spectra.iter().map(|v| v * v).sum::<f64>().sqrt();
     let spectra_norm = if spectra_norm.is_finite() { spectra_norm } else { 0.0 };
-    let cage_stiffness_ln = cage_stiffness(rig, variant).map_or(f64::NAN, f64::ln);
     let problem = Problem {
         sweep,
         declared: rig.clone(),
-        cage_stiffness_ln,
         variant,
         speed0,
         measured,
@@ -781,7 +766,7 @@ pub fn diagnose(
         // implausible model (one followed a round ahead) also from the declared ones
         let mut bases: Vec<Vec<f64>> = Vec::new();
         let bent = base.x[..2].iter().any(|v| v.abs() > PROFILE_BENT_LN);
-        if base.effects.is_empty() || (c == Candidate::Backlash && bent) || !base.plausible(&problem) {
+        if base.effects.is_empty() || (c == Candidate::Backlash && bent) || !base.plausible() {
             let mut x = base.x.clone();
             x[..2].fill(0.0);
             bases.push(x);
@@ -793,7 +778,7 @@ pub fn diagnose(
         // lacks), that effect re-seated from its own starts too, with the declared j_drive and
         // c_short: its value was fitted without the candidate that explains the rest
         if let [own] = base.effects[..] {
-            if !base.plausible(&problem) {
+            if !base.plausible() {
                 for s in own.starts(&problem, shuffle_hz) {
                     let mut x = base.x.clone();
                     x[..2].fill(0.0);
@@ -877,7 +862,7 @@ pub fn diagnose(
             cost: f64::INFINITY,
             score: f64::INFINITY,
         });
-        if !best.cost.is_finite() || best.plausible(&problem) {
+        if !best.cost.is_finite() || best.plausible() {
             return best;
         }
         // The fit bent j_drive or c_short beyond the plausible factor: the candidate is fitted
@@ -931,10 +916,7 @@ pub fn diagnose(
         });
         let fits: Vec<Fit> = polished.into_iter().filter(|f| f.cost.is_finite()).chain(std::iter::once(b)).collect();
         let lowest = |plausible: bool| {
-            fits.iter()
-                .filter(|f| !plausible || f.plausible(&problem))
-                .min_by(|a, b| a.cost.total_cmp(&b.cost))
-                .cloned()
+            fits.iter().filter(|f| !plausible || f.plausible()).min_by(|a, b| a.cost.total_cmp(&b.cost)).cloned()
         };
         lowest(true).or_else(|| lowest(false)).expect("the accepted fit is there")
     };
@@ -968,7 +950,7 @@ pub fn diagnose(
     // the best fit of `fits` (plausible or not) that beats `base` clearly
     let best_beating = |fits: &[Fit], base: &Fit, plausible: bool| -> Option<Fit> {
         fits.iter()
-            .filter(|f| f.cost.is_finite() && f.plausible(&problem) == plausible && f.beats(base))
+            .filter(|f| f.cost.is_finite() && f.plausible() == plausible && f.beats(base))
             .min_by(|a, b| a.score.total_cmp(&b.score))
             .cloned()
     };
@@ -989,7 +971,7 @@ pub fn diagnose(
             let refitted = each_left_out(&current);
             let weakest = refitted
                 .iter()
-                .filter(|w| w.cost.is_finite() && w.plausible(&problem) && !current.beats(w))
+                .filter(|w| w.cost.is_finite() && w.plausible() && !current.beats(w))
                 .min_by(|a, b| a.score.total_cmp(&b.score));
             match weakest {
                 Some(w) => {
@@ -1107,7 +1089,7 @@ pub fn diagnose(
             let swapped: Vec<Fit> = super::on_two_workers(trials.len(), &|t| swap(&current, trials[t].0, trials[t].1));
             let best = swapped
                 .into_iter()
-                .filter(|f| f.cost.is_finite() && f.plausible(&problem) && f.score < current.score)
+                .filter(|f| f.cost.is_finite() && f.plausible() && f.score < current.score)
                 .min_by(|a, b| a.score.total_cmp(&b.score));
             match best {
                 Some(b) => {
@@ -1135,7 +1117,7 @@ pub fn diagnose(
     let runner_up = main
         .first_round
         .iter()
-        .filter(|f| f.cost.is_finite() && f.plausible(&problem) && f.beats(&none))
+        .filter(|f| f.cost.is_finite() && f.plausible() && f.beats(&none))
         .filter(|f| f.effects.iter().all(|c| !main.current.effects.iter().any(|m| m.overlaps(*c))))
         .min_by(|a, b| a.score.total_cmp(&b.score))
         .cloned();
@@ -1154,13 +1136,64 @@ pub fn diagnose(
         None => main,
     };
 
+    // Other basins of the compliance that fit as well: the load machines' speeds alone may not
+    // tell a soft spring with most of the drive's inertia on the motor from a stiff one with
+    // most on the cage and stiffer shafts. Each motor share of the grid is fitted from its best
+    // start (beside the declared and the answer's j_drive and c_short); a fit within
+    // EQUIVALENT_BIC of the answer with the compliance elsewhere is an equivalent solution: the
+    // record does not determine the compliance's parameters, and the report says so. A fit
+    // better than the answer becomes the answer.
+    let mut equivalent_fits: Vec<Fit> = Vec::new();
+    if let Some(i) = current.effects.iter().position(|&c| c == Candidate::DriveCompliance) {
+        let at = 2 + current.effects[..i].iter().map(|c| c.own_len()).sum::<usize>();
+        let effects = current.effects.clone();
+        let f = |x: &[f64]| problem.residual(&problem.build(&effects, x));
+        let cost_at = |x: &[f64]| f(x).map_or(f64::INFINITY, |r| r.iter().map(|v| v * v).sum::<f64>());
+        let starts = Candidate::DriveCompliance.starts(&problem, shuffle_hz);
+        let mut seeds: Vec<Vec<f64>> = Vec::new();
+        for declared_mechanics in [true, false] {
+            let points: Vec<Vec<f64>> = starts
+                .iter()
+                .map(|s| {
+                    let mut x = current.x.clone();
+                    if declared_mechanics {
+                        x[..2].fill(0.0);
+                    }
+                    x[at..at + 2].copy_from_slice(s);
+                    x
+                })
+                .collect();
+            let costs = super::on_two_workers(points.len(), &|k| cost_at(&points[k]));
+            seeds.extend(compliance_minima(&costs).into_iter().map(|k| points[k].clone()));
+        }
+        let fits = super::on_two_workers(seeds.len(), &|k| fit_with(effects.clone(), seeds[k].clone(), LM_ITERATIONS));
+        let apart = |a: &Fit, b: &Fit| {
+            (a.x[at] - b.x[at]).abs() > EQUIVALENT_APART_LN
+                || (logistic(a.x[at + 1]) - logistic(b.x[at + 1])).abs() > EQUIVALENT_APART_SHARE
+        };
+        // a fit better than the answer (the selection's valley was not the deepest) is the answer
+        let mut fits: Vec<Fit> = fits.into_iter().filter(|f| f.cost.is_finite() && f.plausible()).collect();
+        if let Some(k) = (0..fits.len()).min_by(|&a, &b| fits[a].score.total_cmp(&fits[b].score)) {
+            if fits[k].score < current.score {
+                let better = fits.swap_remove(k);
+                fits.push(std::mem::replace(&mut current, better));
+            }
+        }
+        for fit in fits {
+            let equivalent = fit.score <= current.score + EQUIVALENT_BIC;
+            if equivalent && apart(&fit, &current) && equivalent_fits.iter().all(|e| apart(e, &fit)) {
+                equivalent_fits.push(fit);
+            }
+        }
+    }
+
     // The answer's own path, declared → +A → +A+B: where the search reached the answer only
     // by additions, its steps; otherwise (an effect left out or swapped) the nested models
     // re-fitted, each adding the kept effect that lowers the error most, and the answer's
     // effects put in that order.
     let additive = search.len() == current.effects.len() + 1
         && search.windows(2).all(|w| w[1].effects.len() == w[0].effects.len() + 1);
-    let path: Vec<PathStep> = if additive {
+    let mut path: Vec<PathStep> = if additive {
         search.clone()
     } else {
         // nested[k]: the best model of all but k kept effects; built down from the answer by
@@ -1199,6 +1232,18 @@ pub fn diagnose(
             .collect()
     };
 
+    // the answer's own step: its error and score (a better fit of the same effects may have
+    // replaced the selection's, above)
+    if let Some(last) = path.last_mut() {
+        let (mut a, mut b) = (last.effects.clone(), current.step().effects);
+        a.sort();
+        b.sort();
+        if a == b {
+            last.error = current.error();
+            last.score = current.score;
+        }
+    }
+
     // the first round's table: every candidate beside the declared parameters
     let entry = |f: &Fit| -> CandidateScore {
         let m = problem.build(&f.effects, &f.x);
@@ -1213,7 +1258,7 @@ pub fn diagnose(
             error_after: f.error(),
             score: f.score,
             fitted_parameters: f.x.len(),
-            implausible: !f.plausible(&problem),
+            implausible: !f.plausible(),
         }
     };
     let mut candidates: Vec<CandidateScore> =
@@ -1233,7 +1278,7 @@ pub fn diagnose(
             score: none.score + n_eff.max(2.0).ln(),
             fitted_parameters: none.x.len() + 1,
             // it is the re-fitted declared model, judged as that
-            implausible: !none.plausible(&problem),
+            implausible: !none.plausible(),
         });
     }
     candidates.sort_by(|a, b| a.score.total_cmp(&b.score));
@@ -1269,15 +1314,28 @@ pub fn diagnose(
         after,
     };
     // the answer's re-fit of the declared mechanics, judged by the rule every candidate is
-    let distorted = (!current.plausible(&problem)).then(|| {
+    let distorted = (!current.plausible()).then(|| {
         format!(
             "the model fits only with the declared mechanics moved beyond a factor {DECLARED_TOLERANCE_FACTOR} (j_drive ×{:.3}, c_short ×{:.3} of the declared values)",
             current.x[0].exp(),
             current.x[1].exp()
         )
     });
+    let equivalents: Vec<BTreeMap<String, f64>> = equivalent_fits
+        .iter()
+        .map(|f| {
+            let m = problem.build(&f.effects, &f.x);
+            let mut p = declared_keys(&m);
+            for c in &f.effects {
+                p.extend(c.report(&m));
+            }
+            p.insert("error".into(), f.error());
+            p
+        })
+        .collect();
     Ok(TorsionalDiagnosis {
         distorted,
+        equivalents,
         effect: effects.first().map_or_else(|| "none".to_string(), |e| e.effect.clone()),
         at: effects.first().and_then(|e| e.at.clone()),
         parameters,
