@@ -213,6 +213,14 @@ pub struct Units {
     pub force: &'static str,
 }
 
+impl Units {
+    /// The FMUs' units of `domain` (`rigtwin_fmu::variables::unit_of`).
+    pub fn of(domain: plant::Domain) -> Units {
+        use rigtwin_fmu::variables::unit_of;
+        Units { speed: unit_of(plant::Dimension::Speed, domain), force: unit_of(plant::Dimension::Force, domain) }
+    }
+}
+
 /// What `rigtwin mpc` prints, the same for every model (the paper rig against its PI baseline,
 /// a drive model alone).
 #[derive(Debug, Clone, Serialize)]
@@ -274,6 +282,15 @@ pub struct MpcReport {
     /// quasi-static share of the drive torque (half of it) during the sweep, N·m.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub sweep_peak_torque_deviation_nm: Option<Compared<f64>>,
+}
+
+/// The controller's real-time first input and its largest deviation from the exact optimum of
+/// the same QP (solved to 1e-12): (max |u₀ − u₀*|, u₀).
+fn first_input_error(c: &Controller) -> mpc::Result<(f64, Vec<f64>)> {
+    let exact = c.exact_first_input()?;
+    let rt = c.planned_first_input();
+    let e = rt.iter().zip(&exact).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
+    Ok((e, rt))
 }
 
 /// Largest |value| of the columns `which` over the samples `rows`.
@@ -548,10 +565,8 @@ pub fn report(
         if !k.is_multiple_of(CHECK_EVERY) || info.fallback {
             return;
         }
-        match c.exact_first_input() {
-            Ok(exact) => {
-                let rt = c.planned_first_input();
-                let e = rt.iter().zip(&exact).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
+        match first_input_error(c) {
+            Ok((e, rt)) => {
                 u0_error = u0_error.max(e);
                 checked += 1;
                 if let Some(list) = export.as_deref_mut() {
@@ -651,7 +666,7 @@ pub fn report(
         prediction: prediction.notes.clone(),
         plant_effects: effects_in_words(truth),
         model_effects: effects_in_words(params),
-        units: Units { speed: "rad/s", force: "N.m" },
+        units: Units::of(plant::Domain::Rotational),
         sweep_peak_torque_deviation_nm: (kind == ScenarioKind::Sweep)
             .then(|| Compared { mpc: sweep_dev(&run.mpc), baseline: Some(sweep_dev(&run.baseline)) }),
     };
@@ -874,11 +889,9 @@ pub fn drive_report(
         times.push(info.elapsed_s * 1e6);
         iterations.push(info.solve.iterations as f64);
         if k.is_multiple_of(CHECK_EVERY) && !fallback {
-            let exact = controller
-                .exact_first_input()
+            let (e, _) = first_input_error(&controller)
                 .map_err(|e| anyhow::anyhow!("reference solve of the exact optimum failed: {e}"))?;
-            let rt = controller.planned_first_input();
-            u0_error = rt.iter().zip(&exact).map(|(a, b)| (a - b).abs()).fold(u0_error, f64::max);
+            u0_error = u0_error.max(e);
             checked += 1;
         }
         trace.push(y);
@@ -902,15 +915,12 @@ pub fn drive_report(
     };
     let (median, p99) = median_p99(&times);
     let input_at_bound_share = mpc::closed_loop::share_at_bounds(&inputs, &settings, &ss.input_names);
-    let (speed, force) = match model.line.domain {
-        plant::Domain::Rotational => ("rad/s", "N.m"),
-        plant::Domain::Translational => ("m/s", "N"),
-    };
     let effects = |m: &plant::DriveModel| {
-        if m.effects.is_empty() {
+        let named = crate::report::effects_at(m);
+        if named.is_empty() {
             "none".to_string()
         } else {
-            m.effects.iter().map(|e| format!("{} at {}", e.name(), e.element(m))).collect::<Vec<_>>().join(", ")
+            named.join(", ")
         }
     };
     let report = MpcReport {
@@ -950,7 +960,7 @@ pub fn drive_report(
         prediction,
         plant_effects: effects(truth),
         model_effects: effects(model),
-        units: Units { speed, force },
+        units: Units::of(model.line.domain),
         sweep_peak_torque_deviation_nm: None,
     };
     let run = DriveRun {

@@ -237,15 +237,17 @@ fn frequency_response(u: &[f64], y: &[f64], dt: f64, f_max: f64) -> Vec<(f64, f6
 }
 
 /// The verdict of a diagnosis that chose `effect`, with the parameters of everything it found
-/// judged against the record's bounds (`ident::diagnose::verdict`, default settings).
+/// judged against the record's bounds (`ident::diagnose::verdict`, default settings) beside
+/// the reason the diagnosis itself gave why its answer is no finding, if it gave one.
 fn judge<'a>(
     effect: &str,
     structured_residual: bool,
     parameters: impl Iterator<Item = &'a BTreeMap<String, f64>>,
     scales: &ident::diagnose::verdict::RecordScales,
+    no_finding: Option<&String>,
 ) -> (ident::diagnose::verdict::Verdict, Vec<String>) {
     use ident::diagnose::verdict::{out_of_bounds, verdict, BoundSettings, Verdict};
-    let mut reasons: Vec<String> = Vec::new();
+    let mut reasons: Vec<String> = no_finding.into_iter().cloned().collect();
     if effect != "none" {
         for p in parameters {
             for r in out_of_bounds(p, scales, &BoundSettings::default()) {
@@ -384,12 +386,7 @@ fn torsional(file: &Path, progress: &(dyn Fn(&str) + Sync)) -> anyhow::Result<Di
         duration_s: b.sweep.torque_nm.len() as f64 * dt,
     };
     let judged = std::iter::once(&d.parameters).chain(d.effects.iter().map(|e| &e.parameters));
-    let (mut verdict, mut verdict_reasons) = judge(&d.effect, d.structured_residual, judged, &scales);
-    if let Some(why) = &d.distorted {
-        verdict = ident::diagnose::verdict::Verdict::NotExplained;
-        verdict_reasons.retain(|r| !r.starts_with("the residual is structured"));
-        verdict_reasons.insert(0, why.clone());
-    }
+    let (verdict, verdict_reasons) = judge(&d.effect, d.structured_residual, judged, &scales, d.distorted.as_ref());
     Ok(Diagnosis {
         report: DiagnosisReport {
             verdict,
@@ -527,7 +524,8 @@ fn bearing(file: &Path, _progress: &(dyn Fn(&str) + Sync)) -> anyhow::Result<Dia
         rms_speed: f64::INFINITY,
         duration_s: test.force_x_n.len() as f64 * test.dt_s,
     };
-    let (verdict, verdict_reasons) = judge(&d.effect, d.structured_residual, std::iter::once(&d.parameters), &scales);
+    let (verdict, verdict_reasons) =
+        judge(&d.effect, d.structured_residual, std::iter::once(&d.parameters), &scales, None);
     Ok(Diagnosis {
         report: DiagnosisReport {
             verdict,
@@ -789,7 +787,8 @@ fn drive(file: &Path, progress: &(dyn Fn(&str) + Sync)) -> anyhow::Result<Diagno
         rms_speed: if scales.rms_speed.is_nan() { f64::INFINITY } else { scales.rms_speed },
         ..scales
     };
-    let (verdict, verdict_reasons) = judge(&d.effect, d.structured_residual, std::iter::once(&d.parameters), &scales);
+    let (verdict, verdict_reasons) =
+        judge(&d.effect, d.structured_residual, std::iter::once(&d.parameters), &scales, None);
     Ok(Diagnosis {
         report: DiagnosisReport {
             verdict,

@@ -525,9 +525,9 @@ impl Table {
     /// one set of signal names.
     fn of_drive(m: &DriveModel) -> Table {
         let domain = m.line.domain;
-        let mut v = vec![time_row()];
+        let mut rows = Rows { v: vec![time_row()], next_vr: 1 };
         let mut push = |name: String, causality, slot, unit, description: String, constraint| {
-            float_row(&mut v, name.into(), causality, slot, unit, description.into(), constraint)
+            rows.push_if(true, name, Kind::Float64, (causality, slot, unit, description, constraint))
         };
         for (i, p) in m.parameter_list().into_iter().enumerate() {
             let constraint = if p.zero_allowed { Constraint::NonNegative } else { Constraint::Positive };
@@ -586,16 +586,16 @@ impl Table {
         }
         let derivative_state = (0..nx).map(|k| (k < n).then_some(k + n)).collect();
         let input_slots = m.inputs.len();
-        Table { variables: v, states: Vec::new(), derivative_state, nominal: vec![1.0; nx], input_slots }
+        Table { variables: rows.v, states: Vec::new(), derivative_state, nominal: vec![1.0; nx], input_slots }
     }
 
     /// The table of the controller FMU (`crate::controller`): its tunable settings, the
     /// measured speeds and references as inputs, the torque commands as outputs; no states.
     fn of_controller() -> Table {
         use crate::controller::{INPUTS, OUTPUTS, PARAMETERS};
-        let mut v = vec![time_row()];
+        let mut rows = Rows { v: vec![time_row()], next_vr: 1 };
         let mut push = |name: &'static str, causality, slot, unit, description: &'static str, constraint| {
-            float_row(&mut v, name.into(), causality, slot, unit, description.into(), constraint)
+            rows.push_if(true, name, Kind::Float64, (causality, slot, unit, description, constraint))
         };
         for (i, &(name, unit, description, constraint)) in PARAMETERS.iter().enumerate() {
             push(name, Causality::Parameter, Slot::Param(i), unit, description, constraint);
@@ -607,7 +607,7 @@ impl Table {
             push(name, Causality::Output, Slot::Command(i), "N.m", description, Constraint::Finite);
         }
         Table {
-            variables: v,
+            variables: rows.v,
             states: Vec::new(),
             derivative_state: Vec::new(),
             nominal: Vec::new(),
@@ -650,12 +650,12 @@ struct Rows {
 impl Rows {
     /// Appends the row (causality, slot, unit, description, constraint) at the next value
     /// reference if `present`; that value reference is taken either way.
-    fn push_if(
+    fn push_if<D: Into<Cow<'static, str>>>(
         &mut self,
         present: bool,
-        name: &'static str,
+        name: impl Into<Cow<'static, str>>,
         kind: Kind,
-        (causality, slot, unit, description, constraint): (Causality, Slot, &'static str, &'static str, Constraint),
+        (causality, slot, unit, description, constraint): (Causality, Slot, &'static str, D, Constraint),
     ) {
         if present {
             let (name, description) = (name.into(), description.into());
@@ -663,20 +663,6 @@ impl Rows {
         }
         self.next_vr += 1;
     }
-}
-
-/// Appends a Float64 row at the next value reference.
-fn float_row(
-    v: &mut Vec<Variable>,
-    name: Cow<'static, str>,
-    causality: Causality,
-    slot: Slot,
-    unit: &'static str,
-    description: Cow<'static, str>,
-    constraint: Constraint,
-) {
-    let vr = v.len() as u32;
-    v.push(Variable { vr, name, kind: Kind::Float64, causality, slot, unit, description, constraint });
 }
 
 fn time_row() -> Variable {

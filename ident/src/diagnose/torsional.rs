@@ -466,26 +466,19 @@ pub const COMPLIANCE_GRID_STEPS: usize = 12;
 /// Motor shares of the compliance's grid.
 pub const COMPLIANCE_GRID_SHARES: [f64; 3] = [0.3, 0.5, 0.7];
 
-/// Local minima of the compliance's grid refined per motor share in the search for equivalent
-/// solutions (the lowest first).
-pub const COMPLIANCE_MINIMA: usize = 1;
-
 /// Indices into the compliance's starts (frequency-major: [`COMPLIANCE_GRID_STEPS`] ×
-/// `COMPLIANCE_GRID_SHARES`) worth refining, given their `costs`: per motor share, the lowest
-/// [`COMPLIANCE_MINIMA`] local minima of the cost along the frequency.
-fn compliance_minima(costs: &[f64]) -> Vec<usize> {
+/// `COMPLIANCE_GRID_SHARES`) worth refining, given their `costs`: per motor share, its lowest
+/// finite point along the frequency.
+fn best_per_share(costs: &[f64]) -> Vec<usize> {
     let shares = COMPLIANCE_GRID_SHARES.len();
-    let steps = costs.len() / shares;
-    let mut out = Vec::new();
-    for s in 0..shares {
-        let at = |i: usize| costs[i * shares + s];
-        let mut minima: Vec<usize> = (0..steps)
-            .filter(|&i| at(i).is_finite() && (i == 0 || at(i - 1) >= at(i)) && (i + 1 == steps || at(i + 1) >= at(i)))
-            .collect();
-        minima.sort_by(|&a, &b| at(a).total_cmp(&at(b)));
-        out.extend(minima.into_iter().take(COMPLIANCE_MINIMA).map(|i| i * shares + s));
-    }
-    out
+    (0..shares)
+        .filter_map(|s| {
+            (s..costs.len())
+                .step_by(shares)
+                .filter(|&i| costs[i].is_finite())
+                .min_by(|&a, &b| costs[a].total_cmp(&costs[b]))
+        })
+        .collect()
 }
 
 /// Two fits whose BIC differ by at most this fit a record equally well (Kass & Raftery 1995:
@@ -1164,7 +1157,7 @@ pub fn diagnose(
                 })
                 .collect();
             let costs = super::on_two_workers(points.len(), &|k| cost_at(&points[k]));
-            seeds.extend(compliance_minima(&costs).into_iter().map(|k| points[k].clone()));
+            seeds.extend(best_per_share(&costs).into_iter().map(|k| points[k].clone()));
         }
         let fits = super::on_two_workers(seeds.len(), &|k| fit_with(effects.clone(), seeds[k].clone(), LM_ITERATIONS));
         let apart = |a: &Fit, b: &Fit| {
@@ -1232,16 +1225,11 @@ pub fn diagnose(
             .collect()
     };
 
-    // the answer's own step: its error and score (a better fit of the same effects may have
-    // replaced the selection's, above)
+    // the path ends at the answer: its error and score (a better fit of the same effects may
+    // have replaced the selection's, above)
     if let Some(last) = path.last_mut() {
-        let (mut a, mut b) = (last.effects.clone(), current.step().effects);
-        a.sort();
-        b.sort();
-        if a == b {
-            last.error = current.error();
-            last.score = current.score;
-        }
+        last.error = current.error();
+        last.score = current.score;
     }
 
     // the first round's table: every candidate beside the declared parameters
