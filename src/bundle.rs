@@ -7,8 +7,9 @@ use std::path::{Path, PathBuf};
 use ident::Sweep;
 use plant::{RigParams, Variant};
 
-use crate::rigfile::parse_rig;
 use crate::units::{Calibration, Dimension};
+use modelfile::drive::{BodyRef, DriveModelFile};
+use modelfile::rig::parse_rig;
 
 /// A bundle that cannot be used: which file, which line if known, and what is wrong.
 #[derive(Debug, thiserror::Error)]
@@ -759,14 +760,6 @@ pub struct DriveTestBundle {
     pub conversions: Vec<String>,
 }
 
-/// A body given by name or by 1-based position.
-#[derive(Deserialize)]
-#[serde(untagged)]
-enum BodyRef {
-    Name(String),
-    Position(i64),
-}
-
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct DriveFile {
@@ -784,17 +777,9 @@ struct DriveFile {
     inputs: Vec<DriveInputFile>,
     #[serde(default)]
     outputs: Vec<DriveOutputFile>,
-    /// The controller's section, read by `rigtwin mpc` (`control::mpc_section_of_file`).
+    /// The controller's section, read by `modelfile::read`.
     #[allow(dead_code)]
     mpc: Option<toml::Value>,
-}
-
-#[derive(Deserialize)]
-#[serde(deny_unknown_fields)]
-struct DriveModelFile {
-    bodies: Vec<plant::LineBody>,
-    #[serde(default)]
-    couplings: Vec<plant::Coupling>,
 }
 
 #[derive(Deserialize)]
@@ -1290,72 +1275,6 @@ fn common_time_base(
         grid[grid.len() - 1]
     );
     Ok((grid, Some(note)))
-}
-
-/// Reads a drive model: a `kind = "drive_model"` file (as `rigtwin diagnose --write-model`
-/// writes it: `domain`, `[model]` bodies and couplings, `[[inputs]]` with `body` by name or
-/// 1-based position, `[[effects]]` with 1-based `body`/`coupling`/`input`) or a `drive_test`
-/// bundle's declared model (its data are not read).
-pub fn load_drive_model(file: &Path) -> Result<plant::DriveModel, BundleError> {
-    #[derive(Deserialize)]
-    #[serde(deny_unknown_fields)]
-    struct Input {
-        #[allow(dead_code)]
-        column: Option<String>,
-        body: BodyRef,
-        #[allow(dead_code)]
-        unit: Option<String>,
-        #[allow(dead_code)]
-        gain: Option<f64>,
-        #[allow(dead_code)]
-        offset: Option<f64>,
-    }
-    #[derive(Deserialize)]
-    struct ModelFile {
-        kind: String,
-        domain: plant::Domain,
-        model: DriveModelFile,
-        #[serde(default)]
-        inputs: Vec<Input>,
-        #[serde(default)]
-        effects: Vec<plant::Effect>,
-    }
-    let text = read_toml(file)?;
-    let raw: ModelFile = toml::from_str(&text).map_err(|e| error(file, None, e.to_string().trim_end().to_string()))?;
-    if raw.kind != "drive_model" && raw.kind != "drive_test" {
-        return Err(error(
-            file,
-            None,
-            format!("`kind` = \"{}\": expected \"drive_model\" or \"drive_test\"", raw.kind),
-        ));
-    }
-    if raw.kind == "drive_test" && !raw.effects.is_empty() {
-        return Err(error(file, None, "`effects` belong in a drive_model file, not in a drive_test bundle"));
-    }
-    let line = plant::Line { domain: raw.domain, bodies: raw.model.bodies, couplings: raw.model.couplings };
-    line.validate().map_err(|e| error(file, None, e.to_string()))?;
-    let n = line.bodies.len();
-    let mut inputs = Vec::with_capacity(raw.inputs.len());
-    for (k, i) in raw.inputs.iter().enumerate() {
-        let at = match &i.body {
-            BodyRef::Name(name) => line.body(name),
-            BodyRef::Position(p) => usize::try_from(*p).ok().filter(|&p| (1..=n).contains(&p)).map(|p| p - 1),
-        };
-        inputs.push(at.ok_or_else(|| {
-            error(file, None, format!("`inputs[{}].body`: expected a body's name or its position 1..={n}", k + 1))
-        })?);
-    }
-    let mut effects = Vec::with_capacity(raw.effects.len());
-    for (k, e) in raw.effects.iter().enumerate() {
-        let (i, what) = e.element_index();
-        let i = i
-            .checked_sub(1)
-            .ok_or_else(|| error(file, None, format!("`effects[{}].{what}` = 0: positions are 1-based", k + 1)))?;
-        effects.push(e.at_index(i));
-    }
-    let m = plant::DriveModel { line, inputs, effects };
-    m.validate().map_err(|e| error(file, None, e.to_string()))?;
-    Ok(m)
 }
 
 /// The `kind` of the bundle `file` (torsional_sweep, bearing_shake, drive_test), read before

@@ -18,14 +18,14 @@ pub const MAX_DURATION_S: f64 = 120.0;
 /// Every this many steps the real-time first input is compared with the exact optimum.
 pub const CHECK_EVERY: usize = 25;
 
-pub use mpc::rig::Prediction;
+pub use mpc::Prediction;
 
 /// The prediction model of `params` (see [`Prediction`]); a drive model is refused.
 pub fn prediction(params: &rigtwin_fmu::FmuParams) -> anyhow::Result<Prediction> {
     if params.drive.is_some() {
         anyhow::bail!("a drive model: the MPC runs on the paper rig's powertrain only (give a rig file)");
     }
-    Ok(mpc::rig::prediction(&params.powertrain, params.variant, &params.effects, 1e-3)?)
+    Ok(mpc::prediction::prediction(&params.powertrain, params.variant, &params.effects, 1e-3)?)
 }
 
 /// The rig as the FMU integrates it (`rigtwin_fmu::model::Model`: exact ZOH pieces split at the
@@ -1034,15 +1034,4 @@ pub fn plot_drive(target: &crate::files::Target, run: &DriveRun, domain: plant::
         series: (0..run.input_names.len()).map(|j| (run.input_names[j].clone(), of(&run.inputs, j))).collect(),
     });
     lines(target, "rigtwin mpc: reference step on the drive model", &panels)
-}
-
-/// The `[mpc]` section of a model file (empty when it has none); an unknown key or a wrong type
-/// is named with the file.
-pub fn mpc_section_of_file(file: &std::path::Path) -> anyhow::Result<mpc::MpcSection> {
-    let text = crate::files::read_text(file).map_err(|e| anyhow::anyhow!("{}: {}", file.display(), e.message))?;
-    let table: toml::Table = toml::from_str(&text).map_err(|e| anyhow::anyhow!("{}: {e}", file.display()))?;
-    match table.get("mpc") {
-        None => Ok(mpc::MpcSection::default()),
-        Some(v) => v.clone().try_into().map_err(|e| anyhow::anyhow!("{}: [mpc]: {e}", file.display())),
-    }
 }

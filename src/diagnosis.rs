@@ -845,7 +845,7 @@ pub fn drive_model_toml(m: &plant::DriveModel, b: &crate::bundle::DriveTestBundl
     // the controller's input bounds: the bundle's own [mpc] section, else the record's peak
     // |input| (what the actuators reached), so that `rigtwin mpc --params` takes the model as
     // written; the file says which
-    let mut section = crate::control::mpc_section_of_file(&b.file)?;
+    let mut section = modelfile::read(&b.file)?.mpc;
     let derived = section.input_max.is_none();
     if derived {
         section.input_max = Some(b.input_data.iter().map(|u| u.iter().fold(0.0_f64, |a, v| a.max(v.abs()))).collect());

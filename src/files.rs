@@ -8,73 +8,11 @@ use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicU64, Ordering};
 
-/// Largest TOML file read (a rig file or a bundle's header), bytes.
-pub const MAX_TEXT_BYTES: u64 = 16 << 20;
 /// Largest data file read (a CSV record), bytes: 4 GiB, far above a 200 s, 10 kHz, 8-channel
 /// record in CSV (≈ 0.3 GB).
 pub const MAX_DATA_BYTES: u64 = 4 << 30;
 
-/// An input that cannot be read: the file and what is wrong with it (shown as "FILE: message";
-/// a caller that names the file itself takes `message`).
-#[derive(Debug, thiserror::Error)]
-#[error("{}: {message}", path.display())]
-pub struct InputError {
-    /// The file.
-    pub path: PathBuf,
-    /// What is wrong, without the file's name.
-    pub message: String,
-}
-
-/// Checks that `path` is a regular file of at most `max_bytes`.
-pub fn check_input(path: &Path, max_bytes: u64) -> Result<(), InputError> {
-    let fail = |message: String| InputError { path: path.to_path_buf(), message };
-    if path.as_os_str().is_empty() {
-        return Err(fail("an empty file name was given".into()));
-    }
-    let meta = std::fs::metadata(path).map_err(|e| fail(format!("cannot read: {e}")))?;
-    if !meta.is_file() {
-        return Err(fail(format!("not a regular file ({}): expected a file to read", kind(&meta))));
-    }
-    if meta.len() > max_bytes {
-        return Err(fail(format!("{} bytes is more than the {max_bytes} bytes such a file may have", meta.len())));
-    }
-    Ok(())
-}
-
-/// Reads a text input (TOML), checked first.
-pub fn read_text(path: &Path) -> Result<String, InputError> {
-    check_input(path, MAX_TEXT_BYTES)?;
-    std::fs::read_to_string(path)
-        .map_err(|e| InputError { path: path.to_path_buf(), message: format!("cannot read: {e}") })
-}
-
-#[cfg(unix)]
-fn kind(meta: &std::fs::Metadata) -> &'static str {
-    use std::os::unix::fs::FileTypeExt;
-    let t = meta.file_type();
-    if t.is_dir() {
-        "a directory"
-    } else if t.is_char_device() {
-        "a character device"
-    } else if t.is_block_device() {
-        "a block device"
-    } else if t.is_fifo() {
-        "a FIFO"
-    } else if t.is_socket() {
-        "a socket"
-    } else {
-        "not a regular file"
-    }
-}
-
-#[cfg(not(unix))]
-fn kind(meta: &std::fs::Metadata) -> &'static str {
-    if meta.is_dir() {
-        "a directory"
-    } else {
-        "not a regular file"
-    }
-}
+pub use modelfile::input::{check_input, file_kind, read_text, InputError, MAX_TEXT_BYTES};
 
 #[cfg(unix)]
 fn is_char_device(meta: &std::fs::Metadata) -> bool {
@@ -153,7 +91,7 @@ pub fn output(path: &Path, option: &str, inputs: &[PathBuf]) -> anyhow::Result<T
     match std::fs::metadata(&resolved) {
         Ok(meta) if meta.is_file() => {}
         Ok(meta) if is_char_device(&meta) => return Ok(Target::Device(resolved)),
-        Ok(meta) => anyhow::bail!("{}: {}; expected a file to write", named(), kind(&meta)),
+        Ok(meta) => anyhow::bail!("{}: {}; expected a file to write", named(), file_kind(&meta)),
         Err(_) => {}
     }
     let dir = resolved.parent().unwrap_or(Path::new("."));

@@ -51,20 +51,19 @@ pub fn params_of_rig(rig: &Rig) -> anyhow::Result<FmuParams> {
     })
 }
 
-/// The FMU parameter set of a file given to `--params`: a drive model (`kind = "drive_model"`,
-/// as `rigtwin diagnose --write-model` writes it for a drive test), a `drive_test` bundle's
-/// declared model, or a rig file (any other file: the paper rig's structure with its values).
+/// The FMU parameter set of a file given to `--params` (`modelfile::read`): a drive model
+/// (`kind = "drive_model"`, as `rigtwin diagnose --write-model` writes it for a drive test), a
+/// `drive_test` bundle's declared model, or a rig file (any other file: the paper rig's
+/// structure with its values).
 pub fn params_of_file(file: &Path) -> anyhow::Result<FmuParams> {
-    let text = crate::files::read_text(file).map_err(|e| anyhow::anyhow!("{}: {}", file.display(), e.message))?;
-    let kind = toml::from_str::<toml::Table>(&text)
-        .ok()
-        .and_then(|t| t.get("kind").and_then(|k| k.as_str()).map(str::to_string));
-    match kind.as_deref() {
-        Some("drive_model" | "drive_test") => {
-            let drive = crate::bundle::load_drive_model(file)?;
-            Ok(FmuParams { drive: Some(drive), ..FmuParams::default() })
-        }
-        _ => params_of_rig(&crate::rigfile::load_rig(file)?),
+    params_of_model(&modelfile::read(file)?.model)
+}
+
+/// The FMU parameter set of a model read from a file.
+pub fn params_of_model(model: &modelfile::Model) -> anyhow::Result<FmuParams> {
+    match model {
+        modelfile::Model::Drive(drive) => Ok(FmuParams { drive: Some(drive.clone()), ..FmuParams::default() }),
+        modelfile::Model::Rig(rig) => params_of_rig(rig),
     }
 }
 

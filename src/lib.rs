@@ -10,5 +10,4 @@ pub mod identification;
 pub mod plot;
 pub mod progress;
 pub mod report;
-pub mod rigfile;
 pub mod units;

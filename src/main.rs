@@ -5,11 +5,11 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 use ident::{DesignSettings, ModelChoice, ParametriseSettings};
+use modelfile::rig::load_rig;
 use plant::{paper, Rig, Variant};
 use rigtwin::files::{Outputs, Target};
 use rigtwin::identification::{self, FrequencyMethod, Source};
 use rigtwin::report::{self, ModelKind};
-use rigtwin::rigfile::load_rig;
 
 /// `print!` that does not panic when stdout is closed early (`rigtwin ... | head`): what
 /// cannot be written is dropped, as with any command-line tool whose reader has gone.
@@ -542,13 +542,12 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             let export_qp = export_qp.map(|f| outs.file(&f, "--export-qp")).transpose()?;
             let json = json.map(|f| outs.file(&f, "--json")).transpose()?;
             let model_name = params.as_ref().map_or("the embedded rig".to_string(), |f| f.display().to_string());
-            let p = match &params {
-                Some(f) => rigtwin::fmu_package::params_of_file(f)?,
-                None => rigtwin_fmu::FmuParams::default(),
-            };
-            let section = match &params {
-                Some(f) => rigtwin::control::mpc_section_of_file(f)?,
-                None => mpc::MpcSection::default(),
+            let (p, section) = match &params {
+                Some(f) => {
+                    let file = modelfile::read(f)?;
+                    (rigtwin::fmu_package::params_of_model(&file.model)?, file.mpc)
+                }
+                None => (rigtwin_fmu::FmuParams::default(), mpc::MpcSection::default()),
             };
             let tuning = rigtwin::control::Tuning {
                 blocks,

@@ -70,7 +70,7 @@ fn reduce_json_contract_is_table_1() {
 #[test]
 fn shipped_rig_file_is_the_embedded_default() {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("rigs/paper.toml");
-    let rig = rigtwin::rigfile::load_rig(&path).unwrap();
+    let rig = modelfile::rig::load_rig(&path).unwrap();
     let default = plant::paper::rig();
     assert_eq!(rig.name, default.name);
     assert_eq!(rig.variant, default.variant);

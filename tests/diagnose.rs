@@ -441,7 +441,7 @@ fn diagnose_bundle(name: &str) -> serde_json::Value {
         assert!(c["effect"].is_string() && c["error_after"].is_number() && c["score"].is_number());
     }
     // the written model is a rig file the rest of rigtwin reads
-    rigtwin::rigfile::load_rig(&model).unwrap();
+    modelfile::rig::load_rig(&model).unwrap();
     v
 }
 
@@ -548,7 +548,7 @@ fn fmu_reproduces_the_diagnosis(truth: Truth, seed: u64, effect: &str) {
     assert!(out.status.success(), "rigtwin fmu: {}", String::from_utf8_lossy(&out.stderr));
 
     // start in the written model's steady state under the first torque sample
-    let rig = rigtwin::rigfile::load_rig(&model).unwrap();
+    let rig = modelfile::rig::load_rig(&model).unwrap();
     let p = plant::effects::Powertrain::new(&rig.model, rig.variant, &rig.effects).unwrap();
     // the measured initial speed, as the diagnosis starts its simulation: about 0 Nm with play
     // the response depends on the start (a speed 1e-4 rad/s off is a drag torque of 5e-5 Nm

@@ -153,7 +153,7 @@ proptest! {
         for m in &ms {
             text = String::from_utf8_lossy(&apply(&text, m)).into_owned();
         }
-        if let Ok(rig) = rigtwin::rigfile::parse_rig(&text, Path::new("rig.toml")) {
+        if let Ok(rig) = modelfile::rig::parse_rig(&text, Path::new("rig.toml")) {
             prop_assert!(rig.model.validate("model").is_ok());
         }
     }
@@ -267,7 +267,7 @@ proptest! {
         }
         std::fs::write(d.join("b.toml"), toml).unwrap();
         std::fs::write(d.join("bench_gear.csv"), head(&shared("bench_gear.csv"), 2000)).unwrap();
-        if let Ok(m) = rigtwin::bundle::load_drive_model(&d.join("b.toml")) {
+        if let Ok(m) = modelfile::drive::load_drive_model(&d.join("b.toml")) {
             prop_assert!(m.validate().is_ok());
             prop_assert!(m.line.bodies.len() <= plant::MAX_BODIES);
         }
@@ -311,7 +311,7 @@ proptest! {
         prop_assert!(rigtwin::bundle::load_torsional(&d.join("b.toml")).is_err());
         prop_assert!(rigtwin::bundle::load_bearing(&d.join("b.toml")).is_err());
         let text = String::from_utf8_lossy(&bytes);
-        let _ = rigtwin::rigfile::parse_rig(&text, Path::new("b.toml"));
+        let _ = modelfile::rig::parse_rig(&text, Path::new("b.toml"));
         let _ = std::fs::remove_dir_all(&d);
     }
 }

@@ -1,22 +1,28 @@
 /*
- * rigtwin_mpc.h — rigtwin's model-predictive controller of the open-differential rig for C and
- * real-time targets (a static library librigtwin_mpc.a and a shared library
- * librigtwin_mpc.so / .dylib / .dll, built by `cargo build --release -p rigtwin-mpc`); the link
- * lines and a minimal program are in capi/examples/minimal.c and docs/c-api.md.
+ * rigtwin_mpc.h — rigtwin's model-predictive controller for C and real-time targets (a static
+ * library librigtwin_mpc.a and a shared library librigtwin_mpc.so / .dylib / .dll, built by
+ * `cargo build --release -p rigtwin-mpc`); the link lines and a minimal program are in
+ * capi/examples/minimal.c and docs/c-api.md.
  *
- * The controller is the one `rigtwin mpc` runs: Clarabel QP on the rig's prediction model
- * (the rig file's [model] and [effects]: a dead time as input-delay states, an actuator lag and
- * a drive compliance as states; backlash left out, the prediction is linear in contact),
+ * The controller is the one `rigtwin mpc` runs, on the model file it is created from: the paper
+ * rig (its [model] and [effects]) or any drive model (a drive_model file or a drive_test
+ * bundle, with its [mpc] section: tracked and penalised signals, input bounds). Clarabel QP on
+ * the model's linearisation (dead times as input-delay states, an actuator lag and a drive
+ * compliance as states; backlash and friction left out: the prediction is linear, in contact),
  * a steady-state Kalman filter with input disturbances, sample time 1 ms.
  *
- * Signals (SI units, fixed order):
+ * Signals (SI units; rigtwin_mpc_count and rigtwin_mpc_name give each list of a controller):
+ *   measured[]   the plant outputs the controller reads (speeds: rad/s, m/s)
+ *   reference[]  the tracked outputs' references, then the tracked inputs'
+ *   commands[]   the plant's inputs to apply (N.m, N)
+ * The paper rig's lists are fixed:
  *   measured[3]  = { w_m2, w_drive, w_m3 }        speeds of load machine M2, drive, M3, rad/s
- *   reference[3] = { w_m2_ref, w_m3_ref, M_drive_ref }   load speeds rad/s, drive torque N.m
- *   torques[3]   = { M_m2, M_drive, M_m3 }        torque commands, N.m
+ *   reference[3] = { w_m2, w_m3, M_drive }        load speeds rad/s, drive torque N.m
+ *   commands[3]  = { M_m2, M_drive, M_m3 }        torque commands, N.m
  *
  * Real-time use: create and reset outside the loop (they allocate); step allocates nothing in
  * rigtwin's code (Clarabel 0.11's solve makes one small allocation per call, its timer), never
- * unwinds a Rust panic into C, and never returns a non-finite torque. Not thread-safe per
+ * unwinds a Rust panic into C, and never returns a non-finite command. Not thread-safe per
  * controller; separate controllers are independent.
  */
 #ifndef RIGTWIN_MPC_H
@@ -33,15 +39,15 @@ typedef struct rigtwin_mpc rigtwin_mpc;
 
 /* What a step did. */
 typedef enum rigtwin_mpc_status {
-    /* The QP was solved; torques[] is the first move of its plan. */
+    /* The QP was solved; commands[] is the first move of its plan. */
     RIGTWIN_MPC_OK = 0,
-    /* The solve failed or ran past its time limit: torques[] is the shifted previous plan. */
+    /* The solve failed or ran past its time limit: commands[] is the shifted previous plan. */
     RIGTWIN_MPC_FALLBACK = 1,
-    /* A measurement or reference was not finite: torques[] repeats the previous command and the
-       controller's state is unchanged. */
+    /* A measurement or reference was not finite: commands[] repeats the previous commands and
+       the controller's state is unchanged. */
     RIGTWIN_MPC_BAD_INPUT = -1,
-    /* A NULL pointer, or the controller failed internally (it then refuses every further step;
-       free it and create another). */
+    /* A NULL pointer, or the controller failed internally (it then refuses every further step
+       and repeats the last finite commands until rigtwin_mpc_reset). */
     RIGTWIN_MPC_INVALID = -2
 } rigtwin_mpc_status;
 
@@ -58,26 +64,41 @@ typedef struct rigtwin_mpc_options {
 /* Fills *options with the defaults. */
 void rigtwin_mpc_default_options(rigtwin_mpc_options *options);
 
+/* Which of a controller's signal lists. */
+typedef enum rigtwin_mpc_signals {
+    RIGTWIN_MPC_MEASURED = 0,
+    RIGTWIN_MPC_REFERENCES = 1,
+    RIGTWIN_MPC_COMMANDS = 2
+} rigtwin_mpc_signals;
+
 /*
- * Creates a controller for the parameter set in params_path: a rig file (TOML, as
- * rigs/paper.toml, or a model written by `rigtwin diagnose --write-model`) or a params.json from
- * an FMU's resources; NULL: the embedded paper rig. options NULL: the defaults. The controller
- * starts at rest (rigtwin_mpc_reset sets the operating point). On failure returns NULL and
- * writes a NUL-terminated message naming the file and field into error (error_len bytes, may
- * be 0 with error NULL).
+ * Creates a controller for the model file model_path: a rig file (TOML, as rigs/paper.toml, or a
+ * model written by `rigtwin diagnose --write-model`), a drive_model file or a drive_test bundle
+ * (its data are not read; a drive model needs [mpc] input_max); NULL: the embedded paper rig.
+ * options NULL: the defaults. The controller starts at rest (rigtwin_mpc_reset sets the
+ * operating point). On failure returns NULL and writes a NUL-terminated message naming the file
+ * and key into error (error_len bytes, may be 0 with error NULL).
  */
-rigtwin_mpc *rigtwin_mpc_create(const char *params_path, const rigtwin_mpc_options *options, char *error,
+rigtwin_mpc *rigtwin_mpc_create(const char *model_path, const rigtwin_mpc_options *options, char *error,
                                 size_t error_len);
 
-/* Restarts from steady spinning at speed_radps (every machine at that speed, the load machines
-   holding it against their drag, no drive torque). Returns RIGTWIN_MPC_OK, or
-   RIGTWIN_MPC_BAD_INPUT for a non-finite speed, RIGTWIN_MPC_INVALID for NULL. */
-rigtwin_mpc_status rigtwin_mpc_reset(rigtwin_mpc *controller, double speed_radps);
+/* Number of entries of the list `which` (a rigtwin_mpc_signals value); 0 for NULL or an unknown
+   list. */
+size_t rigtwin_mpc_count(const rigtwin_mpc *controller, int which);
 
-/* One 1 ms control step: the measurements now and the references in, the torques to apply
-   until the next step out. */
-rigtwin_mpc_status rigtwin_mpc_step(rigtwin_mpc *controller, const double measured[3], const double reference[3],
-                                    double torques[3]);
+/* The name of entry `index` of the list `which` (NUL-terminated, owned by the controller, valid
+   until it is freed), or NULL past the end. */
+const char *rigtwin_mpc_name(const rigtwin_mpc *controller, int which, size_t index);
+
+/* Restarts from steady motion at `speed` (every body at that speed, rad/s or m/s; the inputs
+   holding it against the drag). Returns RIGTWIN_MPC_OK, or RIGTWIN_MPC_BAD_INPUT for a
+   non-finite speed or one no input can hold, RIGTWIN_MPC_INVALID for NULL. */
+rigtwin_mpc_status rigtwin_mpc_reset(rigtwin_mpc *controller, double speed);
+
+/* One control step: the measurements now and the references in (rigtwin_mpc_count entries
+   each, in the order rigtwin_mpc_name gives), the commands to apply until the next step out. */
+rigtwin_mpc_status rigtwin_mpc_step(rigtwin_mpc *controller, const double *measured, const double *reference,
+                                    double *commands);
 
 /* Frees a controller (NULL is ignored). */
 void rigtwin_mpc_free(rigtwin_mpc *controller);

@@ -1,41 +1,34 @@
-//! # rigtwin-mpc — the rig's MPC behind a C API (`include/rigtwin_mpc.h`)
+//! # rigtwin-mpc — rigtwin's MPC behind a C API (`include/rigtwin_mpc.h`)
 //!
 //! A static and a shared library for C code on real-time targets (and Simulink S-functions,
-//! NI VeriStand custom devices, …): create a controller from a rig file or an FMU's
-//! `params.json`, reset it at an operating point, step it every millisecond with the measured
-//! speeds and the references, free it. The controller is `rigtwin mpc`'s
-//! (`mpc::rig::prediction` with the file's effects, `mpc::Controller`); this crate only
-//! guards the boundary: no panic crosses it (`catch_unwind` everywhere), non-finite inputs
-//! are refused, a non-finite command is never returned, `step` allocates nothing here.
+//! NI VeriStand custom devices, …): create a controller from a model file (the paper rig's
+//! file, a drive model, a `drive_test` bundle; its `[mpc]` section), ask for its signals, reset
+//! it at an operating point, step it every sample with the measurements and the references,
+//! free it. The controller is `rigtwin mpc`'s (`mpc::Design::controller`, `mpc::RealTime`, the
+//! same core as the controller FMU's); this crate only guards the boundary: no panic crosses it
+//! (`catch_unwind` everywhere), wrong pointers are refused, the core refuses non-finite inputs
+//! and never returns a non-finite command, `step` allocates nothing here. It depends on `mpc`
+//! and `modelfile` (which reads the model file) and what they need, nothing more.
 
-use std::ffi::{c_char, c_int, CStr};
+use std::ffi::{c_char, c_int, CStr, CString};
 use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::path::Path;
 
-use mpc::closed_loop::steady_spin;
-use mpc::{Controller, MpcSettings};
-use plant::statespace::StateSpace;
-use rigtwin_fmu::FmuParams;
+use modelfile::{Model, ModelFile};
+use mpc::{Design, MpcSection, MpcSettings, RealTime};
 
-/// Measured outputs, in the order of `measured[]`.
-pub const MEASURED: [&str; 3] = ["w_m2", "w_drive", "w_m3"];
-/// References, in the order of `reference[]`.
-pub const REFERENCES: [&str; 3] = ["w_m2", "w_m3", "M_drive"];
-/// Commands, in the order of `torques[]`.
-pub const COMMANDS: [&str; 3] = ["M_m2", "M_drive", "M_m3"];
+pub use mpc::Status;
 
-/// `rigtwin_mpc_status`.
+/// `rigtwin_mpc_signals`: which of a controller's signal lists.
 #[repr(C)]
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Status {
-    /// The QP was solved.
-    Ok = 0,
-    /// The shifted previous plan was applied.
-    Fallback = 1,
-    /// A measurement or reference was not finite.
-    BadInput = -1,
-    /// NULL, or the controller failed internally.
-    Invalid = -2,
+pub enum Signals {
+    /// `measured[]`: the plant outputs the controller reads.
+    Measured = 0,
+    /// `reference[]`: the tracked outputs, then the tracked inputs.
+    References = 1,
+    /// `commands[]`: the plant's inputs.
+    Commands = 2,
 }
 
 /// `rigtwin_mpc_options`.
@@ -58,121 +51,72 @@ impl Default for Options {
 }
 
 impl Options {
-    /// The controller settings these options give.
-    pub fn settings(&self) -> anyhow::Result<MpcSettings> {
-        let horizon =
-            usize::try_from(self.horizon).map_err(|_| anyhow::anyhow!("horizon {}: expected 1..1000", self.horizon))?;
+    /// The horizon, checked.
+    fn horizon(&self) -> anyhow::Result<usize> {
+        usize::try_from(self.horizon)
+            .ok()
+            .filter(|h| (1..=mpc::MAX_HORIZON).contains(h))
+            .ok_or_else(|| anyhow::anyhow!("horizon {}: expected 1..={}", self.horizon, mpc::MAX_HORIZON))
+    }
+
+    /// Applies the move blocks and the time limit to `s` and checks the result.
+    fn apply(&self, s: &mut MpcSettings) -> anyhow::Result<()> {
         let blocks = usize::try_from(self.move_blocks)
             .map_err(|_| anyhow::anyhow!("move_blocks {}: expected 0 or more", self.move_blocks))?;
-        let mut s = MpcSettings::powertrain(horizon);
-        s.move_blocks = if blocks == 0 { Vec::new() } else { mpc::exponential_blocks(horizon, blocks) };
+        s.move_blocks = if blocks == 0 { Vec::new() } else { mpc::exponential_blocks(s.horizon, blocks) };
         s.solver.time_limit_s = self.time_limit_s;
         s.validate()?;
-        Ok(s)
+        Ok(())
     }
 }
 
-/// The controller behind `rigtwin_mpc *`.
+/// The controller behind `rigtwin_mpc *`: the real-time core and its signals' names as C
+/// strings.
 pub struct RigtwinMpc {
-    controller: Controller,
-    model: StateSpace,
-    /// Model output index of each `measured[]` entry.
-    measured: [usize; 3],
-    /// Model input index of each `torques[]` entry.
-    commands: [usize; 3],
-    y: Vec<f64>,
-    last: [f64; 3],
-    failed: bool,
+    core: RealTime,
+    names: [Vec<CString>; 3],
 }
 
 impl RigtwinMpc {
-    /// The controller of parameter set `params` with `options`, at rest.
-    pub fn new(params: &FmuParams, options: &Options) -> anyhow::Result<Self> {
-        if params.drive.is_some() {
-            anyhow::bail!("a drive model: the C API's controller is the paper rig's (give a rig file)");
-        }
-        let settings = options.settings()?;
-        let p = mpc::rig::prediction(&params.powertrain, params.variant, &params.effects, settings.dt_s)?;
-        let controller = Controller::with_input_delays(&p.model, &p.input_delays_s, &settings)?;
-        if controller.reference_names() != REFERENCES {
-            anyhow::bail!("the controller's references are {:?}, not {:?}", controller.reference_names(), REFERENCES);
-        }
-        let find = |names: &[String], n: &str| {
-            names.iter().position(|x| x == n).ok_or_else(|| anyhow::anyhow!("the model has no signal `{n}`"))
+    /// The controller of the model `file` (its `[mpc]` section and `options`), at rest.
+    pub fn new(file: &ModelFile, options: &Options) -> anyhow::Result<Self> {
+        let design = match &file.model {
+            Model::Rig(rig) => Design::Rig { rig: &rig.model, variant: rig.variant, effects: &rig.effects },
+            Model::Drive(m) => Design::Drive(m),
         };
-        let (mut measured, mut commands) = ([0; 3], [0; 3]);
-        for i in 0..3 {
-            measured[i] = find(&p.model.output_names, MEASURED[i])?;
-            commands[i] = find(&p.model.input_names, COMMANDS[i])?;
-        }
-        let mut c = RigtwinMpc {
-            y: vec![0.0; p.model.output_names.len()],
-            controller,
-            model: p.model,
-            measured,
-            commands,
-            last: [0.0; 3],
-            failed: false,
+        let (prediction, mut settings) = design.controller(&file.mpc, options.horizon()?)?;
+        options.apply(&mut settings)?;
+        let core = RealTime::new(&prediction, &settings)?;
+        let c_names = |names: &[String]| -> anyhow::Result<Vec<CString>> {
+            names
+                .iter()
+                .map(|n| CString::new(n.as_str()).map_err(|_| anyhow::anyhow!("signal `{n}` holds a NUL")))
+                .collect()
         };
-        c.reset(0.0)?;
-        Ok(c)
+        let names = [c_names(core.measured_names())?, c_names(core.reference_names())?, c_names(core.command_names())?];
+        Ok(RigtwinMpc { core, names })
     }
 
-    /// The controller of the parameter file `path` (`None`: the embedded paper rig).
+    /// The controller of the model file `path` (`None`: the embedded paper rig).
     pub fn from_file(path: Option<&Path>, options: &Options) -> anyhow::Result<Self> {
-        let params = match path {
-            None => FmuParams::default(),
-            Some(p) if p.extension().is_some_and(|e| e.eq_ignore_ascii_case("json")) => {
-                let text = std::fs::read_to_string(p).map_err(|e| anyhow::anyhow!("{}: {e}", p.display()))?;
-                serde_json::from_str(&text).map_err(|e| anyhow::anyhow!("{}: {e}", p.display()))?
-            }
-            Some(p) => rigtwin::fmu_package::params_of_file(p)?,
+        let file = match path {
+            None => ModelFile { model: Model::Rig(Box::new(plant::paper::rig())), mpc: MpcSection::default() },
+            Some(p) => modelfile::read(p)?,
         };
-        Self::new(&params, options).map_err(|e| match path {
+        Self::new(&file, options).map_err(|e| match path {
             Some(p) => anyhow::anyhow!("{}: {e}", p.display()),
             None => e,
         })
     }
 
-    /// Steady spinning at `speed_radps`.
-    pub fn reset(&mut self, speed_radps: f64) -> anyhow::Result<()> {
-        if !speed_radps.is_finite() {
-            anyhow::bail!("speed {speed_radps} rad/s: expected a finite value");
-        }
-        let (x0, u0) = steady_spin(&self.model, speed_radps)?;
-        self.controller.reset(&x0, &u0);
-        self.last = self.commands.map(|j| u0[j]);
-        self.failed = false;
-        Ok(())
+    /// Number of entries in the list `which`.
+    pub fn count(&self, which: Signals) -> usize {
+        self.names[which as usize].len()
     }
 
-    /// One step (see `rigtwin_mpc_step`). Allocation-free here.
-    pub fn step(&mut self, measured: &[f64; 3], reference: &[f64; 3], torques: &mut [f64; 3]) -> Status {
-        if self.failed {
-            *torques = self.last;
-            return Status::Invalid;
-        }
-        if measured.iter().chain(reference).any(|v| !v.is_finite()) {
-            *torques = self.last;
-            return Status::BadInput;
-        }
-        for (k, &j) in self.measured.iter().enumerate() {
-            self.y[j] = measured[k];
-        }
-        let (u, info) = self.controller.step(&self.y, reference);
-        let next = self.commands.map(|j| u[j]);
-        if next.iter().any(|v| !v.is_finite()) {
-            self.failed = true;
-            *torques = self.last;
-            return Status::Invalid;
-        }
-        self.last = next;
-        *torques = next;
-        if info.fallback {
-            Status::Fallback
-        } else {
-            Status::Ok
-        }
+    /// The real-time core.
+    pub fn core(&mut self) -> &mut RealTime {
+        &mut self.core
     }
 }
 
@@ -208,11 +152,11 @@ pub unsafe extern "C" fn rigtwin_mpc_default_options(options: *mut Options) {
 /// See `rigtwin_mpc.h`.
 ///
 /// # Safety
-/// `params_path` is NULL or a NUL-terminated string; `options` NULL or valid; `error` NULL or
+/// `model_path` is NULL or a NUL-terminated string; `options` NULL or valid; `error` NULL or
 /// `error_len` writable bytes.
 #[no_mangle]
 pub unsafe extern "C" fn rigtwin_mpc_create(
-    params_path: *const c_char,
+    model_path: *const c_char,
     options: *const Options,
     error: *mut c_char,
     error_len: usize,
@@ -220,12 +164,12 @@ pub unsafe extern "C" fn rigtwin_mpc_create(
     let made = catch_unwind(AssertUnwindSafe(|| {
         // SAFETY: by the contract, NULL or valid
         let options = if options.is_null() { Options::default() } else { unsafe { *options } };
-        let path = if params_path.is_null() {
+        let path = if model_path.is_null() {
             None
         } else {
             // SAFETY: by the contract, a NUL-terminated string
-            let s = unsafe { CStr::from_ptr(params_path) };
-            Some(s.to_str().map_err(|_| anyhow::anyhow!("params_path is not UTF-8"))?.to_string())
+            let s = unsafe { CStr::from_ptr(model_path) };
+            Some(s.to_str().map_err(|_| anyhow::anyhow!("model_path is not UTF-8"))?.to_string())
         };
         RigtwinMpc::from_file(path.as_deref().map(Path::new), &options)
     }));
@@ -249,17 +193,52 @@ pub unsafe extern "C" fn rigtwin_mpc_create(
 /// # Safety
 /// `controller` is NULL or from `rigtwin_mpc_create` and not freed.
 #[no_mangle]
-pub unsafe extern "C" fn rigtwin_mpc_reset(controller: *mut RigtwinMpc, speed_radps: f64) -> Status {
+pub unsafe extern "C" fn rigtwin_mpc_count(controller: *const RigtwinMpc, which: c_int) -> usize {
+    // SAFETY: by the contract, NULL or a live controller
+    let Some(c) = (unsafe { controller.as_ref() }) else { return 0 };
+    signals(which).map_or(0, |w| c.count(w))
+}
+
+/// See `rigtwin_mpc.h`.
+///
+/// # Safety
+/// `controller` is NULL or from `rigtwin_mpc_create` and not freed.
+#[no_mangle]
+pub unsafe extern "C" fn rigtwin_mpc_name(controller: *const RigtwinMpc, which: c_int, index: usize) -> *const c_char {
+    // SAFETY: by the contract, NULL or a live controller
+    let Some(c) = (unsafe { controller.as_ref() }) else { return std::ptr::null() };
+    match signals(which).and_then(|w| c.names[w as usize].get(index)) {
+        Some(name) => name.as_ptr(),
+        None => std::ptr::null(),
+    }
+}
+
+/// The list `which` names (`rigtwin_mpc_signals`), if any.
+fn signals(which: c_int) -> Option<Signals> {
+    match which {
+        0 => Some(Signals::Measured),
+        1 => Some(Signals::References),
+        2 => Some(Signals::Commands),
+        _ => None,
+    }
+}
+
+/// See `rigtwin_mpc.h`.
+///
+/// # Safety
+/// `controller` is NULL or from `rigtwin_mpc_create` and not freed.
+#[no_mangle]
+pub unsafe extern "C" fn rigtwin_mpc_reset(controller: *mut RigtwinMpc, speed: f64) -> Status {
     // SAFETY: by the contract, NULL or a live controller
     let Some(c) = (unsafe { controller.as_mut() }) else { return Status::Invalid };
-    if !speed_radps.is_finite() {
+    if !speed.is_finite() {
         return Status::BadInput;
     }
-    match catch_unwind(AssertUnwindSafe(|| c.reset(speed_radps))) {
+    match catch_unwind(AssertUnwindSafe(|| c.core.reset(speed))) {
         Ok(Ok(())) => Status::Ok,
         Ok(Err(_)) => Status::BadInput,
         Err(_) => {
-            c.failed = true;
+            c.core.fail();
             Status::Invalid
         }
     }
@@ -268,28 +247,38 @@ pub unsafe extern "C" fn rigtwin_mpc_reset(controller: *mut RigtwinMpc, speed_ra
 /// See `rigtwin_mpc.h`.
 ///
 /// # Safety
-/// `controller` is NULL or live; the arrays are NULL or hold 3 doubles each.
+/// `controller` is NULL or live; the arrays are NULL or hold `rigtwin_mpc_count` doubles each.
 #[no_mangle]
 pub unsafe extern "C" fn rigtwin_mpc_step(
     controller: *mut RigtwinMpc,
     measured: *const f64,
     reference: *const f64,
-    torques: *mut f64,
+    commands: *mut f64,
 ) -> Status {
-    if measured.is_null() || reference.is_null() || torques.is_null() {
-        return Status::Invalid;
-    }
     // SAFETY: by the contract, NULL or a live controller
     let Some(c) = (unsafe { controller.as_mut() }) else { return Status::Invalid };
-    // SAFETY: non-NULL and, by the contract, 3 doubles each
-    let (m, r, t) = unsafe {
-        (&*(measured as *const [f64; 3]), &*(reference as *const [f64; 3]), &mut *(torques as *mut [f64; 3]))
+    let (nm, nr, nc) = (c.count(Signals::Measured), c.count(Signals::References), c.count(Signals::Commands));
+    // an empty list may come as NULL; a list with entries may not
+    let null = |p: bool, n: usize| p && n > 0;
+    if null(measured.is_null(), nm) || null(reference.is_null(), nr) || null(commands.is_null(), nc) {
+        return Status::Invalid;
+    }
+    let slice = |p: *const f64, n: usize| -> &[f64] {
+        if n == 0 {
+            &[]
+        } else {
+            // SAFETY: non-NULL and, by the contract, n doubles
+            unsafe { std::slice::from_raw_parts(p, n) }
+        }
     };
-    match catch_unwind(AssertUnwindSafe(|| c.step(m, r, t))) {
+    let (m, r) = (slice(measured, nm), slice(reference, nr));
+    // SAFETY: non-NULL (nc > 0: every model has an input) and, by the contract, nc doubles
+    let out = unsafe { std::slice::from_raw_parts_mut(commands, nc) };
+    match catch_unwind(AssertUnwindSafe(|| c.core.step(m, r, out))) {
         Ok(s) => s,
         Err(_) => {
-            c.failed = true;
-            *t = c.last;
+            c.core.fail();
+            out.copy_from_slice(c.core.commands());
             Status::Invalid
         }
     }

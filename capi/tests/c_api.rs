@@ -1,8 +1,9 @@
 //! The C API from C: `tests/c/replay.c` is compiled against `include/rigtwin_mpc.h` and linked
 //! once with the static and once with the shared library; it replays the measurements and
-//! references of a Rust closed loop — `rigtwin mpc`'s controller (`rigtwin::control::prediction`,
-//! `mpc::Controller`) on the rig with a dead time as the FMU integrates it — and must command
-//! the same torques. It also checks the API's refusals (a missing file named, NULL, NaN).
+//! references of a Rust closed loop — `rigtwin mpc`'s controller (`mpc::Controller` on the
+//! model's prediction) on the rig with a dead time and on a geared drive model, each as its FMU
+//! integrates it — and must command the same. It also checks the API's refusals (a missing
+//! file named, NULL, NaN).
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -56,6 +57,71 @@ fn compile_source(source: &str, out: &Path, link: &[&str]) {
     assert!(status.status.success(), "cc: {}", String::from_utf8_lossy(&status.stderr));
 }
 
+/// A Rust closed loop's record: the operating speed, then per step the measurements (in the
+/// C API's order: the measured outputs in model output order) and the references it gave its
+/// controller, and the commands the controller returned.
+struct Record {
+    speed: f64,
+    rows: Vec<(Vec<f64>, Vec<f64>)>,
+    commands: Vec<Vec<f64>>,
+}
+
+impl Record {
+    fn text(&self) -> String {
+        let mut t = format!("{}\n", self.speed);
+        for (m, r) in &self.rows {
+            let all: Vec<String> = m.iter().chain(r).map(|v| format!("{v:.17e}")).collect();
+            t += &(all.join(" ") + "\n");
+        }
+        t
+    }
+}
+
+/// The measured outputs' indices in model output order, as the C API lists them.
+fn measured(p: &mpc::Prediction, settings: &MpcSettings) -> Vec<usize> {
+    (0..p.model.output_names.len())
+        .filter(|&j| settings.outputs.iter().any(|o| o.name == p.model.output_names[j] && o.noise_std.is_some()))
+        .collect()
+}
+
+/// Runs the C program on `model` and `record` with both libraries: it names `names` and
+/// commands what the Rust loop commanded, to round-off.
+fn replay_in_c(dir: &Path, model: &Path, record: &Record, names: &str) {
+    let record_file = dir.join("record.txt");
+    std::fs::write(&record_file, record.text()).unwrap();
+    let lib = library_dir();
+    let stat = dir.join("replay_static");
+    compile(&stat, &[lib.join("librigtwin_mpc.a").to_str().unwrap(), "-lm", "-lpthread", "-ldl"]);
+    let shared = dir.join("replay_shared");
+    let rpath = format!("-Wl,-rpath,{}", lib.display());
+    compile(&shared, &["-L", lib.to_str().unwrap(), "-lrigtwin_mpc", &rpath, "-lm"]);
+    for exe in [stat, shared] {
+        let out = Command::new(&exe).arg(model).arg(&record_file).output().unwrap();
+        assert!(
+            out.status.success(),
+            "{}: exit {:?}: {}",
+            exe.display(),
+            out.status.code(),
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let text = String::from_utf8(out.stdout).unwrap();
+        let mut lines = text.lines();
+        assert_eq!(lines.next(), Some(names));
+        let rows: Vec<Vec<f64>> = lines.map(|l| l.split_whitespace().map(|v| v.parse().unwrap()).collect()).collect();
+        assert_eq!(rows.len(), record.commands.len());
+        let mut worst: f64 = 0.0;
+        for (row, u) in rows.iter().zip(&record.commands) {
+            assert_eq!(row[u.len()], 0.0, "status {} (0 = OK)", row[u.len()]);
+            for j in 0..u.len() {
+                worst = worst.max((row[j] - u[j]).abs());
+            }
+        }
+        // the same code on the same numbers: equal to round-off (the record is printed with
+        // 17 digits, so the C side sees the Rust side's doubles exactly)
+        assert!(worst < 1e-9, "{}: commands differ by up to {worst:e}", exe.display());
+    }
+}
+
 #[test]
 fn c_program_commands_what_the_rust_loop_commands() {
     let dir = std::env::temp_dir().join(format!("rigtwin-capi-{}", std::process::id()));
@@ -76,55 +142,63 @@ fn c_program_commands_what_the_rust_loop_commands() {
     let (x0, u0) = steady_spin(&p.model, speed).unwrap();
     c.reset(&x0, &u0);
     let mut plant = rigtwin::control::FmuPlant::new(&params, settings.dt_s, speed, &u0, &p.model.output_names).unwrap();
-    let (mut record, mut commands) = (format!("{speed}\n"), Vec::new());
+    let picked = measured(&p, &settings);
+    let mut record = Record { speed, rows: Vec::new(), commands: Vec::new() };
     for k in 0..300 {
         let y = plant.outputs().to_vec();
-        let r = [speed, speed, if k >= 50 { 40.0 } else { 0.0 }];
+        let r = vec![speed, speed, if k >= 50 { 40.0 } else { 0.0 }];
         let (u, info) = c.step(&y, &r);
         assert!(!info.fallback);
         let u = u.to_vec();
-        record += &format!("{:.17e} {:.17e} {:.17e} {} {} {}\n", y[0], y[1], y[2], r[0], r[1], r[2]);
-        commands.push(u.clone());
+        record.rows.push((picked.iter().map(|&j| y[j]).collect(), r));
+        record.commands.push(u.clone());
         plant.advance(&u).unwrap();
     }
-    assert_eq!(&p.model.output_names[..3], ["w_m2", "w_drive", "w_m3"]);
-    assert_eq!(p.model.input_names, ["M_m2", "M_drive", "M_m3"]);
-    let record_file = dir.join("record.txt");
-    std::fs::write(&record_file, record).unwrap();
+    let step = record.commands.iter().map(|u| u[1]).fold(0.0f64, f64::max);
+    assert!(step > 30.0, "the drive torque followed its step ({step} Nm)");
+    replay_in_c(
+        &dir,
+        &rig,
+        &record,
+        "measured: w_m2 w_drive w_m3 | references: w_m2 w_m3 M_drive | commands: M_m2 M_drive M_m3",
+    );
+}
 
-    let lib = library_dir();
-    let stat = dir.join("replay_static");
-    compile(&stat, &[lib.join("librigtwin_mpc.a").to_str().unwrap(), "-lm", "-lpthread", "-ldl"]);
-    let shared = dir.join("replay_shared");
-    let rpath = format!("-Wl,-rpath,{}", lib.display());
-    compile(&shared, &["-L", lib.to_str().unwrap(), "-lrigtwin_mpc", &rpath, "-lm"]);
-
-    for exe in [stat, shared] {
-        let out = Command::new(&exe).arg(&rig).arg(&record_file).output().unwrap();
-        assert!(
-            out.status.success(),
-            "{}: exit {:?}: {}",
-            exe.display(),
-            out.status.code(),
-            String::from_utf8_lossy(&out.stderr)
-        );
-        let text = String::from_utf8(out.stdout).unwrap();
-        let rows: Vec<Vec<f64>> =
-            text.lines().map(|l| l.split_whitespace().map(|v| v.parse().unwrap()).collect()).collect();
-        assert_eq!(rows.len(), commands.len());
-        let mut worst: f64 = 0.0;
-        for (row, u) in rows.iter().zip(&commands) {
-            assert_eq!(row[3], 0.0, "status {} (0 = OK)", row[3]);
-            for j in 0..3 {
-                worst = worst.max((row[j] - u[j]).abs());
-            }
-        }
-        // the same code on the same numbers: equal to round-off (the record is printed with
-        // 17 digits, so the C side sees the Rust side's doubles exactly)
-        assert!(worst < 1e-9, "{}: torques differ by up to {worst:e} Nm", exe.display());
-        let step = commands.iter().map(|u| u[1]).fold(0.0f64, f64::max);
-        assert!(step > 30.0, "the drive torque followed its step ({step} Nm)");
+/// A drive model through the same API: the gear bench example (motor – shaft – hub – 3:1 gear –
+/// load, its `[mpc]` section bounding the motor torque at 2 N·m) closed in Rust as
+/// `rigtwin mpc --params` closes it (the model integrated as its FMU integrates it), the load
+/// speed's reference stepping to 10 rad/s at 50 ms; the C program names the model's signals and
+/// commands the same motor torques.
+#[test]
+fn c_program_controls_a_drive_model_as_the_rust_loop_does() {
+    let dir = std::env::temp_dir().join(format!("rigtwin-capi-drive-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let bench = Path::new(env!("CARGO_MANIFEST_DIR")).join("../examples/gear_bench/bench.toml");
+    let file = modelfile::read(&bench).unwrap();
+    let modelfile::Model::Drive(model) = &file.model else { panic!("a drive model") };
+    let p = mpc::prediction::drive_prediction(model).unwrap();
+    let mut settings = file.mpc.drive_settings(&p.model.input_names, &p.model.output_names, 50).unwrap();
+    settings.solver.time_limit_s = 1.0;
+    let mut c = Controller::with_input_delays(&p.model, &p.input_delays_s, &settings).unwrap();
+    let x0 = nalgebra::DVector::zeros(p.model.nstates());
+    c.reset(&x0, &[0.0]);
+    let mut plant = rigtwin::control::DrivePlant::new(model, settings.dt_s, &p.model.output_names).unwrap();
+    let picked = measured(&p, &settings);
+    let mut record = Record { speed: 0.0, rows: Vec::new(), commands: Vec::new() };
+    for k in 0..300 {
+        let y = plant.outputs().to_vec();
+        let r = vec![if k >= 50 { 10.0 } else { 0.0 }];
+        let (u, info) = c.step(&y, &r);
+        assert!(!info.fallback);
+        let u = u.to_vec();
+        record.rows.push((picked.iter().map(|&j| y[j]).collect(), r));
+        record.commands.push(u.clone());
+        plant.advance(&u).unwrap();
     }
+    // the motor pushes the load towards its new speed, within its 2 N·m bound
+    let peak = record.commands.iter().map(|u| u[0]).fold(0.0f64, f64::max);
+    assert!(peak > 0.5 && peak <= 2.0 + 1e-9, "motor torque peak {peak} N m");
+    replay_in_c(&dir, &bench, &record, "measured: w_motor w_hub w_load | references: w_load | commands: M_motor");
 }
 
 /// The Rust side of the boundary: NULL, a bad file and a NaN are refused with statuses and
@@ -151,6 +225,13 @@ fn refusals_at_the_boundary() {
     let c = unsafe { rigtwin_mpc_create(std::ptr::null(), std::ptr::null(), std::ptr::null_mut(), 0) };
     assert!(!c.is_null());
     let (m, r, mut t) = ([10.0, 10.0, 10.0], [10.0, 10.0, f64::INFINITY], [0.0; 3]);
+    // SAFETY: live controller
+    unsafe {
+        assert_eq!(rigtwin_mpc_count(c, Signals::Measured as i32), 3);
+        let name = std::ffi::CStr::from_ptr(rigtwin_mpc_name(c, Signals::Commands as i32, 1));
+        assert_eq!(name.to_str().unwrap(), "M_drive");
+        assert!(rigtwin_mpc_name(c, Signals::Commands as i32, 3).is_null());
+    }
     // SAFETY: live controller, arrays of 3
     unsafe {
         assert_eq!(rigtwin_mpc_reset(c, 10.0), Status::Ok);

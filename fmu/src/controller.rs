@@ -167,8 +167,8 @@ impl ControllerMachine {
     pub fn new(p: &FmuParams) -> Result<ControllerMachine, String> {
         let spec = p.controller.as_ref().ok_or("the parameter set has no controller")?;
         let settings = spec.settings()?;
-        let pred =
-            mpc::rig::prediction(&p.powertrain, p.variant, &p.effects, settings.dt_s).map_err(|e| e.to_string())?;
+        let pred = mpc::prediction::prediction(&p.powertrain, p.variant, &p.effects, settings.dt_s)
+            .map_err(|e| e.to_string())?;
         let controller =
             Controller::with_input_delays(&pred.model, &pred.input_delays_s, &settings).map_err(|e| e.to_string())?;
         let refs = controller.reference_names();

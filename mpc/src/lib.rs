@@ -14,7 +14,9 @@
 //! - [`controller`]: one allocation-free step; the shifted previous plan when a solve fails.
 //! - [`closed_loop`]: simulation against a plant, the PI baseline, step figures.
 //! - [`riccati`]: the discrete Riccati equation (`dare`).
-//! - [`rig`]: the paper rig with its effects as a prediction model.
+//! - [`prediction`]: any model (the paper rig with its effects, a drive model) as a
+//!   prediction model with its `[mpc]` section's settings.
+//! - [`realtime`]: the core a real-time target runs (the C library, the controller FMU).
 #![warn(missing_docs)]
 
 pub mod alloc_counter;
@@ -23,14 +25,17 @@ pub mod controller;
 pub mod error;
 pub mod estimator;
 pub mod model;
+pub mod prediction;
 pub mod qp;
+pub mod realtime;
 pub mod riccati;
-pub mod rig;
 pub mod settings;
 pub mod solver;
 
 pub use controller::{Controller, StepInfo};
 pub use error::{MpcError, Result};
+pub use prediction::{Design, Prediction};
+pub use realtime::{RealTime, Status};
 pub use settings::{
     exponential_blocks, Formulation, InputSettings, MpcSection, MpcSettings, OutputSettings, SolverSettings,
     MAX_HORIZON,

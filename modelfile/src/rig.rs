@@ -59,20 +59,12 @@
 //! ```
 
 use serde::Deserialize;
-use std::path::{Path, PathBuf};
+use std::path::Path;
+
+use crate::ModelFileError;
 
 use plant::segment::{STEEL_DENSITY_KG_PER_M3, STEEL_SHEAR_MODULUS_PA};
 use plant::{bodies_from_segments, AdditionalSpring, Body, Rig, RigChain, RigParams, Segment, Variant};
-
-/// A rig file that cannot be used: which file, and what is wrong where.
-#[derive(Debug, thiserror::Error)]
-#[error("{}: {message}", file.display())]
-pub struct RigFileError {
-    /// The file.
-    pub file: PathBuf,
-    /// What is wrong, naming the line (syntax, unknown or missing keys) or the key (values).
-    pub message: String,
-}
 
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -99,7 +91,7 @@ struct RigFile {
     bearing: Option<plant::BearingModel>,
     #[serde(default)]
     effects: plant::effects::DriveEffects,
-    /// The controller's section, read by `rigtwin mpc` (`control::mpc_section_of_file`).
+    /// The controller's section, read by [`crate::read`].
     #[allow(dead_code)]
     mpc: Option<toml::Value>,
 }
@@ -231,8 +223,8 @@ fn bodies(list: Vec<BodyFile>, key: &str) -> Result<Vec<Body>, String> {
 }
 
 /// Parses a rig description; `file` only names the source in errors.
-pub fn parse_rig(text: &str, file: &Path) -> Result<Rig, RigFileError> {
-    let err = |message: String| RigFileError { file: file.to_path_buf(), message };
+pub fn parse_rig(text: &str, file: &Path) -> Result<Rig, ModelFileError> {
+    let err = |message: String| ModelFileError { file: file.to_path_buf(), message };
     let toml_err = |e: toml::de::Error| err(e.to_string().trim_end().to_string());
     // A bundle of another kind would fail on its first foreign key; say what it is instead.
     #[derive(Deserialize)]
@@ -290,9 +282,9 @@ pub fn parse_rig(text: &str, file: &Path) -> Result<Rig, RigFileError> {
 }
 
 /// Reads and parses a rig file.
-pub fn load_rig(file: &Path) -> Result<Rig, RigFileError> {
+pub fn load_rig(file: &Path) -> Result<Rig, ModelFileError> {
     let text =
-        crate::files::read_text(file).map_err(|e| RigFileError { file: file.to_path_buf(), message: e.message })?;
+        crate::input::read_text(file).map_err(|e| ModelFileError { file: file.to_path_buf(), message: e.message })?;
     parse_rig(&text, file)
 }
 
