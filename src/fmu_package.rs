@@ -127,58 +127,54 @@ pub fn package(p: &FmuParams, lib: &[u8], targets: &[Target; 2]) -> anyhow::Resu
     Ok(())
 }
 
-/// The closed loop's connections: (plant output, controller input) and (controller output,
-/// plant input) — the one description both `rigtwin-closed-loop.ssp` and the tests' masters use.
-pub const LOOP_CONNECTIONS: [(&str, &str, &str, &str); 6] = [
-    ("plant", "w_m2", "controller", "w_m2"),
-    ("plant", "w_drive", "controller", "w_drive"),
-    ("plant", "w_m3", "controller", "w_m3"),
-    ("controller", "M_m2", "plant", "M_m2"),
-    ("controller", "M_drive", "plant", "M_drive"),
-    ("controller", "M_m3", "plant", "M_m3"),
-];
+/// The closed loop's connections, each (from element, its connector, to element, its connector):
+/// every measurement from the plant's output of that name to the controller's input, every
+/// command from the controller's output to the plant's input of that name — the one description
+/// both `rigtwin-closed-loop.ssp` and the tests' masters use. Refused when the plant lacks one
+/// of the controller's signals.
+pub fn loop_connections(plant: &FmuParams, controller: &FmuParams) -> anyhow::Result<Vec<[String; 4]>> {
+    let spec = controller.controller.as_ref().ok_or_else(|| anyhow::anyhow!("the second FMU is not a controller"))?;
+    if plant.controller.is_some() {
+        anyhow::bail!("the plant is a controller FMU");
+    }
+    let ports = spec.ports(controller).map_err(|e| anyhow::anyhow!("the controller: {e}"))?;
+    let table = rigtwin_fmu::variables::Table::new(plant);
+    let has = |name: &str, causality: rigtwin_fmu::variables::Causality| {
+        table.variables.iter().any(|v| v.name == name && v.causality == causality)
+    };
+    let mut connections = Vec::new();
+    for q in &ports.inputs[..ports.measured] {
+        if !has(&q.name, rigtwin_fmu::variables::Causality::Output) {
+            anyhow::bail!("the controller measures `{}`, which the plant does not output", q.name);
+        }
+        connections.push(["plant".into(), q.name.to_string(), "controller".into(), q.name.to_string()]);
+    }
+    for q in &ports.outputs {
+        if !has(&q.name, rigtwin_fmu::variables::Causality::Input) {
+            anyhow::bail!("the controller commands `{}`, which is not an input of the plant", q.name);
+        }
+        connections.push(["controller".into(), q.name.to_string(), "plant".into(), q.name.to_string()]);
+    }
+    Ok(connections)
+}
 
-/// Writes `rigtwin-closed-loop.ssp` ([`SSP_NAME`]) to `target`: an SSP 1.0 archive with the FMI 2 FMUs of the
-/// plant `plant` and the controller `controller` (as `resources/plant.fmu` and
-/// `resources/controller.fmu`) and their connections ([`LOOP_CONNECTIONS`]), which OSP libcosim
-/// and other SSP importers load as one system. The references (`w_m2_ref`, `w_m3_ref`,
-/// `M_drive_ref`) stay open inputs of the controller.
+/// Writes `rigtwin-closed-loop.ssp` ([`SSP_NAME`]) to `target`: an SSP 1.0 archive with the FMI 2
+/// FMUs of the plant `plant` and the controller `controller` (as `resources/plant.fmu` and
+/// `resources/controller.fmu`) and their connections ([`loop_connections`]), which OSP libcosim
+/// and other SSP importers load as one system. The references (the rig's `w_m2_ref`,
+/// `w_m3_ref`, `M_drive_ref`) stay open inputs of the controller.
 pub fn closed_loop_ssp(plant: &FmuParams, controller: &FmuParams, lib: &[u8], target: &Target) -> anyhow::Result<()> {
     rigtwin_fmu::check(plant)
         .map_err(|e| anyhow::anyhow!("the plant's parameter set does not describe a model: {e}"))?;
-    if plant.drive.is_some() || plant.controller.is_some() || controller.controller.is_none() {
-        anyhow::bail!("the closed loop connects the paper rig's plant FMU with its controller FMU");
-    }
+    let connections = loop_connections(plant, controller)?;
     let mut ssd = String::from(
         "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n<ssd:SystemStructureDescription \
          xmlns:ssc=\"http://ssp-standard.org/SSP1/SystemStructureCommon\" \
          xmlns:ssd=\"http://ssp-standard.org/SSP1/SystemStructureDescription\" version=\"1.0\" \
          name=\"rigtwin closed loop\">\n  <ssd:System name=\"rig_with_mpc\">\n    <ssd:Elements>\n",
     );
-    for (name, kinds) in [
-        (
-            "plant",
-            [
-                ("w_m2", "output"),
-                ("w_drive", "output"),
-                ("w_m3", "output"),
-                ("M_m2", "input"),
-                ("M_drive", "input"),
-                ("M_m3", "input"),
-            ],
-        ),
-        (
-            "controller",
-            [
-                ("w_m2", "input"),
-                ("w_drive", "input"),
-                ("w_m3", "input"),
-                ("M_m2", "output"),
-                ("M_drive", "output"),
-                ("M_m3", "output"),
-            ],
-        ),
-    ] {
+    for name in ["plant", "controller"] {
+        let kinds = connections.iter().map(|[from, c, _, _]| (c, if from == name { "output" } else { "input" }));
         ssd += &format!(
             "      <ssd:Component name=\"{name}\" source=\"resources/{name}.fmu\" type=\"application/x-fmu-sharedlibrary\">\n        <ssd:Connectors>\n"
         );
@@ -188,7 +184,7 @@ pub fn closed_loop_ssp(plant: &FmuParams, controller: &FmuParams, lib: &[u8], ta
         ssd += "        </ssd:Connectors>\n      </ssd:Component>\n";
     }
     ssd += "    </ssd:Elements>\n    <ssd:Connections>\n";
-    for (a, ac, b, bc) in LOOP_CONNECTIONS {
+    for [a, ac, b, bc] in &connections {
         ssd += &format!(
             "      <ssd:Connection startElement=\"{a}\" startConnector=\"{ac}\" endElement=\"{b}\" endConnector=\"{bc}\"/>\n"
         );

@@ -472,15 +472,17 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             emit(json.as_ref(), &rep, &rep.human())?;
         }
         Command::Fmu { params, out, descriptions, controller, horizon, blocks, plant } => {
-            let mut p = match &params {
-                Some(f) => rigtwin::fmu_package::params_of_file(f)?,
-                None => rigtwin_fmu::FmuParams::default(),
+            let (mut p, section) = match &params {
+                Some(f) => {
+                    let file = modelfile::read(f)?;
+                    (rigtwin::fmu_package::params_of_model(&file.model)?, file.mpc)
+                }
+                None => (rigtwin_fmu::FmuParams::default(), mpc::MpcSection::default()),
             };
             if controller {
-                if p.drive.is_some() {
-                    anyhow::bail!("--controller: the controller FMU is the paper rig's MPC; --params is a drive model");
-                }
-                p.controller = Some(rigtwin_fmu::controller::ControllerSpec::new(horizon, blocks));
+                let spec = rigtwin_fmu::controller::ControllerSpec::of_model(&p, &section, horizon, blocks);
+                let named = || params.as_ref().map_or("the embedded rig".into(), |f| f.display().to_string());
+                p.controller = Some(spec.map_err(|e| anyhow::anyhow!("--controller: {}: {e}", named()))?);
             }
             // the closed loop's plant is checked before anything is written
             let plant_params = match (&plant, controller) {
@@ -489,10 +491,8 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                 (None, false) => None,
             };
             if let Some(pl) = &plant_params {
-                if pl.drive.is_some() {
-                    anyhow::bail!("--plant: a drive model; the closed loop is the paper rig's (give a rig file)");
-                }
                 rigtwin_fmu::check(pl).map_err(|e| anyhow::anyhow!("--plant: {e}"))?;
+                rigtwin::fmu_package::loop_connections(pl, &p).map_err(|e| anyhow::anyhow!("--plant: {e}"))?;
             }
             rigtwin_fmu::check(&p).map_err(|e| anyhow::anyhow!("the parameter set does not describe a model: {e}"))?;
             // every output is checked before the first is written; none may be an input

@@ -4,18 +4,18 @@
 
 PLANT_DIR holds rigtwin-fmi3.fmu / rigtwin-fmi2.fmu (`rigtwin fmu --params TRUE`),
 CONTROLLER_DIR rigtwin-mpc-fmi3.fmu / rigtwin-mpc-fmi2.fmu (`rigtwin fmu --controller --params
-MODEL`). START.json: {"plant": {name: start value}, "speed_radps": w, "step_at": k,
-"step_nm": T, "controller": {setting: value}}. Both FMUs are validated (fmpy validate, fmutool -check), then run as
+MODEL`). START.json: {"plant": {name: start value}, "references": {name: value}, "step_at": k,
+"step": {reference: value from step k on}, "controller": {setting: value}}. Both FMUs are validated (fmpy validate, fmutool -check), then run as
 co-simulation FMUs by a small master that does what `rigtwin mpc` does in process, at every
-1 ms communication point: read the plant's speeds, set them and the references (speeds w, drive
-torque 0 then T from step k on) as the controller's inputs, read its torque commands
+1 ms communication point: read the plant's measured outputs, set them and the references (those
+of "references", then "step"'s from step k on) as the controller's inputs, read its commands
 (direct feedthrough: the controller steps when they are read), set them as the plant's inputs,
 step both (Gauss-Seidel: no delay in the loop); the connections are read from LOOP.ssp when it
 is given. With LOOP.ssp (`rigtwin fmu --controller`
 writes rigtwin-closed-loop.ssp: both FMI 2 FMUs and their connections), OSP libcosim loads the
 system from it and runs it with its fixed-step (Jacobi) master: every FMU steps on the others'
 outputs of the point before, so the plant gets the controller's command one sample late; the
-references and the start values are set as above, the drive-torque step by an override
+references and the start values are set as above, the reference step by an override
 manipulator.
 """
 import json
@@ -35,7 +35,17 @@ dt = 1e-3
 fmutool = Path(sys.executable).parent / "fmutool"
 report = {"validate": {}, "fmutool": {}}
 
-REFERENCES = ["w_m2_ref", "w_m3_ref", "M_drive_ref"]
+REFERENCES = list(start["references"].keys())
+
+
+def references(k):
+    """The references at communication point k."""
+    now = dict(start["references"])
+    if k >= start["step_at"]:
+        now.update(start["step"])
+    return [now[n] for n in REFERENCES]
+
+
 if ssp is not None:
     # the connections as the SSP describes them, the one description of the loop
     import xml.etree.ElementTree as ET
@@ -51,7 +61,7 @@ TO_CONTROLLER = [(a, b) for (e, a, _, b) in links if e == "plant"]
 TO_PLANT = [(a, b) for (e, a, _, b) in links if e == "controller"]
 MEASURED = [a for a, _ in TO_CONTROLLER]
 COMMANDS = [a for a, _ in TO_PLANT]
-assert len(MEASURED) == 3 and len(COMMANDS) == 3, links
+assert MEASURED and COMMANDS, links
 
 
 def open_fmu(path, name):
@@ -91,17 +101,15 @@ for version in ("fmi3", "fmi2"):
     pput(names, [start["plant"][n] for n in names])
     settings = list(start.get("controller", {}).keys())
     cput(settings, [start["controller"][n] for n in settings])
-    w = start["speed_radps"]
     speeds = pget(MEASURED)
-    cput([b for _, b in TO_CONTROLLER] + REFERENCES, list(speeds) + [w, w, 0.0])
+    cput([b for _, b in TO_CONTROLLER] + REFERENCES, list(speeds) + references(0))
     plant.exitInitializationMode()
     ctrl.exitInitializationMode()
     rows = []
     t = 0.0
     for k in range(steps):
         speeds = pget(MEASURED)
-        drive_ref = start["step_nm"] if k >= start["step_at"] else 0.0
-        cput([b for _, b in TO_CONTROLLER] + REFERENCES, list(speeds) + [w, w, drive_ref])
+        cput([b for _, b in TO_CONTROLLER] + REFERENCES, list(speeds) + references(k))
         torques = cget(COMMANDS)
         pput([b for _, b in TO_PLANT], torques)
         rows.append(list(speeds) + list(torques))
@@ -124,20 +132,20 @@ if ssp is not None:
     plant, ctrl = index["plant"], index["controller"]
     for name, value in start["plant"].items():
         ex.real_initial_value(plant, refs[plant][name], value)
-    w = start["speed_radps"]
     for a, b in TO_CONTROLLER:
-        ex.real_initial_value(ctrl, refs[ctrl][b], start["plant"][a])
-    for name, value in [("w_m2_ref", w), ("w_m3_ref", w), ("M_drive_ref", 0.0)] + list(start.get("controller", {}).items()):
+        ex.real_initial_value(ctrl, refs[ctrl][b], start["plant"].get(a, 0.0))
+    for name, value in list(start["references"].items()) + list(start.get("controller", {}).items()):
         ex.real_initial_value(ctrl, refs[ctrl][name], value)
     observer = CosimObserver.create_last_value()
     ex.add_observer(observer)
     override = CosimManipulator.create_override()
     ex.add_manipulator(override)
     rows = []
-    speeds = [start["plant"][n] for n in MEASURED]
+    speeds = [start["plant"].get(n, 0.0) for n in MEASURED]
     for k in range(steps):
         if k == start["step_at"]:
-            override.slave_real_values(ctrl, [refs[ctrl]["M_drive_ref"]], [start["step_nm"]])
+            stepped = list(start["step"].items())
+            override.slave_real_values(ctrl, [refs[ctrl][n] for n, _ in stepped], [v for _, v in stepped])
         ex.step()
         applied = observer.last_real_values(plant, [refs[plant][n] for n in COMMANDS])
         rows.append(list(speeds) + list(applied))

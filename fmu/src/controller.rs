@@ -1,7 +1,8 @@
-//! The controller FMU: `rigtwin mpc`'s controller (`mpc::rig::prediction` of the parameter
-//! set's rig and effects, `mpc::Controller`) as a co-simulation FMU. Inputs: what the rig
-//! measures (the three speeds) and the references; outputs: the torque commands; tunable
-//! parameters: the MPC's weights, bounds and time limit. The communication step is the control
+//! The controller FMU: `rigtwin mpc`'s controller of any model (`mpc::Design::controller`, run
+//! by the real-time core `mpc::RealTime` that the C library runs too) as a co-simulation FMU.
+//! Inputs: what the plant measures (the rig's three speeds; a drive model's measured outputs)
+//! and the references; outputs: the commands (the plant's inputs); tunable parameters: the
+//! MPC's weights, bounds and time limit. The communication step is the control
 //! period. The outputs depend directly on the inputs: the step that makes them runs when they
 //! are read after the inputs of a communication point were set (or at DoStep if they are not
 //! read), so a master that reads the plant, sets the controller's inputs, reads its outputs and
@@ -10,13 +11,17 @@
 //! input before the next (Jacobi, as OSP libcosim) gets the commands of the step before: one
 //! sample of computational delay.
 
+use std::borrow::Cow;
+
 use serde::{Deserialize, Serialize};
 
 use crate::params::FmuParams;
-use crate::variables::Constraint;
-use mpc::{Controller, MpcSettings};
+use crate::variables::{unit_of, Constraint};
+use mpc::{Design, MpcSection, MpcSettings, Prediction, RealTime, Status};
+use plant::drive::{Dimension, MAX_INPUTS};
+use plant::{Domain, DriveModel};
 
-/// Inputs: (name, unit, description), in input order.
+/// The paper rig's inputs: (name, unit, description), in input order.
 pub const INPUTS: [(&str, &str, &str); 6] = [
     ("w_m2", "rad/s", "measured speed of load machine M2"),
     ("w_drive", "rad/s", "measured speed of the drive"),
@@ -26,14 +31,15 @@ pub const INPUTS: [(&str, &str, &str); 6] = [
     ("M_drive_ref", "N.m", "drive torque reference"),
 ];
 
-/// Outputs: (name, description), torques in N.m, in the prediction model's input order.
+/// The paper rig's outputs: (name, description), torques in N.m, in the prediction model's
+/// input order.
 pub const OUTPUTS: [(&str, &str); 3] = [
     ("M_m2", "torque command of load machine M2"),
     ("M_drive", "torque command of the drive"),
     ("M_m3", "torque command of load machine M3"),
 ];
 
-/// Tunable parameters: (name, unit, description, constraint), in the order of
+/// The paper rig's tunable parameters: (name, unit, description, constraint), in the order of
 /// [`ControllerSpec::values`].
 pub const PARAMETERS: [(&str, &str, &str, Constraint); 9] = [
     (
@@ -67,8 +73,43 @@ pub const PARAMETERS: [(&str, &str, &str, Constraint); 9] = [
     ),
 ];
 
-/// The controller an FMU carries: horizon and move blocks (fixed at export) and the tunable
-/// settings (start values of [`PARAMETERS`]); defaults are `mpc::MpcSettings::powertrain`'s.
+/// One variable of the controller FMU: a tunable parameter, an input or an output.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Port {
+    /// Name (structured naming convention).
+    pub name: Cow<'static, str>,
+    /// Unit.
+    pub unit: &'static str,
+    /// Description.
+    pub description: Cow<'static, str>,
+    /// The values a parameter accepts (`Finite` for inputs and outputs).
+    pub constraint: Constraint,
+}
+
+impl Port {
+    fn of(name: impl Into<Cow<'static, str>>, unit: &'static str, description: impl Into<Cow<'static, str>>) -> Port {
+        Port { name: name.into(), unit, description: description.into(), constraint: Constraint::Finite }
+    }
+}
+
+/// The controller FMU's variables, generated from its model: tunable parameters (in
+/// [`ControllerSpec::values`] order), inputs (measured, then references), outputs (commands).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Ports {
+    /// Tunable parameters.
+    pub parameters: Vec<Port>,
+    /// Inputs: the measured outputs, then the references.
+    pub inputs: Vec<Port>,
+    /// How many of the inputs are measurements.
+    pub measured: usize,
+    /// Outputs: the commands.
+    pub outputs: Vec<Port>,
+}
+
+/// The controller an FMU carries: horizon and move blocks (fixed at export), the tunable
+/// settings (start values of its parameters) and, for a drive model, its `[mpc]` section
+/// (the signals tracked, penalised and measured; the tunables override its weights and bounds).
+/// The rig's defaults are `mpc::MpcSettings::powertrain`'s.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ControllerSpec {
@@ -76,46 +117,100 @@ pub struct ControllerSpec {
     pub horizon: usize,
     /// Number of move blocks (0: every step free).
     pub move_blocks: usize,
-    /// The tunable settings, in [`PARAMETERS`] order.
+    /// The tunable settings, in the order of [`ControllerSpec::ports`]' parameters.
     pub values: Vec<f64>,
+    /// A drive model's `[mpc]` section (`None` for the paper rig).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub section: Option<MpcSection>,
+}
+
+/// The rig's tunable settings of `s`, in [`PARAMETERS`] order.
+fn rig_values(s: &MpcSettings) -> Vec<f64> {
+    let w = s.outputs.iter().find(|o| o.name == "w_m2").map_or(100.0, |o| o.weight);
+    let shaft = s.outputs.iter().find(|o| o.name == "T_short_side_shaft");
+    let (load, drive) = (&s.inputs[0], &s.inputs[1]);
+    vec![
+        w,
+        shaft.map_or(1.0, |o| o.weight),
+        shaft.and_then(|o| o.soft_max).unwrap_or(60.0),
+        drive.weight_per_nm2,
+        load.max_nm,
+        drive.max_nm,
+        load.max_rate_nm_per_s,
+        drive.max_rate_nm_per_s,
+        s.solver.time_limit_s,
+    ]
 }
 
 impl ControllerSpec {
-    /// `rigtwin mpc`'s controller with horizon `horizon` and `move_blocks` blocks.
+    /// `rigtwin mpc`'s controller of the paper rig with horizon `horizon` and `move_blocks` blocks.
     pub fn new(horizon: usize, move_blocks: usize) -> ControllerSpec {
         let s = MpcSettings::powertrain(horizon.max(1));
-        let w = s.outputs.iter().find(|o| o.name == "w_m2").map_or(100.0, |o| o.weight);
-        let shaft = s.outputs.iter().find(|o| o.name == "T_short_side_shaft");
-        let (load, drive) = (&s.inputs[0], &s.inputs[1]);
-        ControllerSpec {
-            horizon,
-            move_blocks,
-            values: vec![
-                w,
-                shaft.map_or(1.0, |o| o.weight),
-                shaft.and_then(|o| o.soft_max).unwrap_or(60.0),
-                drive.weight_per_nm2,
-                load.max_nm,
-                drive.max_nm,
-                load.max_rate_nm_per_s,
-                drive.max_rate_nm_per_s,
-                s.solver.time_limit_s,
-            ],
-        }
+        ControllerSpec { horizon, move_blocks, values: rig_values(&s), section: None }
     }
 
-    /// The settings, checked; the error names the parameter.
-    pub fn settings(&self) -> Result<MpcSettings, String> {
-        if self.values.len() != PARAMETERS.len() {
-            return Err(format!("{} controller settings for {}", self.values.len(), PARAMETERS.len()));
+    /// The controller of the model of `p` with its `[mpc]` section `section`: the rig's
+    /// weights and bounds from the section, or a drive model's section kept whole.
+    pub fn of_model(
+        p: &FmuParams,
+        section: &MpcSection,
+        horizon: usize,
+        move_blocks: usize,
+    ) -> Result<ControllerSpec, String> {
+        let spec = match &p.drive {
+            None => {
+                let s = section.rig_settings(horizon).map_err(|e| e.to_string())?;
+                ControllerSpec { horizon, move_blocks, values: rig_values(&s), section: None }
+            }
+            Some(m) => {
+                let (_, s) = Design::Drive(m).controller(section, horizon).map_err(|e| e.to_string())?;
+                let mut values = vec![drive_speed_weight(section), drive_force_weight(&s)];
+                if let Some(b) = section.force_soft_max {
+                    values.push(b);
+                }
+                values.extend(s.inputs.iter().map(|u| u.max_nm));
+                values.extend(s.inputs.iter().map(|u| u.max_rate_nm_per_s));
+                values.push(s.solver.time_limit_s);
+                ControllerSpec { horizon, move_blocks, values, section: Some(section.clone()) }
+            }
+        };
+        spec.design(p)?;
+        Ok(spec)
+    }
+
+    /// The prediction and the settings of the tunable values, checked; an error names the
+    /// parameter.
+    pub fn design(&self, p: &FmuParams) -> Result<(Prediction, MpcSettings), String> {
+        let ports = self.ports(p)?;
+        if self.values.len() != ports.parameters.len() {
+            return Err(format!("{} controller settings for {}", self.values.len(), ports.parameters.len()));
         }
-        for (v, p) in self.values.iter().zip(&PARAMETERS) {
-            p.3.check(*v).map_err(|want| format!("`{}` = {v}: expected {want}", p.0))?;
+        for (v, q) in self.values.iter().zip(&ports.parameters) {
+            q.constraint.check(*v).map_err(|want| format!("`{}` = {v}: expected {want}", q.name))?;
         }
-        let v = &self.values;
-        let mut s = MpcSettings::powertrain(self.horizon);
+        let (prediction, mut s) = match (&p.drive, &self.section) {
+            (None, _) => {
+                let s = self.rig_settings();
+                let p = mpc::prediction::prediction(&p.powertrain, p.variant, &p.effects, s.dt_s)
+                    .map_err(|e| e.to_string())?;
+                (p, s)
+            }
+            (Some(m), Some(section)) => {
+                Design::Drive(m).controller(&self.drive_section(section), self.horizon).map_err(|e| e.to_string())?
+            }
+            (Some(_), None) => return Err("a drive model's controller needs its [mpc] section".into()),
+        };
         s.move_blocks =
             if self.move_blocks == 0 { Vec::new() } else { mpc::exponential_blocks(self.horizon, self.move_blocks) };
+        s.solver.time_limit_s = *self.values.last().expect("checked above: every controller has a time limit");
+        s.validate().map_err(|e| e.to_string())?;
+        Ok((prediction, s))
+    }
+
+    /// The paper rig's settings of the [`PARAMETERS`] values.
+    fn rig_settings(&self) -> MpcSettings {
+        let v = &self.values;
+        let mut s = MpcSettings::powertrain(self.horizon);
         for o in s.outputs.iter_mut() {
             match o.name.as_str() {
                 "w_m2" | "w_m3" => o.weight = v[0],
@@ -136,26 +231,157 @@ impl ControllerSpec {
                 u.weight_per_nm2 = v[3];
             }
         }
-        s.solver.time_limit_s = v[8];
-        s.validate().map_err(|e| e.to_string())?;
-        Ok(s)
+        s
+    }
+
+    /// A drive model's section with the tunable values in place of its weights and bounds.
+    fn drive_section(&self, section: &MpcSection) -> MpcSection {
+        let v = &self.values;
+        let soft = usize::from(section.force_soft_max.is_some());
+        let m = (v.len() - 3 - soft) / 2;
+        MpcSection {
+            speed_weight: Some(v[0]),
+            force_weight: Some(v[1]),
+            force_soft_max: section.force_soft_max.map(|_| v[2]),
+            input_max: Some(v[2 + soft..2 + soft + m].to_vec()),
+            input_rate_max: Some(v[2 + soft + m..2 + soft + 2 * m].to_vec()),
+            ..section.clone()
+        }
+    }
+
+    /// The FMU's variables for the model of `p`.
+    pub fn ports(&self, p: &FmuParams) -> Result<Ports, String> {
+        let Some(m) = &p.drive else {
+            return Ok(Ports {
+                parameters: PARAMETERS
+                    .iter()
+                    .map(|&(name, unit, description, constraint)| Port {
+                        name: name.into(),
+                        unit,
+                        description: description.into(),
+                        constraint,
+                    })
+                    .collect(),
+                inputs: INPUTS.iter().map(|&(n, u, d)| Port::of(n, u, d)).collect(),
+                measured: 3,
+                outputs: OUTPUTS.iter().map(|&(n, d)| Port::of(n, "N.m", d)).collect(),
+            });
+        };
+        let section = self.section.as_ref().ok_or("a drive model's controller needs its [mpc] section")?;
+        let (prediction, s) = Design::Drive(m).controller(section, self.horizon).map_err(|e| e.to_string())?;
+        Ok(drive_ports(m, section, &prediction, &s))
     }
 }
 
-/// The controller of an instance and its lazy step.
+/// A drive model's default weight on its tracked speeds (`MpcSection::drive_settings`').
+fn drive_speed_weight(section: &MpcSection) -> f64 {
+    section.speed_weight.unwrap_or(100.0)
+}
+
+/// The weight on the penalised forces in drive settings `s` (that of any force output, else the
+/// section's default for the model's bounds).
+fn drive_force_weight(s: &MpcSettings) -> f64 {
+    let big = s.inputs.iter().map(|u| u.max_nm).fold(0.0, f64::max);
+    s.outputs.iter().find(|o| !o.tracked && o.noise_std.is_none()).map_or((30.0 / big).powi(2), |o| o.weight)
+}
+
+/// A drive model's controller FMU variables: the section's weights and bounds as tunables, its
+/// measured outputs and references as inputs, its inputs as outputs.
+fn drive_ports(m: &DriveModel, section: &MpcSection, prediction: &Prediction, s: &MpcSettings) -> Ports {
+    let domain = m.line.domain;
+    let (speed, force) = (unit_of(Dimension::Speed, domain), unit_of(Dimension::Force, domain));
+    let (force_word, rate) = match domain {
+        Domain::Rotational => ("torque", "N.m/s"),
+        Domain::Translational => ("force", "N/s"),
+    };
+    let (speed_weight, force_weight) = match domain {
+        Domain::Rotational => ("s2/rad2", "1/(N.m)2"),
+        Domain::Translational => ("s2/m2", "1/N2"),
+    };
+    let tunable = |name: String, unit, description: String, constraint| Port {
+        name: name.into(),
+        unit,
+        description: description.into(),
+        constraint,
+    };
+    let mut parameters = vec![
+        tunable(
+            "mpc.speed_weight".into(),
+            speed_weight,
+            "weight on the tracked speeds' error: cost per unit squared".into(),
+            Constraint::Positive,
+        ),
+        tunable(
+            "mpc.force_weight".into(),
+            force_weight,
+            format!("weight on the penalised coupling {force_word}s: cost per unit squared"),
+            Constraint::NonNegative,
+        ),
+    ];
+    if section.force_soft_max.is_some() {
+        parameters.push(tunable(
+            "mpc.force_soft_max".into(),
+            force,
+            format!("soft bound on |penalised coupling {force_word}|"),
+            Constraint::Positive,
+        ));
+    }
+    let inputs = &prediction.model.input_names;
+    for name in inputs {
+        parameters.push(tunable(
+            format!("mpc.input_max.{name}"),
+            force,
+            format!("hard bound on |{name}|"),
+            Constraint::Positive,
+        ));
+    }
+    for name in inputs {
+        parameters.push(tunable(
+            format!("mpc.input_rate_max.{name}"),
+            rate,
+            format!("hard bound on the rate of {name}"),
+            Constraint::Positive,
+        ));
+    }
+    parameters.push(tunable(
+        "mpc.time_limit".into(),
+        "s",
+        "wall-clock limit of one QP solve (then the shifted plan is applied)".into(),
+        Constraint::Positive,
+    ));
+    let unit_of_signal = |n: &str| if n.starts_with("w_") || n.starts_with("v_") { speed } else { force };
+    let measured = mpc::realtime::measured_outputs(&prediction.model.output_names, s);
+    let mut ports: Vec<Port> = measured
+        .iter()
+        .map(|&j| {
+            let n = &prediction.model.output_names[j];
+            Port::of(n.clone(), unit_of_signal(n), format!("measured {n}"))
+        })
+        .collect();
+    for n in s.reference_names() {
+        ports.push(Port::of(format!("{n}_ref"), unit_of_signal(&n), format!("reference of {n}")));
+    }
+    Ports {
+        parameters,
+        measured: measured.len(),
+        inputs: ports,
+        outputs: inputs.iter().map(|n| Port::of(n.clone(), force, format!("command of {n}"))).collect(),
+    }
+}
+
+/// The controller of an instance (`mpc::RealTime`) and its lazy step.
 pub struct ControllerMachine {
-    controller: Controller,
-    model: plant::statespace::StateSpace,
-    /// Model output index of each measured input (w_m2, w_drive, w_m3).
-    measured: [usize; 3],
-    /// Model input index of each output.
-    commands: [usize; 3],
-    y: Vec<f64>,
+    core: RealTime,
+    /// How many inputs are measurements (the rest are references).
+    measured: usize,
+    /// Which measured inputs are speeds (their mean is the operating point at start).
+    speeds: Vec<usize>,
     /// The commands of the last step.
-    out: [f64; 3],
+    out: [f64; MAX_INPUTS],
     /// The communication point and the inputs the last step was made at, while it is not yet
     /// committed by DoStep.
-    computed: Option<(f64, [f64; 6])>,
+    computed: Option<f64>,
+    given: Vec<f64>,
     /// The controller's state before that step (to redo it if the inputs change).
     before: Vec<f64>,
     /// Control period, s.
@@ -166,81 +392,85 @@ impl ControllerMachine {
     /// The controller of parameter set `p` (its `controller` spec), at rest.
     pub fn new(p: &FmuParams) -> Result<ControllerMachine, String> {
         let spec = p.controller.as_ref().ok_or("the parameter set has no controller")?;
-        let settings = spec.settings()?;
-        let pred = mpc::prediction::prediction(&p.powertrain, p.variant, &p.effects, settings.dt_s)
-            .map_err(|e| e.to_string())?;
-        let controller =
-            Controller::with_input_delays(&pred.model, &pred.input_delays_s, &settings).map_err(|e| e.to_string())?;
-        let refs = controller.reference_names();
-        if refs != ["w_m2", "w_m3", "M_drive"] {
-            return Err(format!("the controller's references are {refs:?}"));
+        let (prediction, settings) = spec.design(p)?;
+        let core = RealTime::new(&prediction, &settings).map_err(|e| e.to_string())?;
+        if core.command_names().len() > MAX_INPUTS {
+            return Err(format!("{} commands: at most {MAX_INPUTS}", core.command_names().len()));
         }
-        let find = |names: &[String], n: &str| names.iter().position(|x| x == n).ok_or(format!("no signal `{n}`"));
-        let (mut measured, mut commands) = ([0; 3], [0; 3]);
-        for i in 0..3 {
-            measured[i] = find(&pred.model.output_names, INPUTS[i].0)?;
-            commands[i] = find(&pred.model.input_names, OUTPUTS[i].0)?;
-        }
-        let n = controller.state_len();
+        let measured = core.measured_names().len();
+        let speeds = (0..measured)
+            .filter(|&k| {
+                let n = &core.measured_names()[k];
+                n.starts_with("w_") || n.starts_with("v_")
+            })
+            .collect();
+        let n = core.state_len();
+        let inputs = measured + core.reference_names().len();
         Ok(ControllerMachine {
-            controller,
-            y: vec![0.0; pred.model.output_names.len()],
-            model: pred.model,
-            measured,
-            commands,
-            out: [0.0; 3],
-            computed: None,
-            before: vec![0.0; n],
             dt_s: settings.dt_s,
+            core,
+            measured,
+            speeds,
+            out: [0.0; MAX_INPUTS],
+            computed: None,
+            given: vec![0.0; inputs],
+            before: vec![0.0; n],
         })
     }
 
-    /// Starts from steady spinning at `speed_radps` (the load machines holding it against their
-    /// drag, no drive torque).
-    pub fn reset(&mut self, speed_radps: f64) -> Result<(), String> {
-        let (x0, u0) = mpc::closed_loop::steady_spin(&self.model, speed_radps).map_err(|e| e.to_string())?;
-        self.controller.reset(&x0, &u0);
-        self.out = self.commands.map(|j| u0[j]);
+    /// The operating speed the inputs `u` give at start: the measured speeds' mean.
+    pub fn start_speed(&self, u: &[f64]) -> f64 {
+        if self.speeds.is_empty() {
+            return 0.0;
+        }
+        self.speeds.iter().map(|&k| u[k]).sum::<f64>() / self.speeds.len() as f64
+    }
+
+    /// Starts from steady motion at `speed` (the inputs holding it against the drag).
+    pub fn reset(&mut self, speed: f64) -> Result<(), String> {
+        self.core.reset(speed).map_err(|e| e.to_string())?;
+        let c = self.core.commands();
+        self.out[..c.len()].copy_from_slice(c);
         self.computed = None;
         Ok(())
     }
 
-    /// The commands at communication point `t` for the inputs `u` (measured speeds, then the
+    /// The commands at communication point `t` for the inputs `u` (measurements, then the
     /// references): the step is made once per point, and made again from the state before it
     /// if the inputs have changed since. `fresh`: the importer has set the inputs since the
     /// last DoStep; if it has not (a Jacobi master reads every output right after the step),
     /// the commands of the last step are returned — a sample of computational delay, as a
     /// controller on a real-time target has — and the step is made at DoStep. Allocation-free.
-    pub fn outputs(&mut self, t: f64, u: &[f64], fresh: bool) -> Result<[f64; 3], String> {
-        let inputs: [f64; 6] = u.try_into().map_err(|_| format!("{} inputs for 6", u.len()))?;
+    pub fn outputs(&mut self, t: f64, u: &[f64], fresh: bool) -> Result<&[f64], String> {
+        let nc = self.core.command_names().len();
+        if u.len() != self.given.len() {
+            return Err(format!("{} inputs for {}", u.len(), self.given.len()));
+        }
         if !fresh && self.computed.is_none() {
-            return Ok(self.out);
+            return Ok(&self.out[..nc]);
         }
         match self.computed {
-            Some((at, given)) if at == t && given == inputs => return Ok(self.out),
-            Some((at, _)) if at == t => {
-                self.controller.restore_state(&self.before);
+            Some(at) if at == t && self.given == u => return Ok(&self.out[..nc]),
+            Some(at) if at == t => {
+                self.core.restore_state(&self.before);
             }
-            _ => self.controller.save_state(&mut self.before),
+            _ => self.core.save_state(&mut self.before),
         }
-        for (k, &j) in self.measured.iter().enumerate() {
-            self.y[j] = inputs[k];
-        }
-        let (cmd, _) = self.controller.step(&self.y, &inputs[3..]);
-        let next = self.commands.map(|j| cmd[j]);
-        if let Some(v) = next.iter().find(|v| !v.is_finite()) {
-            self.controller.restore_state(&self.before);
+        let (measured, reference) = u.split_at(self.measured);
+        let status = self.core.step(measured, reference, &mut self.out[..nc]);
+        if matches!(status, Status::Invalid | Status::BadInput) {
+            self.core.restore_state(&self.before);
             self.computed = None;
-            return Err(format!("the controller commanded {v} N.m at {t} s"));
+            return Err(format!("the controller could not step at {t} s ({status:?}): a non-finite command"));
         }
-        self.out = next;
-        self.computed = Some((t, inputs));
-        Ok(self.out)
+        self.given.copy_from_slice(u);
+        self.computed = Some(t);
+        Ok(&self.out[..nc])
     }
 
     /// The commands of the last step (after a reset: the steady state's).
-    pub fn commands(&self) -> [f64; 3] {
-        self.out
+    pub fn commands(&self) -> &[f64] {
+        &self.out[..self.core.command_names().len()]
     }
 
     /// DoStep from `t` over `h` (the control period) with inputs `u`: the step of `t` is made if
@@ -256,28 +486,26 @@ impl ControllerMachine {
 
     /// Length of [`ControllerMachine::save`]'s record.
     pub fn state_len(&self) -> usize {
-        self.controller.state_len() + 3
+        self.core.state_len()
     }
 
     /// The controller's state at the present communication point (before a step made there
     /// and not yet committed) and its last commands.
     pub fn save(&self, out: &mut [f64]) {
-        let n = self.controller.state_len();
         if self.computed.is_some() {
-            out[..n].copy_from_slice(&self.before);
+            out.copy_from_slice(&self.before);
         } else {
-            self.controller.save_state(&mut out[..n]);
+            self.core.save_state(out);
         }
-        out[n..].copy_from_slice(&self.out);
     }
 
     /// Restores a record of [`ControllerMachine::save`]; false if it cannot be one.
     pub fn restore(&mut self, s: &[f64]) -> bool {
-        let n = self.controller.state_len();
-        if s.len() != n + 3 || !self.controller.restore_state(&s[..n]) {
+        if !self.core.restore_state(s) {
             return false;
         }
-        self.out.copy_from_slice(&s[n..]);
+        let c = self.core.commands();
+        self.out[..c.len()].copy_from_slice(c);
         self.computed = None;
         true
     }
@@ -285,6 +513,6 @@ impl ControllerMachine {
 
 impl std::fmt::Debug for ControllerMachine {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.debug_struct("ControllerMachine").field("dt_s", &self.dt_s).field("out", &self.out).finish()
+        f.debug_struct("ControllerMachine").field("dt_s", &self.dt_s).field("core", &self.core).finish()
     }
 }

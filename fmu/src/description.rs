@@ -12,7 +12,7 @@ pub const MODEL_IDENTIFIER: &str = "rigtwin";
 
 /// Units used by the table: (name, SI base-unit exponents kg, m, s, rad, the FMI 3 type and
 /// quantity that carries it).
-const UNITS: [(&str, [i32; 4], &str); 20] = [
+const UNITS: [(&str, [i32; 4], &str); 22] = [
     ("s", [0, 0, 1, 0], "Time"),
     ("rad", [0, 0, 0, 1], "Angle"),
     ("rad/s", [0, 0, -1, 1], "AngularVelocity"),
@@ -34,6 +34,8 @@ const UNITS: [(&str, [i32; 4], &str); 20] = [
     // the controller's weights: cost per squared error
     ("s2/rad2", [0, 0, 2, -2], "SpeedErrorWeight"),
     ("1/(N.m)2", [-2, -4, 4, 0], "TorqueErrorWeight"),
+    ("s2/m2", [0, -2, 2, 0], "VelocityErrorWeight"),
+    ("1/N2", [-2, -2, 4, 0], "ForceErrorWeight"),
 ];
 
 /// The FMI 3 type declaring a unit.
@@ -135,6 +137,29 @@ pub const CONTROL_PERIOD_S: f64 = 1e-3;
 
 /// The controller FMU's description: what it controls and with which prediction model.
 fn controller_description(p: &FmuParams, c: &crate::controller::ControllerSpec) -> String {
+    if let Some(m) = &p.drive {
+        let ports = match c.ports(p) {
+            Ok(ports) => ports,
+            Err(e) => return format!("rigtwin's model-predictive controller of a drive model (not valid: {e})"),
+        };
+        let names =
+            |list: &[crate::controller::Port]| list.iter().map(|q| q.name.as_ref()).collect::<Vec<_>>().join(", ");
+        let mut d = format!(
+            "rigtwin's model-predictive controller of a drive model of {} bodies (Clarabel QP, horizon {} steps of {} s, Kalman filter with input disturbances): it measures {}, follows {}, commands {}",
+            m.line.bodies.len(),
+            c.horizon,
+            CONTROL_PERIOD_S,
+            names(&ports.inputs[..ports.measured]),
+            names(&ports.inputs[ports.measured..]),
+            names(&ports.outputs),
+        );
+        if let Ok(pred) = mpc::prediction::drive_prediction(m) {
+            for note in pred.notes {
+                let _ = write!(d, "; {note}");
+            }
+        }
+        return d;
+    }
     let e = &p.effects;
     let on: Vec<&str> = [
         (e.time_delay_s > 0.0, "the drive torque's dead time"),

@@ -450,8 +450,8 @@ impl Instance {
         self.ensure_model()?;
         // the controller starts from steady spinning at the measured speeds' mean
         if let Some(Machine::Controller(m)) = self.model.as_mut() {
-            let speed = (self.u[0] + self.u[1] + self.u[2]) / 3.0;
-            m.reset(speed).or_else(|e| error(format!("the controller cannot start at {speed} rad/s: {e}")))?;
+            let speed = m.start_speed(self.u.as_slice());
+            m.reset(speed).or_else(|e| error(format!("the controller cannot start at speed {speed}: {e}")))?;
         }
         // the inputs of the initialisation are what the dead times deliver at first
         for (line, &u) in self.delays.iter_mut().zip(self.u.iter()) {
@@ -615,21 +615,24 @@ impl Instance {
             self.ensure_model()?;
             let (t, u) = (self.time, self.u.as_slice());
             let stepping = self.mode == Mode::StepMode;
-            match self.model.as_mut().expect("built above") {
+            let mut commands = [0.0; plant::drive::MAX_INPUTS];
+            let got = match self.model.as_mut().expect("built above") {
                 // before the first step: the steady state's commands at the measured speeds
                 Machine::Controller(m) if !stepping => {
-                    let speed = (u[0] + u[1] + u[2]) / 3.0;
-                    m.reset(speed).or_else(|e| error(format!("the controller cannot start at {speed} rad/s: {e}")))?;
-                    m.commands()
+                    let speed = m.start_speed(u);
+                    m.reset(speed).or_else(|e| error(format!("the controller cannot start at speed {speed}: {e}")))?;
+                    Ok(m.commands())
                 }
-                Machine::Controller(m) => match m.outputs(t, u, self.fresh_inputs) {
-                    Ok(c) => c,
-                    Err(e) => return Err(self.fail(format!("the controller's step at {t} s: {e}"))),
-                },
-                _ => return error("torque commands belong to the controller FMU"),
+                Machine::Controller(m) => m.outputs(t, u, self.fresh_inputs),
+                _ => return error("commands belong to the controller FMU"),
+            };
+            match got {
+                Ok(c) => commands[..c.len()].copy_from_slice(c),
+                Err(e) => return Err(self.fail(format!("the controller's step at {t} s: {e}"))),
             }
+            commands
         } else {
-            [0.0; 3]
+            [0.0; plant::drive::MAX_INPUTS]
         };
         let needs_model = vrs.iter().any(|&v| {
             matches!(self.lookup(v).map(|x| x.slot), Some(Slot::Derivative(_) | Slot::Torque(_) | Slot::Angle(_)))

@@ -415,8 +415,8 @@ pub fn powertrain_states(effects: &plant::effects::DriveEffects) -> Vec<usize> {
 impl Table {
     /// The table of parameter set `p`: the paper rig's, or a drive model's.
     pub fn new(p: &FmuParams) -> Table {
-        if p.controller.is_some() {
-            return Table::of_controller();
+        if let Some(c) = &p.controller {
+            return Table::of_controller(p, c);
         }
         if let Some(m) = &p.drive {
             return Table::of_drive(m);
@@ -590,28 +590,40 @@ impl Table {
     }
 
     /// The table of the controller FMU (`crate::controller`): its tunable settings, the
-    /// measured speeds and references as inputs, the torque commands as outputs; no states.
-    fn of_controller() -> Table {
-        use crate::controller::{INPUTS, OUTPUTS, PARAMETERS};
+    /// measurements and references as inputs, the commands as outputs; no states. The paper
+    /// rig's names and value references are fixed; a drive model's come from its model and
+    /// `[mpc]` section (`ControllerSpec::ports`).
+    fn of_controller(p: &FmuParams, spec: &crate::controller::ControllerSpec) -> Table {
+        let ports = spec.ports(p).unwrap_or_else(|_| crate::controller::Ports {
+            parameters: Vec::new(),
+            inputs: Vec::new(),
+            measured: 0,
+            outputs: Vec::new(),
+        });
         let mut rows = Rows { v: vec![time_row()], next_vr: 1 };
-        let mut push = |name: &'static str, causality, slot, unit, description: &'static str, constraint| {
-            rows.push_if(true, name, Kind::Float64, (causality, slot, unit, description, constraint))
+        let mut push = |q: &crate::controller::Port, causality, slot| {
+            rows.push_if(
+                true,
+                q.name.clone(),
+                Kind::Float64,
+                (causality, slot, q.unit, q.description.clone(), q.constraint),
+            )
         };
-        for (i, &(name, unit, description, constraint)) in PARAMETERS.iter().enumerate() {
-            push(name, Causality::Parameter, Slot::Param(i), unit, description, constraint);
+        for (i, q) in ports.parameters.iter().enumerate() {
+            push(q, Causality::Parameter, Slot::Param(i));
         }
-        for (i, &(name, unit, description)) in INPUTS.iter().enumerate() {
-            push(name, Causality::Input, Slot::Input(i), unit, description, Constraint::Finite);
+        for (i, q) in ports.inputs.iter().enumerate() {
+            push(q, Causality::Input, Slot::Input(i));
         }
-        for (i, &(name, description)) in OUTPUTS.iter().enumerate() {
-            push(name, Causality::Output, Slot::Command(i), "N.m", description, Constraint::Finite);
+        for (i, q) in ports.outputs.iter().enumerate() {
+            push(q, Causality::Output, Slot::Command(i));
         }
         Table {
             variables: rows.v,
             states: Vec::new(),
             derivative_state: Vec::new(),
             nominal: Vec::new(),
-            input_slots: INPUTS.len(),
+            input_slots: ports.inputs.len(),
         }
     }
 

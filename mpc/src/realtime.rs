@@ -26,6 +26,14 @@ pub enum Status {
     Invalid = -2,
 }
 
+/// The indices of the outputs (of `output_names`) that `settings` measure, in output order: what
+/// a real-time controller's `measured[]` holds.
+pub fn measured_outputs(output_names: &[String], settings: &MpcSettings) -> Vec<usize> {
+    (0..output_names.len())
+        .filter(|&j| settings.outputs.iter().any(|o| o.name == output_names[j] && o.noise_std.is_some()))
+        .collect()
+}
+
 /// The real-time controller of one model.
 pub struct RealTime {
     controller: Controller,
@@ -47,15 +55,19 @@ impl RealTime {
     pub fn new(prediction: &Prediction, settings: &MpcSettings) -> Result<RealTime> {
         let model = &prediction.model;
         let controller = Controller::with_input_delays(model, &prediction.input_delays_s, settings)?;
-        let measured: Vec<usize> = (0..model.output_names.len())
-            .filter(|&j| settings.outputs.iter().any(|o| o.name == model.output_names[j] && o.noise_std.is_some()))
-            .collect();
+        if controller.reference_names() != settings.reference_names() {
+            return Err(MpcError::Numerical(format!(
+                "the settings list the inputs out of the plant's order ({:?})",
+                model.input_names
+            )));
+        }
+        let measured = measured_outputs(&model.output_names, settings);
         if measured.is_empty() {
             return Err(MpcError::Numerical("the controller measures no output".into()));
         }
         let mut c = RealTime {
             measured_names: measured.iter().map(|&j| model.output_names[j].clone()).collect(),
-            reference_names: controller.reference_names(),
+            reference_names: settings.reference_names(),
             y: vec![0.0; model.output_names.len()],
             last: vec![0.0; model.input_names.len()],
             measured,

@@ -422,6 +422,14 @@ impl MpcSettings {
         }
     }
 
+    /// Names of the references a controller of these settings takes, in order: the tracked
+    /// outputs, then the tracked inputs (as [`crate::Controller::reference_names`] for inputs
+    /// listed in the plant's order).
+    pub fn reference_names(&self) -> Vec<String> {
+        let outputs = self.outputs.iter().filter(|o| o.tracked).map(|o| o.name.clone());
+        outputs.chain(self.inputs.iter().filter(|u| u.tracked).map(|u| u.name.clone())).collect()
+    }
+
     /// Checks ranges and consistency; names the offending setting.
     pub fn validate(&self) -> Result<()> {
         let pos = |key: &str, v: f64| {
