@@ -835,24 +835,9 @@ pub fn drive_report(
     step: f64,
     allocations: Option<fn() -> u64>,
 ) -> anyhow::Result<(MpcReport, DriveRun)> {
-    let ss = model.control_state_space()?;
-    let delays = model.input_delays_s();
-    let mut settings = section.drive_settings(&ss.input_names, &ss.output_names, horizon)?;
+    let (p, mut settings) = mpc::Design::Drive(model).controller(section, horizon)?;
     tuning.apply(&mut settings)?;
-    let mut prediction = Vec::new();
-    for e in &model.effects {
-        match e {
-            plant::Effect::TimeDelay(_) => {
-                prediction.push(format!("{} at {}: input-delay states", e.name(), e.element(model)))
-            }
-            plant::Effect::ActuatorLag(_) => prediction.push(format!("{} at {}: a state", e.name(), e.element(model))),
-            _ => prediction.push(format!(
-                "{} at {} is NOT in the prediction: it stays linear (in contact, without friction)",
-                e.name(),
-                e.element(model)
-            )),
-        }
-    }
+    let (ss, delays, prediction) = (p.model, p.input_delays_s, p.notes);
     if truth.input_names() != model.input_names() || truth.coupling_force_names() != model.coupling_force_names() {
         anyhow::bail!("--plant: its bodies and inputs differ from the model's");
     }

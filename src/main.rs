@@ -160,8 +160,8 @@ enum Command {
         #[arg(long, value_name = "DIR")]
         descriptions: Option<PathBuf>,
         /// Write the controller FMUs instead (rigtwin-mpc-fmi3.fmu, rigtwin-mpc-fmi2.fmu):
-        /// `rigtwin mpc`'s controller of the rig of --params (with its [effects]) as a
-        /// co-simulation FMU stepping every 1 ms.
+        /// `rigtwin mpc`'s controller of the model of --params (the rig with its [effects], or
+        /// a drive model with its [mpc] section) as a co-simulation FMU stepping every 1 ms.
         #[arg(long)]
         controller: bool,
         /// The controller's prediction horizon, steps of 1 ms (with --controller).
@@ -170,8 +170,8 @@ enum Command {
         /// The controller's number of move blocks, 0: every step free (with --controller).
         #[arg(long, default_value_t = 4, requires = "controller", allow_negative_numbers = true, value_parser = |s: &str| count_in(s, 0, mpc::MAX_HORIZON))]
         blocks: usize,
-        /// With --controller: the plant of rigtwin-closed-loop.ssp (a rig file with its
-        /// [effects]); default: the rig of --params.
+        /// With --controller: the plant of rigtwin-closed-loop.ssp (a model file with the
+        /// signals the controller measures and commands); default: the model of --params.
         #[arg(long, value_name = "FILE", requires = "controller")]
         plant: Option<PathBuf>,
     },

@@ -538,3 +538,36 @@ fn the_bearing_block_is_in_the_fmu_only_where_the_rig_has_one() {
         assert!(with.contains(line.trim()), "{line}");
     }
 }
+
+/// A controller FMU is refused before anything is written when its model or its plant cannot
+/// make one: a drive model without `[mpc] input_max` (the message shows the lines to add), and a
+/// plant that lacks the signals the controller measures (the gear bench's controller on the
+/// paper rig).
+#[test]
+fn a_controller_fmu_that_cannot_be_made_is_refused_by_name() {
+    let d = common::scratch("cli", "controller_refusals");
+    let bare = d.join("bench_without_mpc.toml");
+    let text = std::fs::read_to_string("examples/gear_bench/bench.toml").unwrap();
+    let without = &text[..text.find("[mpc]").unwrap()];
+    std::fs::write(&bare, without).unwrap();
+    let out_dir = d.join("out");
+    std::fs::create_dir_all(&out_dir).unwrap();
+    let out = rigtwin(&["fmu", "--controller", "--params", bare.to_str().unwrap(), "--out", out_dir.to_str().unwrap()]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert!(err.contains("input_max") && err.contains("bench_without_mpc.toml"), "{err}");
+    let out = rigtwin(&[
+        "fmu",
+        "--controller",
+        "--params",
+        "examples/gear_bench/bench.toml",
+        "--plant",
+        "rigs/paper.toml",
+        "--out",
+        out_dir.to_str().unwrap(),
+    ]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert!(err.contains("--plant") && err.contains("`w_motor`"), "{err}");
+    assert_eq!(std::fs::read_dir(&out_dir).unwrap().count(), 0, "nothing written");
+}

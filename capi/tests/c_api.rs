@@ -84,6 +84,29 @@ fn measured(p: &mpc::Prediction, settings: &MpcSettings) -> Vec<usize> {
         .collect()
 }
 
+/// 300 steps of `c` on `plant` from `speed` with the references `reference(k)`: the record of
+/// the outputs `picked` and the commands (every solve must succeed).
+fn close_loop(
+    c: &mut Controller,
+    plant: &mut impl Plant,
+    picked: &[usize],
+    speed: f64,
+    reference: impl Fn(usize) -> Vec<f64>,
+) -> Record {
+    let mut record = Record { speed, rows: Vec::new(), commands: Vec::new() };
+    for k in 0..300 {
+        let y = plant.outputs().to_vec();
+        let r = reference(k);
+        let (u, info) = c.step(&y, &r);
+        assert!(!info.fallback);
+        let u = u.to_vec();
+        record.rows.push((picked.iter().map(|&j| y[j]).collect(), r));
+        record.commands.push(u.clone());
+        plant.advance(&u).unwrap();
+    }
+    record
+}
+
 /// Runs the C program on `model` and `record` with both libraries: it names `names` and
 /// commands what the Rust loop commanded, to round-off.
 fn replay_in_c(dir: &Path, model: &Path, record: &Record, names: &str) {
@@ -143,17 +166,8 @@ fn c_program_commands_what_the_rust_loop_commands() {
     c.reset(&x0, &u0);
     let mut plant = rigtwin::control::FmuPlant::new(&params, settings.dt_s, speed, &u0, &p.model.output_names).unwrap();
     let picked = measured(&p, &settings);
-    let mut record = Record { speed, rows: Vec::new(), commands: Vec::new() };
-    for k in 0..300 {
-        let y = plant.outputs().to_vec();
-        let r = vec![speed, speed, if k >= 50 { 40.0 } else { 0.0 }];
-        let (u, info) = c.step(&y, &r);
-        assert!(!info.fallback);
-        let u = u.to_vec();
-        record.rows.push((picked.iter().map(|&j| y[j]).collect(), r));
-        record.commands.push(u.clone());
-        plant.advance(&u).unwrap();
-    }
+    let record =
+        close_loop(&mut c, &mut plant, &picked, speed, |k| vec![speed, speed, if k >= 50 { 40.0 } else { 0.0 }]);
     let step = record.commands.iter().map(|u| u[1]).fold(0.0f64, f64::max);
     assert!(step > 30.0, "the drive torque followed its step ({step} Nm)");
     replay_in_c(
@@ -184,17 +198,7 @@ fn c_program_controls_a_drive_model_as_the_rust_loop_does() {
     c.reset(&x0, &[0.0]);
     let mut plant = rigtwin::control::DrivePlant::new(model, settings.dt_s, &p.model.output_names).unwrap();
     let picked = measured(&p, &settings);
-    let mut record = Record { speed: 0.0, rows: Vec::new(), commands: Vec::new() };
-    for k in 0..300 {
-        let y = plant.outputs().to_vec();
-        let r = vec![if k >= 50 { 10.0 } else { 0.0 }];
-        let (u, info) = c.step(&y, &r);
-        assert!(!info.fallback);
-        let u = u.to_vec();
-        record.rows.push((picked.iter().map(|&j| y[j]).collect(), r));
-        record.commands.push(u.clone());
-        plant.advance(&u).unwrap();
-    }
+    let record = close_loop(&mut c, &mut plant, &picked, 0.0, |k| vec![if k >= 50 { 10.0 } else { 0.0 }]);
     // the motor pushes the load towards its new speed, within its 2 N·m bound
     let peak = record.commands.iter().map(|u| u[0]).fold(0.0f64, f64::max);
     assert!(peak > 0.5 && peak <= 2.0 + 1e-9, "motor torque peak {peak} N m");
