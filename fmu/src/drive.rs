@@ -32,7 +32,6 @@ pub struct DriveDynamics {
     breaks: Vec<f64>,
     segments: Vec<(f64, f64)>,
     u_piece: Vec<f64>,
-    u_vec: DVector<f64>,
     couplings: usize,
     xs: DVector<f64>,
     next: DVector<f64>,
@@ -63,7 +62,6 @@ impl DriveDynamics {
             breaks: Vec::new(),
             segments: Vec::new(),
             u_piece: vec![0.0; nu],
-            u_vec: DVector::zeros(nu),
             couplings: m.line.couplings.len(),
             xs: DVector::zeros(nx),
             next: DVector::zeros(nx),
@@ -202,11 +200,8 @@ impl DriveDynamics {
                         break;
                     }
                 };
-                self.u_vec.copy_from_slice(&self.u_piece);
                 for _ in 0..n {
-                    let (ad, bd) = self.cache.get(i);
-                    self.next.gemv(1.0, ad, &state, 0.0);
-                    self.next.gemv(1.0, bd, &self.u_vec, 1.0);
+                    self.cache.step(i, state.as_slice(), &self.u_piece, self.next.as_mut_slice());
                     state.copy_from(&self.next);
                 }
             }

@@ -62,7 +62,6 @@ pub struct Model {
     map: Vec<usize>,
     cache: ZohCache,
     scratch: DVector<f64>,
-    u_eff: DVector<f64>,
     pieces: Vec<(f64, f64)>,
     pt_x: Vec<f64>,
     pt_dx: Vec<f64>,
@@ -178,7 +177,6 @@ impl Model {
             map,
             cache: ZohCache::default(),
             scratch: DVector::zeros(nx),
-            u_eff: DVector::zeros(NU),
             pieces: Vec::new(),
             pt_x: vec![0.0; npt],
             pt_dx: vec![0.0; npt],
@@ -349,11 +347,8 @@ impl Model {
                         break;
                     }
                 };
-                self.u_eff.copy_from_slice(&u_eff);
                 for _ in 0..n {
-                    let (ad, bd) = self.cache.get(i);
-                    self.scratch.gemv(1.0, ad, &out, 0.0);
-                    self.scratch.gemv(1.0, bd, &self.u_eff, 1.0);
+                    self.cache.step(i, out.as_slice(), &u_eff, self.scratch.as_mut_slice());
                     out.copy_from(&self.scratch);
                 }
             }
@@ -424,32 +419,65 @@ impl Model {
 
 /// The exact (ZOH) discretisations of one linear model, per piece length: a co-simulation master
 /// uses one or a few step sizes, a dead time adds piece lengths. Shared by the rig's and the
-/// drive models' steps.
+/// drive models' steps. Each entry also keeps [Ad Bd] as one contiguous column-major block, so a
+/// step x ← Ad x + Bd u is one pass over n·(n + m) numbers (as a C loop over the same matrices
+/// makes it), not two general matrix-vector products.
 #[derive(Debug, Clone, Default)]
 pub(crate) struct ZohCache {
-    entries: Vec<(f64, DMatrix<f64>, DMatrix<f64>)>,
+    entries: Vec<ZohEntry>,
+    /// The entry used last: a master's steps hit it.
+    last: usize,
+}
+
+#[derive(Debug, Clone)]
+struct ZohEntry {
+    h: f64,
+    ad: DMatrix<f64>,
+    bd: DMatrix<f64>,
+    /// [Ad Bd], column-major.
+    fused: Vec<f64>,
 }
 
 impl ZohCache {
     /// The entry of piece length `h`, discretised if new (the oldest of [`CACHE`] dropped).
     pub(crate) fn index(&mut self, a: &DMatrix<f64>, b: &DMatrix<f64>, h: f64) -> Result<usize, String> {
         // piece lengths from a dead time carry rounding: equal within 1e-12 is the same
-        match self.entries.iter().position(|c| (c.0 - h).abs() <= 1e-12 * h) {
-            Some(i) => Ok(i),
+        let same = |e: &ZohEntry| (e.h - h).abs() <= 1e-12 * h;
+        if self.entries.get(self.last).is_some_and(same) {
+            return Ok(self.last);
+        }
+        let i = match self.entries.iter().position(same) {
+            Some(i) => i,
             None => {
                 let (ad, bd) = plant::zoh(a, b, h).map_err(|e| e.to_string())?;
                 if self.entries.len() == CACHE {
                     self.entries.remove(0);
                 }
-                self.entries.push((h, ad, bd));
-                Ok(self.entries.len() - 1)
+                let fused = ad.iter().chain(bd.iter()).copied().collect();
+                self.entries.push(ZohEntry { h, ad, bd, fused });
+                self.entries.len() - 1
             }
-        }
+        };
+        self.last = i;
+        Ok(i)
     }
 
     /// (Ad, Bd) of entry `i`.
     pub(crate) fn get(&self, i: usize) -> (&DMatrix<f64>, &DMatrix<f64>) {
-        (&self.entries[i].1, &self.entries[i].2)
+        (&self.entries[i].ad, &self.entries[i].bd)
+    }
+
+    /// out = Ad x + Bd u with entry `i` (`x` and `out` of the states' length, `u` of the
+    /// inputs'). Allocation-free.
+    pub(crate) fn step(&self, i: usize, x: &[f64], u: &[f64], out: &mut [f64]) {
+        let n = out.len();
+        let fused = &self.entries[i].fused;
+        out.fill(0.0);
+        for (column, &v) in fused.chunks_exact(n).zip(x.iter().chain(u)) {
+            for (o, &m) in out.iter_mut().zip(column) {
+                *o += m * v;
+            }
+        }
     }
 }
 
