@@ -760,7 +760,7 @@ impl DrivePlant {
             })
             .collect::<anyhow::Result<Vec<_>>>()?;
         let nu = model.inputs.len();
-        let x = nalgebra::DVector::from_vec(dynamics.dynamics.initial_state(0.0, &vec![0.0; nu]));
+        let x = dynamics.state_of(&dynamics.dynamics.initial_state(0.0, &vec![0.0; nu]));
         let mut delays = vec![plant::effects::DelayLine::default(); nu];
         for d in delays.iter_mut() {
             d.record(f64::NEG_INFINITY, 0.0);

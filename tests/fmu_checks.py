@@ -5,8 +5,11 @@ fmpy validate, fmutool -check, fmpy simulations (CS and ME, FMI 3 and 2) of a fr
 after an initial twist and of a drive-torque step, a step in model exchange at fmpy's default
 solver settings, OSP libcosim running the FMI 2 FMU and Ecos running both.
 
-Usage: fmu_checks.py DIR [EFFECTS_DIR]; EFFECTS_DIR holds FMUs with drive-path effects, which
-get the model-exchange check at default settings too.
+Usage: fmu_checks.py DIR [EFFECTS_DIR [DRIVE_DIR]]; EFFECTS_DIR holds FMUs with drive-path
+effects, which get the model-exchange check at default settings too; DRIVE_DIR the FMUs of a drive
+model (motor - shaft - hub - gear - load), spun up by a constant 1 N.m on the motor for 20 s (to
+angles of 10^4 rad) in co-simulation and in model exchange at fmpy's defaults: its couplings'
+torques.
 """
 import json
 import subprocess
@@ -61,6 +64,17 @@ for name, paths in sets.items():
     for version, path in paths.items():
         for kind, fmi_type in (("cs", "CoSimulation"), ("me", "ModelExchange")):
             report["defaults"][f"{name}_{version}_{kind}"] = step_at_defaults(path, fmi_type)
+
+if len(sys.argv) > 3:
+    drive = Path(sys.argv[3])
+    spin = np.array([(0.0, 1.0), (20.0, 1.0)], dtype=[("time", np.float64), ("M_motor", np.float64)])
+    report["drive_spin"] = {}
+    for version in ("fmi3", "fmi2"):
+        for kind, fmi_type in (("cs", "CoSimulation"), ("me", "ModelExchange")):
+            r = fmpy.simulate_fmu(str(drive / f"rigtwin-{version}.fmu"), fmi_type=fmi_type, stop_time=20.0,
+                                  output_interval=1e-3, input=spin,
+                                  output=["T_coupling_1", "T_coupling_2", "phi_load"])
+            report["drive_spin"][f"{version}_{kind}"] = {n: r[n].tolist() for n in ["T_coupling_1", "T_coupling_2", "phi_load"]}
 
 # FMU state and directional derivatives through the C calls of a real importer
 from fmpy import extract, read_model_description

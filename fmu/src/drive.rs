@@ -1,8 +1,14 @@
 //! The FMU's dynamics of a drivetrain model (`plant::DriveModel`: a line of bodies, couplings
 //! and gear stages with its effects). The right-hand side, the outputs and the RK4 step are
 //! `plant::Dynamics`' — the ones the diagnosis simulated the record with — so the FMU replays the
-//! diagnosis's model, not a copy of it. The states are the plant's: positions, speeds, one per
-//! lagged input. Co-simulation: the step is split where a delayed input changes (each input's
+//! diagnosis's model, not a copy of it. The states are z = [P q; q̇; lagged inputs]: the
+//! positions enter as the couplings' twists (P's rows are the couplings' elongations, as many as
+//! are independent) and, where the twists do not fix every position, a body's own position (the
+//! line's rigid-body coordinate), so their magnitudes stay bounded under a torque that spins the
+//! line up (as the rig's twist states; Modelica's `phi_rel`): an importer's tolerances then
+//! bound the error of the coupling forces, which absolute angles of thousands of radians would
+//! not (their difference loses the digits). The linear model is stepped and differentiated in z
+//! itself; friction and backlash are evaluated at x = T z. Co-simulation: the step is split where a delayed input changes (each input's
 //! own dead time, from its history); each piece is exact (ZOH of the linear model, cached per
 //! piece length) without friction and backlash, else the record simulation's integrator
 //! (`plant::integrate::PiecewiseRk4` with `Dynamics::rk4_steps_s`: coarse steps within a smooth
@@ -17,13 +23,69 @@ use plant::{DriveModel, Dynamics, Quantity};
 
 use crate::model::{longest_exact_piece, ZohCache, MAX_PIECES};
 
+/// Most states a drive model has: positions and speeds of the largest line, one lag per input.
+pub const MAX_STATES: usize = 2 * plant::MAX_BODIES + plant::drive::MAX_INPUTS;
+
+/// A position coordinate of the FMU's state vector.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Coordinate {
+    /// The twist (elongation) of coupling i: eᵢᵀq.
+    Twist(usize),
+    /// The position of body i.
+    Position(usize),
+}
+
+/// The position coordinates of `m` and the matrix P whose rows give them from the bodies'
+/// positions (z_pos = P q): the couplings' elongations in order, each that is independent of
+/// those before, then the bodies' own positions in order until P is invertible.
+pub fn coordinates(m: &DriveModel) -> Result<(Vec<Coordinate>, DMatrix<f64>), String> {
+    let n = m.line.bodies.len();
+    let springs = m.line.model().map_err(|e| e.to_string())?.springs;
+    let candidates = springs
+        .iter()
+        .enumerate()
+        .map(|(k, s)| (Coordinate::Twist(k), s.elongation.clone()))
+        .chain((0..n).map(|b| (Coordinate::Position(b), DVector::from_fn(n, |i, _| f64::from(u8::from(i == b))))));
+    let (mut chosen, mut rows, mut basis): (Vec<Coordinate>, Vec<DVector<f64>>, Vec<DVector<f64>>) =
+        (Vec::new(), Vec::new(), Vec::new());
+    for (c, v) in candidates {
+        if chosen.len() == n {
+            break;
+        }
+        // Gram-Schmidt: what of v the rows chosen so far do not span
+        let mut r = v.clone();
+        for b in &basis {
+            r -= b * b.dot(&v);
+        }
+        if r.norm() > 1e-9 * v.norm() {
+            basis.push(&r / r.norm());
+            chosen.push(c);
+            rows.push(v);
+        }
+    }
+    let p = DMatrix::from_fn(n, n, |i, j| rows[i][j]);
+    Ok((chosen, p))
+}
+
 /// The dynamics of one drive model and the buffers of its step.
 #[derive(Debug)]
 pub struct DriveDynamics {
     /// The plant's model.
     pub dynamics: Dynamics,
+    /// The position coordinates of the state vector z.
+    pub coordinates: Vec<Coordinate>,
+    /// x = to_x z (the plant's state from the FMU's).
+    to_x: DMatrix<f64>,
+    /// z = to_z x.
+    to_z: DMatrix<f64>,
+    /// The linear model in z: ż = a z + b u.
     a: DMatrix<f64>,
     b: DMatrix<f64>,
+    /// The couplings' forces in contact, rows over z.
+    forces: DMatrix<f64>,
+    /// Scratch: the plant's state and its derivative.
+    x_plant: Vec<f64>,
+    dx_plant: Vec<f64>,
     /// Longest exact piece, s: ‖[A B]‖₁ · piece = `plant::statespace::ZOH_MAX_NORM` / 2^10.
     max_piece_s: f64,
     /// The nonlinear model's integrator.
@@ -45,15 +107,33 @@ impl DriveDynamics {
         if a.iter().chain(b.iter()).any(|v| !v.is_finite()) {
             return Err("the parameters give a system matrix with non-finite entries".into());
         }
+        let nx = dynamics.nstates();
+        if nx > MAX_STATES {
+            return Err(format!("{nx} states: at most {MAX_STATES}"));
+        }
+        let n = m.line.bodies.len();
+        let (coordinates, p) = coordinates(m)?;
+        let p_inv = p.clone().try_inverse().ok_or("the couplings' elongations and the positions are dependent")?;
+        let mut to_z = DMatrix::identity(nx, nx);
+        let mut to_x = DMatrix::identity(nx, nx);
+        to_z.view_mut((0, 0), (n, n)).copy_from(&p);
+        to_x.view_mut((0, 0), (n, n)).copy_from(&p_inv);
+        let (a, b) = (&to_z * a * &to_x, &to_z * b);
+        let forces = m.coupling_forces(nx) * &to_x;
         let max_piece_s = longest_exact_piece(&a, &b)?;
         let (coarse, fine) = dynamics.rk4_steps_s();
         if dynamics.is_nonlinear() && !(coarse > 0.0 && fine > 0.0 && coarse.is_finite() && fine.is_finite()) {
             return Err("the model's rates are not finite".into());
         }
         let rk = dynamics.integrator();
-        let nx = dynamics.nstates();
         let nu = dynamics.ninputs();
         Ok(DriveDynamics {
+            coordinates,
+            to_x,
+            to_z,
+            forces,
+            x_plant: vec![0.0; nx],
+            dx_plant: vec![0.0; nx],
             max_piece_s,
             rk,
             a,
@@ -79,21 +159,70 @@ impl DriveDynamics {
         self.couplings
     }
 
-    /// ẋ at state `x` with the inputs acting now (after their dead times).
-    pub fn derivatives(&self, x: &[f64], u_acting: &[f64], out: &mut [f64]) {
-        self.dynamics.rhs(x, u_acting, out);
+    /// The FMU's state of the plant's state `x`.
+    pub fn state_of(&self, x: &[f64]) -> DVector<f64> {
+        &self.to_z * DVector::from_column_slice(x)
     }
 
-    /// Force (torque) of coupling `i` at state `x`.
-    pub fn coupling_force(&self, x: &[f64], i: usize) -> f64 {
-        self.dynamics.output(x, (Quantity::CouplingForce, i))
+    /// Every body's position at state `z`.
+    pub fn positions(&self, z: &[f64]) -> Vec<f64> {
+        let n = self.coordinates.len();
+        (0..n).map(|i| (0..n).map(|j| self.to_x[(i, j)] * z[j]).sum()).collect()
     }
 
-    /// ∂ẋ/∂[x u] and ∂(coupling forces)/∂x at `x`, `u` by central differences of the plant's
-    /// right-hand side (exact for the linear pieces up to rounding; the friction's smoothed
-    /// slope and the backlash's piece where the state is). Steps: 1e-6 of the variable's size
-    /// or of 1e-3 (a step of 1e-6 rad on a mrad twist).
-    pub fn jacobians(&self, x: &[f64], u: &[f64]) -> (DMatrix<f64>, DMatrix<f64>, DMatrix<f64>) {
+    /// ∂(position of body i)/∂z_j.
+    pub fn position_gradient(&self, i: usize, j: usize) -> f64 {
+        if j < self.coordinates.len() {
+            self.to_x[(i, j)]
+        } else {
+            0.0
+        }
+    }
+
+    /// ż at state `z` with the inputs acting now (after their dead times). Allocation-free.
+    pub fn derivatives(&mut self, z: &[f64], u_acting: &[f64], out: &mut [f64]) {
+        if self.dynamics.is_nonlinear() {
+            self.to_plant(z);
+            self.dynamics.rhs(&self.x_plant, u_acting, &mut self.dx_plant);
+            for (i, o) in out.iter_mut().enumerate() {
+                *o = self.to_z.row(i).iter().zip(&self.dx_plant).map(|(t, v)| t * v).sum();
+            }
+        } else {
+            for (i, o) in out.iter_mut().enumerate() {
+                let ax: f64 = self.a.row(i).iter().zip(z).map(|(a, v)| a * v).sum();
+                *o = ax + self.b.row(i).iter().zip(u_acting).map(|(b, v)| b * v).sum::<f64>();
+            }
+        }
+    }
+
+    /// x_plant ← to_x z.
+    fn to_plant(&mut self, z: &[f64]) {
+        for (i, x) in self.x_plant.iter_mut().enumerate() {
+            *x = self.to_x.row(i).iter().zip(z).map(|(t, v)| t * v).sum();
+        }
+    }
+
+    /// Force (torque) of coupling `i` at state `z`: from the twists themselves while the model
+    /// is linear, else the plant's (play, friction) at x = T z.
+    pub fn coupling_force(&self, z: &[f64], i: usize) -> f64 {
+        if self.dynamics.is_nonlinear() {
+            let x = &self.to_x * DVector::from_column_slice(z);
+            self.dynamics.output(x.as_slice(), (Quantity::CouplingForce, i))
+        } else {
+            self.forces.row(i).iter().zip(z).map(|(c, v)| c * v).sum()
+        }
+    }
+
+    /// ∂ż/∂[z u] and ∂(coupling forces)/∂z at `z`, `u`: the plant's by central differences of
+    /// its right-hand side at x = T z (exact for the linear pieces up to rounding; the
+    /// friction's smoothed slope and the backlash's piece where the state is; steps 1e-6 of
+    /// the variable's size or of 1e-3), in z.
+    pub fn jacobians(&self, z: &[f64], u: &[f64]) -> (DMatrix<f64>, DMatrix<f64>, DMatrix<f64>) {
+        if !self.dynamics.is_nonlinear() {
+            return (self.a.clone(), self.b.clone(), self.forces.clone());
+        }
+        let x = &self.to_x * DVector::from_column_slice(z);
+        let x = x.as_slice();
         let (nx, nu) = (x.len(), u.len());
         let nc = self.couplings;
         let mut a = DMatrix::zeros(nx, nx);
@@ -101,6 +230,7 @@ impl DriveDynamics {
         let mut c = DMatrix::zeros(nc, nx);
         let (mut xp, mut up) = (x.to_vec(), u.to_vec());
         let (mut fp, mut fm) = (vec![0.0; nx], vec![0.0; nx]);
+        let force = |x: &[f64], i: usize| self.dynamics.output(x, (Quantity::CouplingForce, i));
         for j in 0..nx + nu {
             let v = if j < nx { x[j] } else { u[j - nx] };
             let h = 1e-6 * v.abs().max(1e-3);
@@ -113,10 +243,10 @@ impl DriveDynamics {
             };
             set(&mut xp, &mut up, v + h);
             self.dynamics.rhs(&xp, &up, &mut fp);
-            let cp: Vec<f64> = (0..nc).map(|i| self.coupling_force(&xp, i)).collect();
+            let cp: Vec<f64> = (0..nc).map(|i| force(&xp, i)).collect();
             set(&mut xp, &mut up, v - h);
             self.dynamics.rhs(&xp, &up, &mut fm);
-            let cm: Vec<f64> = (0..nc).map(|i| self.coupling_force(&xp, i)).collect();
+            let cm: Vec<f64> = (0..nc).map(|i| force(&xp, i)).collect();
             set(&mut xp, &mut up, v);
             for i in 0..nx {
                 let d = (fp[i] - fm[i]) / (2.0 * h);
@@ -132,7 +262,7 @@ impl DriveDynamics {
                 }
             }
         }
-        (a, b, c)
+        (&self.to_z * a * &self.to_x, &self.to_z * b, c * &self.to_x)
     }
 
     /// One communication step of `x` over [t, t + h] with the inputs `u` set now (input j's
@@ -175,8 +305,13 @@ impl DriveDynamics {
         if self.breaks.len() < 2 {
             self.breaks.push(t + h);
         }
+        // the linear model steps z itself; the nonlinear one the plant's x = T z
         let mut state = std::mem::take(&mut self.xs);
-        state.copy_from(x);
+        if nonlinear {
+            state.gemv(1.0, &self.to_x, x, 0.0);
+        } else {
+            state.copy_from(x);
+        }
         let mut result = Ok(());
         for p in 0..self.breaks.len() - 1 {
             let (a, b) = (self.breaks[p], self.breaks[p + 1]);
@@ -210,7 +345,11 @@ impl DriveDynamics {
             if let Some(i) = state.iter().position(|v| !v.is_finite()) {
                 result = Err(format!("state {i} became {} over the step from {t} s", state[i]));
             } else {
-                x.copy_from(&state);
+                if nonlinear {
+                    x.gemv(1.0, &self.to_z, &state, 0.0);
+                } else {
+                    x.copy_from(&state);
+                }
             }
         }
         self.xs = state;

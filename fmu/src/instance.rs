@@ -644,7 +644,7 @@ impl Instance {
             let x = self.x.as_slice();
             let (torques, angles) = match self.model.as_ref().expect("built above") {
                 Machine::Rig(m) => (m.torques(x).to_vec(), m.angles(x).to_vec()),
-                Machine::Drive(m) => ((0..m.couplings()).map(|i| m.coupling_force(x, i)).collect(), Vec::new()),
+                Machine::Drive(m) => ((0..m.couplings()).map(|i| m.coupling_force(x, i)).collect(), m.positions(x)),
                 Machine::Controller(_) => (Vec::new(), Vec::new()),
             };
             Some((dx, torques, angles))
@@ -894,6 +894,7 @@ impl Instance {
         };
         let angle_gradient = |i: usize, col: usize| match self.model.as_ref() {
             Some(Machine::Rig(m)) => m.angle_gradient(i, col),
+            Some(Machine::Drive(m)) => m.position_gradient(i, col),
             _ => 0.0,
         };
         // column of a known in [x u]

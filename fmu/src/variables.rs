@@ -520,9 +520,11 @@ impl Table {
     }
 
     /// The table of a drive model: its parameters (`plant::DriveModel::parameter_list`), its
-    /// states (positions and speeds as outputs, lagged inputs), the speeds' and lags'
-    /// derivatives, the couplings' forces (outputs) and the inputs; every name from the plant's
-    /// one set of signal names.
+    /// states (the couplings' twists and, where they do not fix every position, a body's
+    /// position — `crate::drive::coordinates` —, the speeds, lagged inputs; all outputs), the
+    /// derivatives that are not states themselves, the positions that are not states (outputs),
+    /// the couplings' forces (outputs) and the inputs; every name from the plant's one set of
+    /// signal names. Nominals: 1 mrad of twist (10 µm of elongation), 1 for the rest.
     fn of_drive(m: &DriveModel) -> Table {
         let domain = m.line.domain;
         let mut rows = Rows { v: vec![time_row()], next_vr: 1 };
@@ -541,24 +543,45 @@ impl Table {
             unit_of(Dimension::Speed, domain),
             unit_of(Dimension::Force, domain),
         );
-        let (acc, rate) = match domain {
-            Domain::Rotational => ("rad/s2", "N.m/s"),
-            Domain::Translational => ("m/s2", "N/s"),
+        let (acc, rate, twist, what, twist_nominal) = match domain {
+            Domain::Rotational => ("rad/s2", "N.m/s", "twist", "angle", 1e-3),
+            Domain::Translational => ("m/s2", "N/s", "elongation", "position", 1e-5),
         };
         let bodies: Vec<&str> = m.line.bodies.iter().map(|b| b.name.as_str()).collect();
-        for (k, name) in names.iter().enumerate() {
-            let (unit, description) = if k < n {
-                let what = match domain {
-                    Domain::Rotational => "angle",
-                    Domain::Translational => "position",
-                };
-                (q, format!("{what} of {}", bodies[k]))
-            } else if k < 2 * n {
+        let labels = m.coupling_labels();
+        // a line that cannot be stepped has no coordinates: its table keeps the plant's names
+        // (the instance refuses it with the reason when it is built)
+        let coordinates = crate::drive::coordinates(m)
+            .map(|(c, _)| c)
+            .unwrap_or_else(|_| (0..n).map(crate::drive::Coordinate::Position).collect());
+        let mut nominal = vec![1.0; nx];
+        let mut derivative_state: Vec<Option<usize>> = (0..nx).map(|_| None).collect();
+        for (k, c) in coordinates.iter().enumerate() {
+            let (name, description) = match *c {
+                crate::drive::Coordinate::Twist(i) => {
+                    nominal[k] = twist_nominal;
+                    (format!("{twist}_{}", labels[i]), format!("{twist} of coupling {} ({})", i + 1, labels[i]))
+                }
+                crate::drive::Coordinate::Position(b) => {
+                    derivative_state[k] = Some(n + b);
+                    (names[b].clone(), format!("{what} of {}", bodies[b]))
+                }
+            };
+            push(name, Causality::Output, Slot::State(k), q, description, Constraint::Finite);
+        }
+        for (k, name) in names.iter().enumerate().skip(n) {
+            let (unit, description) = if k < 2 * n {
                 (w, format!("speed of {}", bodies[k - n]))
             } else {
                 (f, format!("{} after the actuator lag", force_word(domain)))
             };
             push(name.clone(), Causality::Output, Slot::State(k), unit, description, Constraint::Finite);
+        }
+        for (k, c) in coordinates.iter().enumerate() {
+            if let crate::drive::Coordinate::Twist(i) = *c {
+                let name = format!("der({twist}_{})", labels[i]);
+                push(name, Causality::Local, Slot::Derivative(k), w, "state derivative".into(), Constraint::Finite);
+            }
         }
         for (k, name) in names.iter().enumerate().skip(n) {
             let unit = if k < 2 * n { acc } else { rate };
@@ -570,6 +593,18 @@ impl Table {
                 "state derivative".into(),
                 Constraint::Finite,
             );
+        }
+        for b in 0..n {
+            if !coordinates.contains(&crate::drive::Coordinate::Position(b)) {
+                push(
+                    names[b].clone(),
+                    Causality::Output,
+                    Slot::Angle(b),
+                    q,
+                    format!("{what} of {}", bodies[b]),
+                    Constraint::Finite,
+                );
+            }
         }
         for (i, name) in m.coupling_force_names().into_iter().enumerate() {
             let c = &m.line.couplings[i];
@@ -584,9 +619,8 @@ impl Table {
             let description = format!("{} on {}", force_word(domain), bodies[m.inputs[j]]);
             push(name, Causality::Input, Slot::Input(j), f, description, Constraint::Finite);
         }
-        let derivative_state = (0..nx).map(|k| (k < n).then_some(k + n)).collect();
         let input_slots = m.inputs.len();
-        Table { variables: rows.v, states: Vec::new(), derivative_state, nominal: vec![1.0; nx], input_slots }
+        Table { variables: rows.v, states: Vec::new(), derivative_state, nominal, input_slots }
     }
 
     /// The table of the controller FMU (`crate::controller`): its tunable settings, the
