@@ -182,7 +182,7 @@ impl DriveDynamics {
     /// ż at state `z` with the inputs acting now (after their dead times). Allocation-free.
     pub fn derivatives(&mut self, z: &[f64], u_acting: &[f64], out: &mut [f64]) {
         if self.dynamics.is_nonlinear() {
-            self.to_plant(z);
+            self.set_plant_state(z);
             self.dynamics.rhs(&self.x_plant, u_acting, &mut self.dx_plant);
             for (i, o) in out.iter_mut().enumerate() {
                 *o = self.to_z.row(i).iter().zip(&self.dx_plant).map(|(t, v)| t * v).sum();
@@ -196,7 +196,7 @@ impl DriveDynamics {
     }
 
     /// x_plant ← to_x z.
-    fn to_plant(&mut self, z: &[f64]) {
+    fn set_plant_state(&mut self, z: &[f64]) {
         for (i, x) in self.x_plant.iter_mut().enumerate() {
             *x = self.to_x.row(i).iter().zip(z).map(|(t, v)| t * v).sum();
         }
