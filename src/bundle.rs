@@ -822,7 +822,7 @@ pub fn load_drive_test(file: &Path) -> Result<DriveTestBundle, BundleError> {
     }
     let raw: DriveFile = toml::from_str(&text).map_err(|e| error(file, None, e.to_string().trim_end().to_string()))?;
     let line = plant::Line { domain: raw.domain, bodies: raw.model.bodies, couplings: raw.model.couplings };
-    line.validate().map_err(|e| error(file, None, e.to_string()))?;
+    let line = line.resolved().map_err(|e| error(file, None, e.to_string()))?;
     let n = line.bodies.len();
     let nc = line.couplings.len();
     let body = |r: &BodyRef, key: &str| -> Result<usize, BundleError> {

@@ -77,7 +77,7 @@ pub fn parse_drive_model(text: &str, file: &Path) -> Result<plant::DriveModel, M
         return Err(error(file, "`effects` belong in a drive_model file, not in a drive_test bundle"));
     }
     let line = plant::Line { domain: raw.domain, bodies: raw.model.bodies, couplings: raw.model.couplings };
-    line.validate().map_err(|e| error(file, e.to_string()))?;
+    let line = line.resolved().map_err(|e| error(file, e.to_string()))?;
     let n = line.bodies.len();
     let mut inputs = Vec::with_capacity(raw.inputs.len());
     for (k, i) in raw.inputs.iter().enumerate() {

@@ -82,12 +82,18 @@ pub struct Coupling {
     /// q_i / ratio − q_{i+1}. Its force T acts on body j as −e_j T.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub elongation: Option<Vec<f64>>,
+    /// The bodies it joins, by name, as engineers draw a gearbox: two bodies — a shaft, or a
+    /// gear mesh of `ratio` (speed of the first = ratio · speed of the second; twist
+    /// q_first / ratio − q_second, the mesh's stiffness at the second) — or one, a spring and
+    /// damper to ground (twist q_body). [`Line::resolved`] turns it into the `elongation`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub between: Option<Vec<String>>,
 }
 
 impl Coupling {
     /// A coupling between neighbours: stiffness, damping and gear ratio, unnamed.
     pub fn new(stiffness: f64, damping: f64, ratio: f64) -> Coupling {
-        Coupling { stiffness, damping, ratio, name: None, elongation: None }
+        Coupling { stiffness, damping, ratio, name: None, elongation: None, between: None }
     }
 
     /// The twist's coefficients of coupling `i` as (body, coefficient), the zeros left out.
@@ -161,6 +167,12 @@ impl Line {
             non_negative(|| format!("model.bodies[{}].drag", i + 1), b.drag, u[2])?;
         }
         for (i, c) in self.couplings.iter().enumerate() {
+            if c.between.is_some() {
+                return Err(PlantError::Invalid(format!(
+                    "`model.couplings[{}].between` is not resolved (`Line::resolved`)",
+                    i + 1
+                )));
+            }
             positive(|| format!("model.couplings[{}].stiffness", i + 1), c.stiffness, u[1])?;
             non_negative(|| format!("model.couplings[{}].damping", i + 1), c.damping, u[2])?;
             positive(
@@ -216,6 +228,53 @@ impl Line {
             }
         }
         Ok(())
+    }
+
+    /// The line with every coupling given by the bodies it joins (`between`) written as its
+    /// elongation (ratio 1); errors name the coupling's key.
+    pub fn resolved(mut self) -> Result<Line> {
+        let n = self.bodies.len();
+        for i in 0..self.couplings.len() {
+            let Some(names) = self.couplings[i].between.take() else { continue };
+            let key = format!("model.couplings[{}]", i + 1);
+            let c = &mut self.couplings[i];
+            if c.elongation.is_some() {
+                return Err(PlantError::Invalid(format!("`{key}` has both `between` and `elongation`: give one")));
+            }
+            let mut at = Vec::with_capacity(names.len());
+            for name in &names {
+                let b = self.bodies.iter().position(|b| &b.name == name).ok_or_else(|| {
+                    PlantError::Invalid(format!("`{key}.between` names `{name}`, which is no body of the line"))
+                })?;
+                at.push(b);
+            }
+            let mut e = vec![0.0; n];
+            match at[..] {
+                [a] => {
+                    if c.ratio != 1.0 {
+                        return Err(PlantError::Invalid(format!(
+                            "`{key}.ratio` = {}: a spring to ground has no ratio",
+                            c.ratio
+                        )));
+                    }
+                    e[a] = 1.0;
+                }
+                [a, b] if a != b => {
+                    positive(|| format!("{key}.ratio"), c.ratio, "(speed of the first body per speed of the second)")?;
+                    e[a] = 1.0 / c.ratio;
+                    e[b] = -1.0;
+                }
+                _ => {
+                    return Err(PlantError::Invalid(format!(
+                        "`{key}.between` = {names:?}: expected two different bodies (a shaft or a gear mesh) or one (a spring to ground)"
+                    )))
+                }
+            }
+            c.elongation = Some(e);
+            c.ratio = 1.0;
+        }
+        self.validate()?;
+        Ok(self)
     }
 
     /// 0-based position of the body named `name`.
