@@ -424,6 +424,34 @@ mod tests {
 
     /// A coupling with an elongation: one finite coefficient per body, not all zero, no ratio,
     /// a name that can name a signal; each error names the key.
+    /// A coupling by the bodies it joins is the elongation q_a / r − q_b (a spring to ground:
+    /// q_a); a wrong name, both forms, three bodies or a ratio on a ground spring are refused by
+    /// key.
+    #[test]
+    fn couplings_between_named_bodies() {
+        let between = |names: &[&str], ratio: f64| Coupling {
+            between: Some(names.iter().map(|n| n.to_string()).collect()),
+            ..Coupling::new(100.0, 0.0, ratio)
+        };
+        let line = |couplings: Vec<Coupling>| Line {
+            domain: Domain::Rotational,
+            bodies: vec![body("pinion", 1.0), body("wheel", 1.0), body("load", 1.0)],
+            couplings,
+        };
+        let ok = line(vec![between(&["pinion", "wheel"], 4.0), between(&["load"], 1.0)]).resolved().unwrap();
+        assert_eq!(ok.couplings[0].elongation, Some(vec![0.25, -1.0, 0.0]));
+        assert_eq!(ok.couplings[0].ratio, 1.0);
+        assert_eq!(ok.couplings[1].elongation, Some(vec![0.0, 0.0, 1.0]));
+        let err = |c: Coupling| line(vec![c]).resolved().unwrap_err().to_string();
+        assert!(err(between(&["pinion", "gear"], 2.0)).contains("`gear`"));
+        assert!(err(between(&["pinion", "wheel", "load"], 1.0)).contains("model.couplings[1].between"));
+        assert!(err(between(&["wheel", "wheel"], 1.0)).contains("two different bodies"));
+        assert!(err(between(&["load"], 3.0)).contains("model.couplings[1].ratio"));
+        assert!(err(Coupling { elongation: Some(vec![1.0, 0.0, 0.0]), ..between(&["load"], 1.0) }).contains("both"));
+        // unresolved, the line is refused rather than read as neighbours
+        assert!(line(vec![between(&["pinion", "wheel"], 1.0)]).validate().is_err());
+    }
+
     #[test]
     fn bad_elongations_name_the_key() {
         let mut line = Line {
