@@ -1020,3 +1020,31 @@ pub fn plot_drive(target: &crate::files::Target, run: &DriveRun, domain: plant::
     });
     lines(target, "rigtwin mpc: reference step on the drive model", &panels)
 }
+
+/// The `[mpc]` section the controller of `file` (read as `model`) is designed with: the file's
+/// own; for a `drive_test` bundle without `input_max`, the record's peak |input| as the bounds
+/// (`mpc::MpcSection::bound_by_record`), with a note saying so.
+pub fn section_of(
+    file: &std::path::Path,
+    model: &modelfile::ModelFile,
+) -> anyhow::Result<(mpc::MpcSection, Option<String>)> {
+    let mut section = model.mpc.clone();
+    let record = matches!(model.model, modelfile::Model::Drive(_))
+        && section.input_max.is_none()
+        && crate::bundle::kind_of(file).is_ok_and(|k| k == "drive_test");
+    if !record {
+        return Ok((section, None));
+    }
+    let b = crate::bundle::load_drive_test(file)?;
+    section.bound_by_record(&b.input_data);
+    let bounds: Vec<String> =
+        b.inputs.iter().zip(section.input_max.iter().flatten()).map(|(s, v)| format!("{} {v:.4}", s.column)).collect();
+    Ok((
+        section,
+        Some(format!(
+            "note: {} has no [mpc] input_max: the inputs are bounded by the record's peaks ({}); give the actuators' limits in [mpc] input_max",
+            file.display(),
+            bounds.join(", ")
+        )),
+    ))
+}

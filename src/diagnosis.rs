@@ -846,10 +846,7 @@ pub fn drive_model_toml(m: &plant::DriveModel, b: &crate::bundle::DriveTestBundl
     // |input| (what the actuators reached), so that `rigtwin mpc --params` takes the model as
     // written; the file says which
     let mut section = modelfile::read(&b.file)?.mpc;
-    let derived = section.input_max.is_none();
-    if derived {
-        section.input_max = Some(b.input_data.iter().map(|u| u.iter().fold(0.0_f64, |a, v| a.max(v.abs()))).collect());
-    }
+    let derived = section.bound_by_record(&b.input_data);
     // 1-based positions, as in the bundle
     let effects = m.effects.iter().map(|e| e.at_index(e.element_index().0 + 1)).collect();
     let out = Out {

@@ -475,7 +475,11 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             let (mut p, section) = match &params {
                 Some(f) => {
                     let file = modelfile::read(f)?;
-                    (rigtwin::fmu_package::params_of_model(&file.model)?, file.mpc)
+                    let (section, note) = rigtwin::control::section_of(f, &file)?;
+                    if let (Some(note), true) = (note, controller) {
+                        eprintln!("{note}");
+                    }
+                    (rigtwin::fmu_package::params_of_model(&file.model)?, section)
                 }
                 None => (rigtwin_fmu::FmuParams::default(), mpc::MpcSection::default()),
             };
@@ -545,7 +549,11 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             let (p, section) = match &params {
                 Some(f) => {
                     let file = modelfile::read(f)?;
-                    (rigtwin::fmu_package::params_of_model(&file.model)?, file.mpc)
+                    let (section, note) = rigtwin::control::section_of(f, &file)?;
+                    if let Some(note) = note {
+                        eprintln!("{note}");
+                    }
+                    (rigtwin::fmu_package::params_of_model(&file.model)?, section)
                 }
                 None => (rigtwin_fmu::FmuParams::default(), mpc::MpcSection::default()),
             };

@@ -360,3 +360,31 @@ fn drive_controller_fmu_closes_the_loop_in_fmpy_and_libcosim() {
     assert!(last[2] > 5.0, "the load speed follows its 10 rad/s reference: {last:?}");
     assert!(rows.iter().all(|r| r[3].abs() <= 2.0 + 1e-9), "the motor torque stays within its 2 N m");
 }
+
+/// Issue 31: `rigtwin mpc` and `rigtwin fmu --controller` take the shared `drive_test` bundle
+/// bench_gear.toml, which has no `[mpc]` section: the inputs are bounded by the record's peak
+/// |torque| (read here from the CSV itself), and a note on standard error says so.
+#[test]
+fn a_drive_test_without_mpc_bounds_is_controlled_within_its_records_peaks() {
+    let bench = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/data/bench_gear.toml");
+    let csv = std::fs::read_to_string(bench.with_extension("csv")).unwrap();
+    let column = csv.lines().next().unwrap().split(',').position(|c| c == "torque_motor_Nm").unwrap();
+    let peak = csv
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').nth(column).unwrap().trim().parse::<f64>().unwrap().abs())
+        .fold(0.0f64, f64::max);
+    let out = rigtwin(&["mpc", "--params", bench.to_str().unwrap(), "--json", "-"]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{err}");
+    assert!(err.contains("no [mpc] input_max") && err.contains("record's peaks"), "{err}");
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(v["verdict"], "valid");
+    let bound = v["signals"]["input_max"][0].as_f64().unwrap();
+    assert!((bound - peak).abs() < 1e-12, "bound {bound} vs the record's peak {peak}");
+    let dir = std::env::temp_dir().join(format!("rigtwin-bench-ctrl-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let out = rigtwin(&["fmu", "--controller", "--params", bench.to_str().unwrap(), "--out", dir.to_str().unwrap()]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(dir.join("rigtwin-mpc-fmi3.fmu").exists() && dir.join("rigtwin-closed-loop.ssp").exists());
+}

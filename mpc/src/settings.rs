@@ -225,6 +225,17 @@ impl MpcSection {
         Ok(s)
     }
 
+    /// Without `input_max`, the bounds a record shows: each input's peak |value| in `inputs`
+    /// (one series per input) — what the actuators reached in that test, not their limits.
+    /// Returns whether the bounds were taken from the record.
+    pub fn bound_by_record(&mut self, inputs: &[Vec<f64>]) -> bool {
+        if self.input_max.is_some() {
+            return false;
+        }
+        self.input_max = Some(inputs.iter().map(|u| u.iter().fold(0.0_f64, |a, v| a.max(v.abs()))).collect());
+        true
+    }
+
     /// Settings for a drive model whose controller state space has `inputs` and `outputs`
     /// (speeds `w_*`/`v_*`, forces): the section's signals (defaults above) and bounds, the
     /// weights scaled to the largest input bound U as the rig's are to its 300 N·m (input
