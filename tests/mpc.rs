@@ -325,7 +325,7 @@ fn drive_controller_fmu_closes_the_loop_in_fmpy_and_libcosim() {
     }
     let file = modelfile::read(&bench).unwrap();
     let modelfile::Model::Drive(model) = &file.model else { panic!("a drive model") };
-    let p = mpc::prediction::drive_prediction(model).unwrap();
+    let p = mpc::prediction::drive_prediction(model, 1e-3).unwrap();
     let mut settings = file.mpc.drive_settings(&p.model.input_names, &p.model.output_names, 50).unwrap();
     settings.solver.time_limit_s = 1.0;
     let picked = mpc::realtime::measured_outputs(&p.model.output_names, &settings);

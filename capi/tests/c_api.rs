@@ -178,31 +178,57 @@ fn c_program_commands_what_the_rust_loop_commands() {
     );
 }
 
-/// A drive model through the same API: the gear bench example (motor – shaft – hub – 3:1 gear –
-/// load, its `[mpc]` section bounding the motor torque at 2 N·m) closed in Rust as
-/// `rigtwin mpc --params` closes it (the model integrated as its FMU integrates it), the load
-/// speed's reference stepping to 10 rad/s at 50 ms; the C program names the model's signals and
-/// commands the same motor torques.
-#[test]
-fn c_program_controls_a_drive_model_as_the_rust_loop_does() {
-    let dir = std::env::temp_dir().join(format!("rigtwin-capi-drive-{}", std::process::id()));
+/// The drive model `file` (relative to the repository) closed in Rust as `rigtwin mpc --params`
+/// closes it — its prediction and `[mpc]` settings, the plant integrated as its FMU integrates
+/// it, from rest, the references `reference(k)` — and replayed through the C program, which
+/// must name `names` and command the same; the Rust loop's record.
+fn drive_model_in_c(file: &str, case: &str, names: &str, reference: impl Fn(usize) -> Vec<f64>) -> Record {
+    let dir = std::env::temp_dir().join(format!("rigtwin-capi-{case}-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
-    let bench = Path::new(env!("CARGO_MANIFEST_DIR")).join("../examples/gear_bench/bench.toml");
-    let file = modelfile::read(&bench).unwrap();
-    let modelfile::Model::Drive(model) = &file.model else { panic!("a drive model") };
-    let p = mpc::prediction::drive_prediction(model).unwrap();
-    let mut settings = file.mpc.drive_settings(&p.model.input_names, &p.model.output_names, 50).unwrap();
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("..").join(file);
+    let read = modelfile::read(&path).unwrap();
+    let modelfile::Model::Drive(model) = &read.model else { panic!("a drive model") };
+    let (p, mut settings) = mpc::Design::Drive(model).controller(&read.mpc, 50).unwrap();
     settings.solver.time_limit_s = 1.0;
     let mut c = Controller::with_input_delays(&p.model, &p.input_delays_s, &settings).unwrap();
-    let x0 = nalgebra::DVector::zeros(p.model.nstates());
-    c.reset(&x0, &[0.0]);
+    c.reset(&nalgebra::DVector::zeros(p.model.nstates()), &vec![0.0; p.model.input_names.len()]);
     let mut plant = rigtwin::control::DrivePlant::new(model, settings.dt_s, &p.model.output_names).unwrap();
     let picked = measured(&p, &settings);
-    let record = close_loop(&mut c, &mut plant, &picked, 0.0, |k| vec![if k >= 50 { 10.0 } else { 0.0 }]);
+    let record = close_loop(&mut c, &mut plant, &picked, 0.0, reference);
+    replay_in_c(&dir, &path, &record, names);
+    record
+}
+
+/// A drive model through the same API: the gear bench example (motor – shaft – hub – 3:1 gear –
+/// load, its `[mpc]` section bounding the motor torque at 2 N·m), the load speed's reference
+/// stepping to 10 rad/s at 50 ms.
+#[test]
+fn c_program_controls_a_drive_model_as_the_rust_loop_does() {
+    let record = drive_model_in_c(
+        "examples/gear_bench/bench.toml",
+        "bench",
+        "measured: w_motor w_hub w_load | references: w_load | commands: M_motor",
+        |k| vec![if k >= 50 { 10.0 } else { 0.0 }],
+    );
     // the motor pushes the load towards its new speed, within its 2 N·m bound
     let peak = record.commands.iter().map(|u| u[0]).fold(0.0f64, f64::max);
     assert!(peak > 0.5 && peak <= 2.0 + 1e-9, "motor torque peak {peak} N m");
-    replay_in_c(&dir, &bench, &record, "measured: w_motor w_hub w_load | references: w_load | commands: M_motor");
+}
+
+/// The branched gearbox drawn with its gears (`rigs/branched_gearbox.toml`: a pinion meshing two
+/// wheels, the meshes' modes at 1.4 and 2.5 kHz left out of the prediction), two inputs: load
+/// a's speed steps to 10 rad/s at 50 ms while load b's brake follows a 5 N·m torque reference.
+#[test]
+fn c_program_controls_a_branched_gearbox_as_the_rust_loop_does() {
+    let record = drive_model_in_c(
+        "rigs/branched_gearbox.toml",
+        "gearbox",
+        "measured: w_motor w_pinion w_wheel_a w_load_a w_wheel_b w_load_b | references: w_load_a M_load_b | commands: M_motor M_load_b",
+        |k| vec![if k >= 50 { 10.0 } else { 0.0 }, 5.0],
+    );
+    let last = record.commands.last().unwrap();
+    assert!((last[1] - 5.0).abs() < 0.5, "the brake follows its 5 N m reference: {last:?}");
+    assert!(record.rows.last().unwrap().0[3] > 5.0, "load a follows its step");
 }
 
 /// The Rust side of the boundary: NULL, a bad file and a NaN are refused with statuses and

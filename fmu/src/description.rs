@@ -153,7 +153,7 @@ fn controller_description(p: &FmuParams, c: &crate::controller::ControllerSpec) 
             names(&ports.inputs[ports.measured..]),
             names(&ports.outputs),
         );
-        if let Ok(pred) = mpc::prediction::drive_prediction(m) {
+        if let Ok(pred) = mpc::prediction::drive_prediction(m, CONTROL_PERIOD_S) {
             for note in pred.notes {
                 let _ = write!(d, "; {note}");
             }

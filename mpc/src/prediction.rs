@@ -78,8 +78,13 @@ pub fn prediction(rig: &RigParams, variant: Variant, effects: &DriveEffects, dt_
     Ok(Prediction { model: pt.control_state_space(), input_delays_s: pt.delay_s().to_vec(), notes })
 }
 
-/// The prediction model of a drive model: its linearisation and its inputs' dead times.
-pub fn drive_prediction(model: &DriveModel) -> Result<Prediction> {
+/// The prediction model of a drive model for a controller sampling every `dt_s`: its
+/// linearisation and its inputs' dead times. Modes at or beyond the loop's Nyquist frequency (a
+/// gear mesh's, a stiff shaft's) are left out — the controller cannot see them, and their aliased
+/// discretisation would break its Riccati equations — by projecting the line onto its slower
+/// undamped modes (q = Φ_s η, Φ_sᵀ J Φ_s = I; exact for those modes without damping, Galerkin
+/// with it); the notes name them.
+pub fn drive_prediction(model: &DriveModel, dt_s: f64) -> Result<Prediction> {
     let mut notes = Vec::new();
     for e in &model.effects {
         notes.push(match e {
@@ -92,7 +97,66 @@ pub fn drive_prediction(model: &DriveModel) -> Result<Prediction> {
             ),
         });
     }
-    Ok(Prediction { model: model.control_state_space()?, input_delays_s: model.input_delays_s(), notes })
+    let ss = model.control_state_space()?;
+    let nyquist_hz = 0.5 / dt_s;
+    let (ss, dropped) = without_modes_beyond(ss, model, nyquist_hz)?;
+    if !dropped.is_empty() {
+        let list: Vec<String> = dropped.iter().map(|f| format!("{f:.1}")).collect();
+        notes.push(format!(
+            "modes at {} Hz are NOT in the prediction: beyond the {nyquist_hz} Hz a controller sampling every {dt_s} s sees",
+            list.join(", ")
+        ));
+    }
+    Ok(Prediction { model: ss, input_delays_s: model.input_delays_s(), notes })
+}
+
+/// `ss` (states [q; q̇; lags] of `model`) projected onto the undamped modes below `f_max_hz`,
+/// and the frequencies of the modes left out (Hz).
+fn without_modes_beyond(ss: StateSpace, model: &DriveModel, f_max_hz: f64) -> Result<(StateSpace, Vec<f64>)> {
+    let mech = model.line.model()?;
+    let n = mech.dofs();
+    // J^{-1/2} K J^{-1/2} = V Ω² Vᵀ; Φ = J^{-1/2} V is J-orthonormal (the inertia is diagonal)
+    let root: Vec<f64> = (0..n).map(|i| 1.0 / mech.inertia[(i, i)].sqrt()).collect();
+    let k = mech.stiffness_matrix();
+    let scaled = nalgebra::DMatrix::from_fn(n, n, |i, j| root[i] * k[(i, j)] * root[j]);
+    let eig = scaled.symmetric_eigen();
+    let omega_max = 2.0 * std::f64::consts::PI * f_max_hz;
+    let hz = |w2: f64| w2.max(0.0).sqrt() / (2.0 * std::f64::consts::PI);
+    let slow: Vec<usize> = (0..n).filter(|&i| eig.eigenvalues[i] < omega_max * omega_max).collect();
+    let mut dropped: Vec<f64> = (0..n).filter(|i| !slow.contains(i)).map(|i| hz(eig.eigenvalues[i])).collect();
+    if dropped.is_empty() {
+        return Ok((ss, dropped));
+    }
+    dropped.sort_by(f64::total_cmp);
+    let (ns, s) = (ss.a.nrows(), slow.len());
+    let lags = ns - 2 * n;
+    let phi = nalgebra::DMatrix::from_fn(n, s, |i, j| root[i] * eig.eigenvectors[(i, slow[j])]);
+    // x = T ξ with ξ = [η; η̇; lags], ξ = W x with W = Φᵀ J on the mechanical blocks (W T = I)
+    let nr = 2 * s + lags;
+    let mut t = nalgebra::DMatrix::zeros(ns, nr);
+    let mut w = nalgebra::DMatrix::zeros(nr, ns);
+    let phi_t_j = phi.transpose() * &mech.inertia;
+    for block in 0..2 {
+        t.view_mut((block * n, block * s), (n, s)).copy_from(&phi);
+        w.view_mut((block * s, block * n), (s, n)).copy_from(&phi_t_j);
+    }
+    for l in 0..lags {
+        t[(2 * n + l, 2 * s + l)] = 1.0;
+        w[(2 * s + l, 2 * n + l)] = 1.0;
+    }
+    let mut state_names: Vec<String> = (0..s).map(|j| format!("eta_{}", j + 1)).collect();
+    state_names.extend((0..s).map(|j| format!("der(eta_{})", j + 1)));
+    state_names.extend(ss.state_names[2 * n..].iter().cloned());
+    let reduced = StateSpace {
+        a: &w * &ss.a * &t,
+        b: &w * &ss.b,
+        c: &ss.c * &t,
+        d: ss.d,
+        state_names,
+        input_names: ss.input_names,
+        output_names: ss.output_names,
+    };
+    Ok((reduced, dropped))
 }
 
 /// The model a controller is designed on: the paper rig (its signals fixed) or a drive model.
@@ -122,9 +186,9 @@ impl Design<'_> {
                 Ok((prediction(rig, variant, effects, settings.dt_s)?, settings))
             }
             Design::Drive(model) => {
-                let p = drive_prediction(model)?;
-                let settings = section.drive_settings(&p.model.input_names, &p.model.output_names, horizon)?;
-                Ok((p, settings))
+                let full = model.control_state_space()?;
+                let settings = section.drive_settings(&full.input_names, &full.output_names, horizon)?;
+                Ok((drive_prediction(model, settings.dt_s)?, settings))
             }
         }
     }
