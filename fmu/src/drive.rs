@@ -96,7 +96,6 @@ pub struct DriveDynamics {
     u_piece: Vec<f64>,
     couplings: usize,
     xs: DVector<f64>,
-    next: DVector<f64>,
 }
 
 impl DriveDynamics {
@@ -144,7 +143,6 @@ impl DriveDynamics {
             u_piece: vec![0.0; nu],
             couplings: m.line.couplings.len(),
             xs: DVector::zeros(nx),
-            next: DVector::zeros(nx),
             dynamics,
         })
     }
@@ -327,17 +325,16 @@ impl DriveDynamics {
             if nonlinear {
                 self.rk.advance(&mut HeldInputs { d: &self.dynamics, u: &self.u_piece }, state.as_mut_slice(), len);
             } else {
-                let n = (len / self.max_piece_s).ceil().max(1.0) as usize;
-                let i = match self.cache.index(&self.a, &self.b, len / n as f64) {
+                let i = match self.cache.index(&self.a, &self.b, len, self.max_piece_s) {
                     Ok(i) => i,
                     Err(e) => {
                         result = Err(e);
                         break;
                     }
                 };
-                for _ in 0..n {
-                    self.cache.step(i, state.as_slice(), &self.u_piece, self.next.as_mut_slice());
-                    state.copy_from(&self.next);
+                if let Err(k) = self.cache.advance(i, state.as_mut_slice(), &self.u_piece) {
+                    result = Err(format!("state {k} would become non-finite over the step from {t} s"));
+                    break;
                 }
             }
         }

@@ -390,7 +390,9 @@ impl Instance {
     fn forget_history(&mut self) {
         for j in 0..self.delays.len() {
             let tau = self.delay_s(j);
-            self.delays[j].forget_before(self.time, tau);
+            if tau > 0.0 {
+                self.delays[j].forget_before(self.time, tau);
+            }
         }
     }
 

@@ -689,7 +689,10 @@ impl DelayLine {
     /// Drops what is no longer needed once the time reached `t`: records before the one in
     /// force at `t − delay_s`.
     pub fn forget_before(&mut self, t: f64, delay_s: f64) {
-        if let Some(i) = self.records.iter().rposition(|r| r.0 <= t - delay_s) {
+        if self.records.len() < 2 {
+            return;
+        }
+        if let Some(i) = self.records.iter().rposition(|r| r.0 <= t - delay_s).filter(|&i| i > 0) {
             self.records.drain(..i);
         }
     }
