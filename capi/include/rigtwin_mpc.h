@@ -90,9 +90,11 @@ size_t rigtwin_mpc_count(const rigtwin_mpc *controller, int which);
    until it is freed), or NULL past the end. */
 const char *rigtwin_mpc_name(const rigtwin_mpc *controller, int which, size_t index);
 
-/* Restarts from steady motion at `speed` (every body at that speed, rad/s or m/s; the inputs
-   holding it against the drag). Returns RIGTWIN_MPC_OK, or RIGTWIN_MPC_BAD_INPUT for a
-   non-finite speed or one no input can hold, RIGTWIN_MPC_INVALID for NULL. */
+/* Restarts from steady motion: the first body of the model at `speed` (rad/s or m/s; the paper
+   rig: every machine), the others as the gear stages turn them, the couplings twisted as the
+   drag behind them needs, the inputs holding it; 0: at rest. Returns RIGTWIN_MPC_OK, or
+   RIGTWIN_MPC_BAD_INPUT for a non-finite speed or one the model cannot move at (a spring to
+   ground holds it: only 0), RIGTWIN_MPC_INVALID for NULL. */
 rigtwin_mpc_status rigtwin_mpc_reset(rigtwin_mpc *controller, double speed);
 
 /* One control step: the measurements now and the references in (rigtwin_mpc_count entries

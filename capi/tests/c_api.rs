@@ -297,3 +297,55 @@ fn the_minimal_c_example_builds_and_runs() {
         .unwrap_or_else(|| panic!("no drive torque in {text}"));
     assert!(drive > 0.0 && drive.is_finite(), "the drive torque moves towards its reference: {text}");
 }
+
+/// Operating points of a geared line: `rigtwin_mpc_reset(c, 10)` on the gear bench (3:1 between
+/// hub and load) starts the motor and hub at 10 rad/s and the load at 10/3 rad/s, held by the
+/// motor against the drags — 0.0002·10 + 0.004·(10/3)/3 = 0.006444 N·m, worked out by hand from
+/// the file's drags — so the first step at that state and reference commands it (to the QP's
+/// tolerance); a line held by a spring to ground has no free motion: only 0 is an operating
+/// speed.
+#[test]
+fn a_geared_line_starts_from_its_free_motion() {
+    use rigtwin_mpc::*;
+    let bench = Path::new(env!("CARGO_MANIFEST_DIR")).join("../examples/gear_bench/bench.toml");
+    let path = std::ffi::CString::new(bench.to_str().unwrap()).unwrap();
+    let mut err = vec![0 as std::ffi::c_char; 512];
+    // SAFETY: valid pointers and lengths
+    let c = unsafe { rigtwin_mpc_create(path.as_ptr(), std::ptr::null(), err.as_mut_ptr(), err.len()) };
+    assert!(!c.is_null());
+    let (m, r, mut u) = ([10.0, 10.0, 10.0 / 3.0], [10.0 / 3.0], [0.0]);
+    // SAFETY: a live controller, arrays of its counts (3 measured, 1 reference, 1 command)
+    unsafe {
+        assert_eq!(rigtwin_mpc_reset(c, 10.0), Status::Ok);
+        for _ in 0..5 {
+            assert_eq!(rigtwin_mpc_step(c, m.as_ptr(), r.as_ptr(), u.as_mut_ptr()), Status::Ok);
+            assert!((u[0] - (0.0002 * 10.0 + 0.004 * (10.0 / 3.0) / 3.0)).abs() < 1e-6, "{u:?}");
+        }
+        rigtwin_mpc_free(c);
+    }
+    let dir = std::env::temp_dir().join(format!("rigtwin-capi-ground-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let grounded = dir.join("grounded.toml");
+    let text = std::fs::read_to_string(&bench).unwrap().replace(
+        "  { stiffness = 15000.0, damping = 0.4, ratio = 3.0 },\n",
+        "  { stiffness = 15000.0, damping = 0.4, ratio = 3.0 },\n  { between = [\"load\"], stiffness = 50.0 },\n",
+    );
+    // a constant torque on a grounded line only deflects it: the ground spring's force is
+    // measured, so that the input disturbance can be estimated, and tracked (a speed has no
+    // steady state other than 0)
+    let text = text.replace(
+        "[mpc]\n",
+        "[mpc]\nmeasured = [\"w_motor\", \"w_load\", \"T_coupling_3\"]\ntracked = [\"T_coupling_3\"]\n",
+    );
+    assert!(text.contains("between") && text.contains("T_coupling_3"));
+    std::fs::write(&grounded, text).unwrap();
+    let path = std::ffi::CString::new(grounded.to_str().unwrap()).unwrap();
+    // SAFETY: as above
+    unsafe {
+        let c = rigtwin_mpc_create(path.as_ptr(), std::ptr::null(), err.as_mut_ptr(), err.len());
+        assert!(!c.is_null(), "{}", std::ffi::CStr::from_ptr(err.as_ptr()).to_string_lossy());
+        assert_eq!(rigtwin_mpc_reset(c, 0.0), Status::Ok);
+        assert_eq!(rigtwin_mpc_reset(c, 5.0), Status::BadInput);
+        rigtwin_mpc_free(c);
+    }
+}

@@ -374,8 +374,6 @@ pub struct ControllerMachine {
     core: RealTime,
     /// How many inputs are measurements (the rest are references).
     measured: usize,
-    /// Which measured inputs are speeds (their mean is the operating point at start).
-    speeds: Vec<usize>,
     /// The commands of the last step.
     out: [f64; MAX_INPUTS],
     /// The communication point and the inputs the last step was made at, while it is not yet
@@ -398,19 +396,12 @@ impl ControllerMachine {
             return Err(format!("{} commands: at most {MAX_INPUTS}", core.command_names().len()));
         }
         let measured = core.measured_names().len();
-        let speeds = (0..measured)
-            .filter(|&k| {
-                let n = &core.measured_names()[k];
-                n.starts_with("w_") || n.starts_with("v_")
-            })
-            .collect();
         let n = core.state_len();
         let inputs = measured + core.reference_names().len();
         Ok(ControllerMachine {
             dt_s: settings.dt_s,
             core,
             measured,
-            speeds,
             out: [0.0; MAX_INPUTS],
             computed: None,
             given: vec![0.0; inputs],
@@ -418,12 +409,10 @@ impl ControllerMachine {
         })
     }
 
-    /// The operating speed the inputs `u` give at start: the measured speeds' mean.
+    /// The operating speed the inputs `u` give at start (`mpc::RealTime::speed_of` the
+    /// measurements: for the rig, the three speeds' mean).
     pub fn start_speed(&self, u: &[f64]) -> f64 {
-        if self.speeds.is_empty() {
-            return 0.0;
-        }
-        self.speeds.iter().map(|&k| u[k]).sum::<f64>() / self.speeds.len() as f64
+        self.core.speed_of(&u[..self.measured])
     }
 
     /// Starts from steady motion at `speed` (the inputs holding it against the drag).

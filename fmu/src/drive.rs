@@ -333,7 +333,7 @@ impl DriveDynamics {
                     }
                 };
                 if let Err(k) = self.cache.advance(i, state.as_mut_slice(), &self.u_piece) {
-                    result = Err(format!("state {k} would become non-finite over the step from {t} s"));
+                    result = Err(format!("state {k} became non-finite over the step from {t} s"));
                     break;
                 }
             }

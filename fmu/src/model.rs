@@ -308,12 +308,12 @@ impl Model {
         delay: &DelayLine,
     ) -> Result<(), String> {
         // the common case — linear, no dead time: one exact step over [Ad Bd]
-        if !self.nonlinear() && self.delay_s() <= 0.0 {
+        if !self.nonlinear() && self.delay_s() <= 0.0 && h <= MAX_PIECES as f64 * self.max_piece_s {
             let i = self.discretise(h)?;
             return self
                 .cache
                 .advance(i, z.as_mut_slice(), u.as_slice())
-                .map_err(|k| format!("state {k} would become non-finite over the step from {t} s"));
+                .map_err(|k| format!("state {k} became non-finite over the step from {t} s"));
         }
         let finest = if self.nonlinear() { self.rk.fine_s } else { self.max_piece_s };
         let sub_steps = h / finest;
@@ -355,7 +355,7 @@ impl Model {
                     }
                 };
                 if let Err(k) = self.cache.advance(i, out.as_mut_slice(), &u_eff) {
-                    result = Err(format!("state {k} would become non-finite over the step from {t} s"));
+                    result = Err(format!("state {k} became non-finite over the step from {t} s"));
                     break;
                 }
             }

@@ -25,6 +25,32 @@ pub struct Prediction {
     pub input_delays_s: Vec<f64>,
     /// What the prediction includes and leaves out, in words.
     pub notes: Vec<String>,
+    /// Free motion at unit speed — every body turning together as its gears allow, the first
+    /// body at 1 (rad/s or m/s) — or `None` where the model cannot move freely (a spring to
+    /// ground holds it, or it falls apart into separate lines).
+    pub motion: Option<Motion>,
+}
+
+/// Free motion of a model, x(t) = x₀ + t·`rate`: its speeds `state` (no twist), and the rate at
+/// which its positions advance.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Motion {
+    /// The speeds, as a state.
+    pub state: nalgebra::DVector<f64>,
+    /// ẋ of the motion: the positions' rate.
+    pub rate: nalgebra::DVector<f64>,
+}
+
+impl Motion {
+    /// The motion of a model in physical coordinates [q; q̇; lags] (`n` bodies, `ns` states)
+    /// whose bodies move with speeds `shape`.
+    fn physical(shape: &[f64], ns: usize) -> Motion {
+        let n = shape.len();
+        let block = |from: usize| {
+            nalgebra::DVector::from_fn(ns, |k, _| if (from..from + n).contains(&k) { shape[k - from] } else { 0.0 })
+        };
+        Motion { state: block(n), rate: block(0) }
+    }
 }
 
 /// The prediction model of the rig `rig` in `variant` with `effects`, for a controller sampling
@@ -75,7 +101,10 @@ pub fn prediction(rig: &RigParams, variant: Variant, effects: &DriveEffects, dt_
             ));
         }
     }
-    Ok(Prediction { model: pt.control_state_space(), input_delays_s: pt.delay_s().to_vec(), notes })
+    let model = pt.control_state_space();
+    // the rig has no gear stage: every body at 1
+    let motion = Motion::physical(&vec![1.0; pt.dofs()], model.nstates());
+    Ok(Prediction { model, input_delays_s: pt.delay_s().to_vec(), notes, motion: Some(motion) })
 }
 
 /// The prediction model of a drive model for a controller sampling every `dt_s`: its
@@ -99,7 +128,7 @@ pub fn drive_prediction(model: &DriveModel, dt_s: f64) -> Result<Prediction> {
     }
     let ss = model.control_state_space()?;
     let nyquist_hz = 0.5 / dt_s;
-    let (ss, dropped) = without_modes_beyond(ss, model, nyquist_hz)?;
+    let (ss, dropped, motion) = without_modes_beyond(ss, model, nyquist_hz)?;
     if !dropped.is_empty() {
         let list: Vec<String> = dropped.iter().map(|f| format!("{f:.1}")).collect();
         notes.push(format!(
@@ -107,12 +136,17 @@ pub fn drive_prediction(model: &DriveModel, dt_s: f64) -> Result<Prediction> {
             list.join(", ")
         ));
     }
-    Ok(Prediction { model: ss, input_delays_s: model.input_delays_s(), notes })
+    Ok(Prediction { model: ss, input_delays_s: model.input_delays_s(), notes, motion })
 }
 
 /// `ss` (states [q; q̇; lags] of `model`) projected onto the undamped modes below `f_max_hz`,
-/// and the frequencies of the modes left out (Hz).
-fn without_modes_beyond(ss: StateSpace, model: &DriveModel, f_max_hz: f64) -> Result<(StateSpace, Vec<f64>)> {
+/// the frequencies of the modes left out (Hz), and the state of free motion at unit speed (see
+/// [`Prediction::motion`]).
+fn without_modes_beyond(
+    ss: StateSpace,
+    model: &DriveModel,
+    f_max_hz: f64,
+) -> Result<(StateSpace, Vec<f64>, Option<Motion>)> {
     let mech = model.line.model()?;
     let n = mech.dofs();
     // J^{-1/2} K J^{-1/2} = V Ω² Vᵀ; Φ = J^{-1/2} V is J-orthonormal (the inertia is diagonal)
@@ -124,11 +158,25 @@ fn without_modes_beyond(ss: StateSpace, model: &DriveModel, f_max_hz: f64) -> Re
     let hz = |w2: f64| w2.max(0.0).sqrt() / (2.0 * std::f64::consts::PI);
     let slow: Vec<usize> = (0..n).filter(|&i| eig.eigenvalues[i] < omega_max * omega_max).collect();
     let mut dropped: Vec<f64> = (0..n).filter(|i| !slow.contains(i)).map(|i| hz(eig.eigenvalues[i])).collect();
+    // free motion: the one rigid-body mode (K φ = 0), the first body at 1, as speeds
+    let top = eig.eigenvalues.iter().copied().fold(0.0_f64, f64::max);
+    let rigid: Vec<usize> = (0..n).filter(|&i| eig.eigenvalues[i] <= 1e-10 * top).collect();
+    let ns = ss.a.nrows();
+    let motion = match rigid[..] {
+        [i] => {
+            let shape: Vec<f64> = (0..n).map(|j| root[j] * eig.eigenvectors[(j, i)]).collect();
+            let largest = shape.iter().copied().fold(0.0, |a: f64, v| if v.abs() > a.abs() { v } else { a });
+            let first = if shape[0].abs() > 1e-9 * largest.abs() { shape[0] } else { largest };
+            let shape: Vec<f64> = shape.iter().map(|v| v / first).collect();
+            Some(Motion::physical(&shape, ns))
+        }
+        _ => None,
+    };
     if dropped.is_empty() {
-        return Ok((ss, dropped));
+        return Ok((ss, dropped, motion));
     }
     dropped.sort_by(f64::total_cmp);
-    let (ns, s) = (ss.a.nrows(), slow.len());
+    let s = slow.len();
     let lags = ns - 2 * n;
     let phi = nalgebra::DMatrix::from_fn(n, s, |i, j| root[i] * eig.eigenvectors[(i, slow[j])]);
     // x = T ξ with ξ = [η; η̇; lags], ξ = W x with W = Φᵀ J on the mechanical blocks (W T = I)
@@ -156,7 +204,7 @@ fn without_modes_beyond(ss: StateSpace, model: &DriveModel, f_max_hz: f64) -> Re
         input_names: ss.input_names,
         output_names: ss.output_names,
     };
-    Ok((reduced, dropped))
+    Ok((reduced, dropped, motion.map(|m| Motion { state: &w * m.state, rate: &w * m.rate })))
 }
 
 /// The model a controller is designed on: the paper rig (its signals fixed) or a drive model.

@@ -6,7 +6,6 @@
 //! non-finite command is never returned (the controller is then failed for good), and a step
 //! allocates nothing.
 
-use crate::closed_loop::steady_spin;
 use crate::error::{MpcError, Result};
 use crate::prediction::Prediction;
 use crate::{Controller, MpcSettings};
@@ -44,6 +43,10 @@ pub struct RealTime {
     reference_names: Vec<String>,
     /// Every plant output: the measured ones set per step, the others unused.
     y: Vec<f64>,
+    /// Free motion at unit speed (`Prediction::motion`).
+    motion: Option<crate::prediction::Motion>,
+    /// Each measured output in that motion (the first body at 1).
+    pattern: Vec<f64>,
     /// The commands of the last step (model input order).
     last: Vec<f64>,
     failed: bool,
@@ -65,7 +68,13 @@ impl RealTime {
         if measured.is_empty() {
             return Err(MpcError::Numerical("the controller measures no output".into()));
         }
+        let pattern = match &prediction.motion {
+            Some(m) => measured.iter().map(|&j| (model.c.row(j) * &m.state)[0]).collect(),
+            None => vec![0.0; measured.len()],
+        };
         let mut c = RealTime {
+            motion: prediction.motion.clone(),
+            pattern,
             measured_names: measured.iter().map(|&j| model.output_names[j].clone()).collect(),
             reference_names: settings.reference_names(),
             y: vec![0.0; model.output_names.len()],
@@ -100,20 +109,74 @@ impl RealTime {
         self.dt_s
     }
 
-    /// Starts from steady motion at `speed` (every body at that speed; rad/s or m/s), the inputs
-    /// holding it against the drag; refused when the speed is not finite or no input can hold it.
+    /// Starts from steady motion at `speed` — every body moving together as its gears allow, the
+    /// first body at `speed` (rad/s or m/s), the inputs holding it against the drag (the
+    /// least-squares inputs u = −B⁺ A x) — or at rest for 0. Refused when the speed is not
+    /// finite, or not 0 for a model that cannot move freely.
     pub fn reset(&mut self, speed: f64) -> Result<()> {
         if !speed.is_finite() {
             return Err(MpcError::Numerical(format!("speed {speed}: expected a finite value")));
         }
-        let (x0, u0) = steady_spin(&self.model, speed)?;
+        let n = self.model.nstates();
+        let (x0, rate) = match (&self.motion, speed == 0.0) {
+            (_, true) => (nalgebra::DVector::zeros(n), nalgebra::DVector::zeros(n)),
+            (Some(m), false) => (&m.state * speed, &m.rate * speed),
+            (None, false) => {
+                return Err(MpcError::Numerical(format!(
+                    "speed {speed}: the model cannot move freely (a spring to ground holds it): only 0 is an operating speed"
+                )))
+            }
+        };
+        let (x0, u0) = self.steady_state(x0, &rate)?;
         if u0.iter().any(|v| !v.is_finite()) {
             return Err(MpcError::Numerical(format!("no finite inputs hold the model at {speed}")));
         }
-        self.controller.reset(&x0, &u0);
-        self.last.copy_from_slice(&u0);
+        self.controller.reset(&x0, u0.as_slice());
+        self.last.copy_from_slice(u0.as_slice());
         self.failed = false;
         Ok(())
+    }
+
+    /// The steady motion through the speeds `x` whose positions advance at `rate` (ẋ = rate):
+    /// the inputs u = B⁺(rate − A x) that hold it; where they cannot without the couplings
+    /// twisting (drag behind a gear stage), the twists too — the least-norm (x, u) with
+    /// A x + B u = rate and the measured outputs at their values in `x`.
+    fn steady_state(
+        &self,
+        x: nalgebra::DVector<f64>,
+        rate: &nalgebra::DVector<f64>,
+    ) -> Result<(nalgebra::DVector<f64>, nalgebra::DVector<f64>)> {
+        let (a, b) = (&self.model.a, &self.model.b);
+        let fail = |e: &str| MpcError::Numerical(e.to_string());
+        let u = b.clone().pseudo_inverse(1e-12).map_err(fail)? * (rate - a * &x);
+        let residual = (a * &x + b * &u - rate).norm();
+        if residual <= 1e-9 * (a * &x).norm().max(rate.norm()).max(1e-300) {
+            return Ok((x, u));
+        }
+        let (n, m, k) = (a.nrows(), b.ncols(), self.measured.len());
+        let mut lhs = nalgebra::DMatrix::zeros(n + k, n + m);
+        lhs.view_mut((0, 0), (n, n)).copy_from(a);
+        lhs.view_mut((0, n), (n, m)).copy_from(b);
+        let mut rhs = nalgebra::DVector::zeros(n + k);
+        rhs.rows_mut(0, n).copy_from(rate);
+        for (r, &j) in self.measured.iter().enumerate() {
+            let row = self.model.c.row(j);
+            lhs.view_mut((n + r, 0), (1, n)).copy_from(&row);
+            rhs[n + r] = (row * &x)[0];
+        }
+        let z = lhs.pseudo_inverse(1e-12).map_err(fail)? * rhs;
+        Ok((z.rows(0, n).into_owned(), z.rows(n, m).into_owned()))
+    }
+
+    /// The speed of free motion that fits the measurements `measured` best (least squares of
+    /// the motion's pattern over the measured speeds; the rig's: their mean), 0 for a model
+    /// that cannot move freely: where a controller starts from.
+    pub fn speed_of(&self, measured: &[f64]) -> f64 {
+        let norm: f64 = self.pattern.iter().map(|p| p * p).sum();
+        if norm == 0.0 {
+            return 0.0;
+        }
+        self.pattern.iter().zip(measured).map(|(p, y)| p * y).sum::<f64>() / norm
     }
 
     /// One step: `measured` and `reference` in the orders of [`RealTime::measured_names`] and
