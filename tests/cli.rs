@@ -356,8 +356,8 @@ fn every_command_writes_json_one_way() {
 }
 
 /// A diagnosed drive model is usable as written: `rigtwin mpc --params` runs it (its input
-/// bounds are the record's peak inputs, said in the file), and `--plot` draws the run; without
-/// bounds the refusal gives the snippet that fixes it.
+/// bounds are the record's peak inputs, said in the file), and `--plot` draws the run; the
+/// bundle itself, without `[mpc]`, runs with the record's peaks as the bounds and a note.
 #[test]
 fn a_diagnosed_drive_model_runs_in_the_controller_as_written() {
     let d = common::scratch("cli", "diagnosed-mpc");
@@ -366,9 +366,9 @@ fn a_diagnosed_drive_model_runs_in_the_controller_as_written() {
     }
     let run = |args: &[&str]| Command::new(env!("CARGO_BIN_EXE_rigtwin")).args(args).current_dir(&d).output().unwrap();
     let out = run(&["mpc", "--params", "bench_gear.toml"]);
-    assert_eq!(out.status.code(), Some(1));
+    assert_eq!(out.status.code(), Some(0));
     let e = String::from_utf8_lossy(&out.stderr);
-    assert!(e.contains("[mpc]\ninput_max = [LIMIT]"), "{e}");
+    assert!(e.contains("no [mpc] input_max") && e.contains("record's peaks"), "{e}");
     let out = run(&["diagnose", "bench_gear.toml", "--write-model", "m.toml"]);
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let model = std::fs::read_to_string(d.join("m.toml")).unwrap();
@@ -548,14 +548,15 @@ fn a_controller_fmu_that_cannot_be_made_is_refused_by_name() {
     let d = common::scratch("cli", "controller_refusals");
     let bare = d.join("bench_without_mpc.toml");
     let text = std::fs::read_to_string("examples/gear_bench/bench.toml").unwrap();
-    let without = &text[..text.find("[mpc]").unwrap()];
+    // a drive_model file (a drive_test bundle would take the bounds from its record)
+    let without = text[..text.find("[mpc]").unwrap()].replace("kind = \"drive_test\"", "kind = \"drive_model\"");
     std::fs::write(&bare, without).unwrap();
     let out_dir = d.join("out");
     std::fs::create_dir_all(&out_dir).unwrap();
     let out = rigtwin(&["fmu", "--controller", "--params", bare.to_str().unwrap(), "--out", out_dir.to_str().unwrap()]);
     let err = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(1), "{err}");
-    assert!(err.contains("input_max") && err.contains("bench_without_mpc.toml"), "{err}");
+    assert!(err.contains("[mpc]\ninput_max = [LIMIT]") && err.contains("bench_without_mpc.toml"), "{err}");
     let out = rigtwin(&[
         "fmu",
         "--controller",
