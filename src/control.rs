@@ -738,6 +738,8 @@ pub struct DrivePlant {
     /// Per output: a state index (speed) or a coupling (force).
     outputs: Vec<Source>,
     y: Vec<f64>,
+    /// Every coupling's force now.
+    forces: Vec<f64>,
 }
 
 impl DrivePlant {
@@ -766,16 +768,27 @@ impl DrivePlant {
             d.record(f64::NEG_INFINITY, 0.0);
         }
         let taus = model.input_delays_s();
-        let mut p = DrivePlant { dynamics, x, delays, taus, t: 0.0, dt_s, y: vec![0.0; outputs.len()], outputs };
+        let mut p = DrivePlant {
+            forces: vec![0.0; dynamics.couplings()],
+            dynamics,
+            x,
+            delays,
+            taus,
+            t: 0.0,
+            dt_s,
+            y: vec![0.0; outputs.len()],
+            outputs,
+        };
         p.read();
         Ok(p)
     }
 
     fn read(&mut self) {
+        self.dynamics.coupling_forces(self.x.as_slice(), &mut self.forces);
         for (y, s) in self.y.iter_mut().zip(&self.outputs) {
             *y = match *s {
                 Source::State(i) => self.x[i],
-                Source::Torque(i) => self.dynamics.coupling_force(self.x.as_slice(), i),
+                Source::Torque(i) => self.forces[i],
             };
         }
     }
@@ -1029,10 +1042,7 @@ pub fn section_of(
     model: &modelfile::ModelFile,
 ) -> anyhow::Result<(mpc::MpcSection, Option<String>)> {
     let mut section = model.mpc.clone();
-    let record = matches!(model.model, modelfile::Model::Drive(_))
-        && section.input_max.is_none()
-        && crate::bundle::kind_of(file).is_ok_and(|k| k == "drive_test");
-    if !record {
+    if model.kind.as_deref() != Some("drive_test") || section.input_max.is_some() {
         return Ok((section, None));
     }
     let b = crate::bundle::load_drive_test(file)?;

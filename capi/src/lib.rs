@@ -100,7 +100,9 @@ impl RigtwinMpc {
     /// The controller of the model file `path` (`None`: the embedded paper rig).
     pub fn from_file(path: Option<&Path>, options: &Options) -> anyhow::Result<Self> {
         let file = match path {
-            None => ModelFile { model: Model::Rig(Box::new(plant::paper::rig())), mpc: MpcSection::default() },
+            None => {
+                ModelFile { model: Model::Rig(Box::new(plant::paper::rig())), mpc: MpcSection::default(), kind: None }
+            }
             Some(p) => modelfile::read(p)?,
         };
         Self::new(&file, options).map_err(|e| match path {
@@ -112,11 +114,6 @@ impl RigtwinMpc {
     /// Number of entries in the list `which`.
     pub fn count(&self, which: Signals) -> usize {
         self.names[which as usize].len()
-    }
-
-    /// The real-time core.
-    pub fn core(&mut self) -> &mut RealTime {
-        &mut self.core
     }
 }
 

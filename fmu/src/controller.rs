@@ -164,7 +164,9 @@ impl ControllerSpec {
             }
             Some(m) => {
                 let (_, s) = Design::Drive(m).controller(section, horizon).map_err(|e| e.to_string())?;
-                let mut values = vec![drive_speed_weight(section), drive_force_weight(&s)];
+                let largest = s.inputs.iter().map(|u| u.max_nm).fold(0.0, f64::max);
+                let (speed_weight, force_weight) = section.drive_weights(largest);
+                let mut values = vec![speed_weight, force_weight];
                 if let Some(b) = section.force_soft_max {
                     values.push(b);
                 }
@@ -181,11 +183,11 @@ impl ControllerSpec {
     /// The prediction and the settings of the tunable values, checked; an error names the
     /// parameter.
     pub fn design(&self, p: &FmuParams) -> Result<(Prediction, MpcSettings), String> {
-        let ports = self.ports(p)?;
-        if self.values.len() != ports.parameters.len() {
-            return Err(format!("{} controller settings for {}", self.values.len(), ports.parameters.len()));
+        let parameters = self.parameters(p)?;
+        if self.values.len() != parameters.len() {
+            return Err(format!("{} controller settings for {}", self.values.len(), parameters.len()));
         }
-        for (v, q) in self.values.iter().zip(&ports.parameters) {
+        for (v, q) in self.values.iter().zip(&parameters) {
             q.constraint.check(*v).map_err(|want| format!("`{}` = {v}: expected {want}", q.name))?;
         }
         let (prediction, mut s) = match (&p.drive, &self.section) {
@@ -249,19 +251,29 @@ impl ControllerSpec {
         }
     }
 
+    /// The FMU's tunable parameters for the model of `p` (the rig's [`PARAMETERS`]), in
+    /// [`ControllerSpec::values`] order.
+    fn parameters(&self, p: &FmuParams) -> Result<Vec<Port>, String> {
+        match (&p.drive, &self.section) {
+            (None, _) => Ok(PARAMETERS
+                .iter()
+                .map(|&(name, unit, description, constraint)| Port {
+                    name: name.into(),
+                    unit,
+                    description: description.into(),
+                    constraint,
+                })
+                .collect()),
+            (Some(m), Some(section)) => Ok(drive_parameters(m, section)),
+            (Some(_), None) => Err("a drive model's controller needs its [mpc] section".into()),
+        }
+    }
+
     /// The FMU's variables for the model of `p`.
     pub fn ports(&self, p: &FmuParams) -> Result<Ports, String> {
         let Some(m) = &p.drive else {
             return Ok(Ports {
-                parameters: PARAMETERS
-                    .iter()
-                    .map(|&(name, unit, description, constraint)| Port {
-                        name: name.into(),
-                        unit,
-                        description: description.into(),
-                        constraint,
-                    })
-                    .collect(),
+                parameters: self.parameters(p)?,
                 inputs: INPUTS.iter().map(|&(n, u, d)| Port::of(n, u, d)).collect(),
                 measured: 3,
                 outputs: OUTPUTS.iter().map(|&(n, d)| Port::of(n, "N.m", d)).collect(),
@@ -273,23 +285,42 @@ impl ControllerSpec {
     }
 }
 
-/// A drive model's default weight on its tracked speeds (`MpcSection::drive_settings`').
-fn drive_speed_weight(section: &MpcSection) -> f64 {
-    section.speed_weight.unwrap_or(100.0)
-}
-
-/// The weight on the penalised forces in drive settings `s` (that of any force output, else the
-/// section's default for the model's bounds).
-fn drive_force_weight(s: &MpcSettings) -> f64 {
-    let big = s.inputs.iter().map(|u| u.max_nm).fold(0.0, f64::max);
-    s.outputs.iter().find(|o| !o.tracked && o.noise_std.is_none()).map_or((30.0 / big).powi(2), |o| o.weight)
-}
-
 /// A drive model's controller FMU variables: the section's weights and bounds as tunables, its
 /// measured outputs and references as inputs, its inputs as outputs.
 fn drive_ports(m: &DriveModel, section: &MpcSection, prediction: &Prediction, s: &MpcSettings) -> Ports {
     let domain = m.line.domain;
     let (speed, force) = (unit_of(Dimension::Speed, domain), unit_of(Dimension::Force, domain));
+    let unit_of_signal = |n: &str| if n.starts_with("w_") || n.starts_with("v_") { speed } else { force };
+    let measured = mpc::realtime::measured_outputs(&prediction.model.output_names, s);
+    let mut ports: Vec<Port> = measured
+        .iter()
+        .map(|&j| {
+            let n = &prediction.model.output_names[j];
+            Port::of(n.clone(), unit_of_signal(n), format!("measured {n}"))
+        })
+        .collect();
+    for n in s.reference_names() {
+        ports.push(Port::of(format!("{n}_ref"), unit_of_signal(&n), format!("reference of {n}")));
+    }
+    Ports {
+        parameters: drive_parameters(m, section),
+        measured: measured.len(),
+        inputs: ports,
+        outputs: prediction
+            .model
+            .input_names
+            .iter()
+            .map(|n| Port::of(n.clone(), force, format!("command of {n}")))
+            .collect(),
+    }
+}
+
+/// A drive model's tunable parameters: its `[mpc]` section's weights and bounds (the soft force
+/// bound only where the section gives one), per input its bounds, the time limit — in the order
+/// of [`ControllerSpec::values`].
+fn drive_parameters(m: &DriveModel, section: &MpcSection) -> Vec<Port> {
+    let domain = m.line.domain;
+    let force = unit_of(Dimension::Force, domain);
     let (force_word, rate) = match domain {
         Domain::Rotational => ("torque", "N.m/s"),
         Domain::Translational => ("force", "N/s"),
@@ -326,8 +357,8 @@ fn drive_ports(m: &DriveModel, section: &MpcSection, prediction: &Prediction, s:
             Constraint::Positive,
         ));
     }
-    let inputs = &prediction.model.input_names;
-    for name in inputs {
+    let inputs = m.input_names();
+    for name in &inputs {
         parameters.push(tunable(
             format!("mpc.input_max.{name}"),
             force,
@@ -335,7 +366,7 @@ fn drive_ports(m: &DriveModel, section: &MpcSection, prediction: &Prediction, s:
             Constraint::Positive,
         ));
     }
-    for name in inputs {
+    for name in &inputs {
         parameters.push(tunable(
             format!("mpc.input_rate_max.{name}"),
             rate,
@@ -349,24 +380,7 @@ fn drive_ports(m: &DriveModel, section: &MpcSection, prediction: &Prediction, s:
         "wall-clock limit of one QP solve (then the shifted plan is applied)".into(),
         Constraint::Positive,
     ));
-    let unit_of_signal = |n: &str| if n.starts_with("w_") || n.starts_with("v_") { speed } else { force };
-    let measured = mpc::realtime::measured_outputs(&prediction.model.output_names, s);
-    let mut ports: Vec<Port> = measured
-        .iter()
-        .map(|&j| {
-            let n = &prediction.model.output_names[j];
-            Port::of(n.clone(), unit_of_signal(n), format!("measured {n}"))
-        })
-        .collect();
-    for n in s.reference_names() {
-        ports.push(Port::of(format!("{n}_ref"), unit_of_signal(&n), format!("reference of {n}")));
-    }
-    Ports {
-        parameters,
-        measured: measured.len(),
-        inputs: ports,
-        outputs: inputs.iter().map(|n| Port::of(n.clone(), force, format!("command of {n}"))).collect(),
-    }
+    parameters
 }
 
 /// The controller of an instance (`mpc::RealTime`) and its lazy step.

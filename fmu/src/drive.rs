@@ -200,14 +200,19 @@ impl DriveDynamics {
         }
     }
 
-    /// Force (torque) of coupling `i` at state `z`: from the twists themselves while the model
-    /// is linear, else the plant's (play, friction) at x = T z.
-    pub fn coupling_force(&self, z: &[f64], i: usize) -> f64 {
+    /// Every coupling's force (torque) at state `z` into `out` (one per coupling): from the
+    /// twists themselves while the model is linear, else the plant's (play, friction) at
+    /// x = T z. Allocation-free.
+    pub fn coupling_forces(&mut self, z: &[f64], out: &mut [f64]) {
         if self.dynamics.is_nonlinear() {
-            let x = &self.to_x * DVector::from_column_slice(z);
-            self.dynamics.output(x.as_slice(), (Quantity::CouplingForce, i))
+            self.set_plant_state(z);
+            for (i, o) in out.iter_mut().enumerate() {
+                *o = self.dynamics.output(&self.x_plant, (Quantity::CouplingForce, i));
+            }
         } else {
-            self.forces.row(i).iter().zip(z).map(|(c, v)| c * v).sum()
+            for (i, o) in out.iter_mut().enumerate() {
+                *o = self.forces.row(i).iter().zip(z).map(|(c, v)| c * v).sum();
+            }
         }
     }
 

@@ -644,9 +644,13 @@ impl Instance {
             let mut dx = vec![0.0; self.x.len()];
             self.evaluate_derivatives(&mut dx);
             let x = self.x.as_slice();
-            let (torques, angles) = match self.model.as_ref().expect("built above") {
+            let (torques, angles) = match self.model.as_mut().expect("built above") {
                 Machine::Rig(m) => (m.torques(x).to_vec(), m.angles(x).to_vec()),
-                Machine::Drive(m) => ((0..m.couplings()).map(|i| m.coupling_force(x, i)).collect(), m.positions(x)),
+                Machine::Drive(m) => {
+                    let mut forces = vec![0.0; m.couplings()];
+                    m.coupling_forces(x, &mut forces);
+                    (forces, m.positions(x))
+                }
                 Machine::Controller(_) => (Vec::new(), Vec::new()),
             };
             Some((dx, torques, angles))

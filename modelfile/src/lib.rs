@@ -45,6 +45,8 @@ pub struct ModelFile {
     pub model: Model,
     /// Its `[mpc]` section (empty when it has none).
     pub mpc: mpc::MpcSection,
+    /// Its `kind` key (`drive_model`, `drive_test`, `torsional_sweep`; none in a plain rig file).
+    pub kind: Option<String>,
 }
 
 /// Reads the model file `file`: a drive model when its `kind` is `drive_model` or
@@ -69,5 +71,5 @@ pub fn parse(text: &str, file: &Path) -> Result<ModelFile, ModelFileError> {
             .try_into()
             .map_err(|e| ModelFileError { file: file.to_path_buf(), message: format!("[mpc]: {e}") })?,
     };
-    Ok(ModelFile { model, mpc })
+    Ok(ModelFile { model, mpc, kind: kind.map(str::to_string) })
 }

@@ -114,6 +114,11 @@ pub fn prediction(rig: &RigParams, variant: Variant, effects: &DriveEffects, dt_
 /// undamped modes (q = Φ_s η, Φ_sᵀ J Φ_s = I; exact for those modes without damping, Galerkin
 /// with it); the notes name them.
 pub fn drive_prediction(model: &DriveModel, dt_s: f64) -> Result<Prediction> {
+    prediction_of(model, model.control_state_space()?, dt_s)
+}
+
+/// [`drive_prediction`] from the model's control state space `ss`.
+fn prediction_of(model: &DriveModel, ss: StateSpace, dt_s: f64) -> Result<Prediction> {
     let mut notes = Vec::new();
     for e in &model.effects {
         notes.push(match e {
@@ -126,7 +131,6 @@ pub fn drive_prediction(model: &DriveModel, dt_s: f64) -> Result<Prediction> {
             ),
         });
     }
-    let ss = model.control_state_space()?;
     let nyquist_hz = 0.5 / dt_s;
     let (ss, dropped, motion) = without_modes_beyond(ss, model, nyquist_hz)?;
     if !dropped.is_empty() {
@@ -236,7 +240,7 @@ impl Design<'_> {
             Design::Drive(model) => {
                 let full = model.control_state_space()?;
                 let settings = section.drive_settings(&full.input_names, &full.output_names, horizon)?;
-                Ok((drive_prediction(model, settings.dt_s)?, settings))
+                Ok((prediction_of(model, full, settings.dt_s)?, settings))
             }
         }
     }

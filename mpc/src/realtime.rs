@@ -50,7 +50,6 @@ pub struct RealTime {
     /// The commands of the last step (model input order).
     last: Vec<f64>,
     failed: bool,
-    dt_s: f64,
 }
 
 impl RealTime {
@@ -83,7 +82,6 @@ impl RealTime {
             controller,
             model: model.clone(),
             failed: false,
-            dt_s: settings.dt_s,
         };
         c.reset(0.0)?;
         Ok(c)
@@ -104,15 +102,10 @@ impl RealTime {
         &self.model.input_names
     }
 
-    /// The control period, s.
-    pub fn dt_s(&self) -> f64 {
-        self.dt_s
-    }
-
     /// Starts from steady motion at `speed` — every body moving together as its gears allow, the
-    /// first body at `speed` (rad/s or m/s), the inputs holding it against the drag (the
-    /// least-squares inputs u = −B⁺ A x) — or at rest for 0. Refused when the speed is not
-    /// finite, or not 0 for a model that cannot move freely.
+    /// first body at `speed` (rad/s or m/s), the inputs holding it against the drag and the
+    /// couplings twisted as that needs ([`RealTime::steady_state`]) — or at rest for 0. Refused
+    /// when the speed is not finite, or not 0 for a model that cannot move freely.
     pub fn reset(&mut self, speed: f64) -> Result<()> {
         if !speed.is_finite() {
             return Err(MpcError::Numerical(format!("speed {speed}: expected a finite value")));
@@ -252,11 +245,6 @@ impl RealTime {
         self.last.copy_from_slice(&s[n..]);
         self.failed = false;
         true
-    }
-
-    /// The controller (for its QP, timing and first-input checks).
-    pub fn controller(&self) -> &Controller {
-        &self.controller
     }
 }
 

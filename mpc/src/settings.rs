@@ -236,6 +236,12 @@ impl MpcSection {
         true
     }
 
+    /// A drive model's weights on its tracked speeds and its penalised forces: the section's, or
+    /// 100 and (30/U)² for the largest input bound U (the rig's proportions to its 300 N·m).
+    pub fn drive_weights(&self, largest_input_max: f64) -> (f64, f64) {
+        (self.speed_weight.unwrap_or(100.0), self.force_weight.unwrap_or((30.0 / largest_input_max).powi(2)))
+    }
+
     /// Settings for a drive model whose controller state space has `inputs` and `outputs`
     /// (speeds `w_*`/`v_*`, forces): the section's signals (defaults above) and bounds, the
     /// weights scaled to the largest input bound U as the rig's are to its 300 N·m (input
@@ -276,8 +282,7 @@ impl MpcSection {
         known("penalised", &penalised, outputs)?;
         known("measured", &measured, outputs)?;
         known("tracked_inputs", &tracked_inputs, inputs)?;
-        let speed_weight = self.speed_weight.unwrap_or(100.0);
-        let force_weight = self.force_weight.unwrap_or((30.0 / big).powi(2));
+        let (speed_weight, force_weight) = self.drive_weights(big);
         let mut names: Vec<&String> = tracked.iter().chain(&penalised).chain(&measured).collect();
         names.sort();
         names.dedup();
