@@ -1,8 +1,10 @@
 //! Builds the FMU's shared library (the `fmu` crate as a cdylib, profile `fmu`: optimised and
 //! stripped) and hands it to the `rigtwin` binary, which carries it inside itself: `rigtwin fmu`
 //! then works wherever the binary is copied or installed (`RIGTWIN_FMU_LIB` still overrides it
-//! at run time). A nested cargo builds it into this build script's own output folder, so it never
-//! waits on the lock of the outer build's target folder.
+//! at run time). A nested cargo builds it into a folder of its own, `fmu-nested` in the outer
+//! build's target folder (its own locks: it never waits on the outer build's), shared by the
+//! outer profiles — `cargo clippy`, `cargo test` and `cargo build --release` build the library
+//! once, not once each.
 
 use std::env;
 use std::path::PathBuf;
@@ -17,7 +19,7 @@ fn main() {
     }
     let target = env::var("TARGET").expect("cargo sets TARGET");
     let host = env::var("HOST").expect("cargo sets HOST");
-    let target_dir = out_dir.join("fmu-target");
+    let target_dir = nested_target_dir(&out_dir);
     let cargo = env::var("CARGO").unwrap_or_else(|_| "cargo".into());
     let mut cmd = Command::new(cargo);
     cmd.arg("build")
@@ -45,4 +47,15 @@ fn main() {
     };
     let built = lib_dir.join(name);
     std::fs::copy(&built, out_dir.join("rigtwin_fmu_library")).unwrap_or_else(|e| panic!("{}: {e}", built.display()));
+}
+
+/// Where the nested cargo builds: `fmu-nested` beside the outer build's profile folders (the
+/// first ancestor of `out_dir` that cargo tagged as a target folder with `CACHEDIR.TAG`), or
+/// inside `out_dir` where there is none.
+fn nested_target_dir(out_dir: &std::path::Path) -> PathBuf {
+    out_dir
+        .ancestors()
+        .find(|dir| dir.join("CACHEDIR.TAG").is_file())
+        .map(|target| target.join("fmu-nested"))
+        .unwrap_or_else(|| out_dir.join("fmu-target"))
 }

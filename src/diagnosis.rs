@@ -279,6 +279,18 @@ fn fit_notes(effect: &str, refitted: &str, structured_residual: bool, error_afte
     notes
 }
 
+/// Why each implausible candidate was not chosen (how its re-fit moved the declared mechanics).
+fn implausible_notes(candidates: &[ident::diagnose::CandidateScore]) -> Vec<String> {
+    candidates
+        .iter()
+        .filter(|c| c.implausible)
+        .map(|c| {
+            let at = c.at.as_ref().map(|a| format!(" at {a}")).unwrap_or_default();
+            format!("{}{at} not chosen (error {:.4}): {}", c.effect, c.error_after, c.implausible_because.join("; "))
+        })
+        .collect()
+}
+
 /// Most points of a plotted time series.
 const PLOT_POINTS: usize = 6000;
 
@@ -313,15 +325,7 @@ fn torsional(file: &Path, progress: &(dyn Fn(&str) + Sync)) -> anyhow::Result<Di
             .collect();
         notes.push(format!("error with each effect left out (the others re-fitted): {}", needed.join(", ")));
     }
-    for c in d.candidates.iter().filter(|c| c.implausible) {
-        let at = c.at.as_ref().map(|a| format!(" at {a}")).unwrap_or_default();
-        notes.push(format!(
-            "{}{at} not chosen: it re-fits j_drive or c_short beyond a factor {} of the declared values (error {:.4})",
-            c.effect,
-            ident::diagnose::torsional::DECLARED_TOLERANCE_FACTOR,
-            c.error_after
-        ));
-    }
+    notes.extend(implausible_notes(&d.candidates));
     if d.model.effects.coulomb_friction_nm.iter().any(|&f| f > 0.0) {
         notes.push(format!(
             "Coulomb friction is smoothed as T_c·w/√(w² + v_s²) with v_s = {:.3e} rad/s (1 % of the load machines' RMS speed, or wider where the friction would be faster than the 0.125 ms integration step resolves)",
@@ -693,6 +697,9 @@ fn drive(file: &Path, progress: &(dyn Fn(&str) + Sync)) -> anyhow::Result<Diagno
     };
     let d = ident::diagnose::drive::diagnose(rec, progress).map_err(|e| anyhow::anyhow!("{}: {e}", file.display()))?;
     let mut notes = fit_notes(&d.effect, "the declared inertias and stiffnesses", d.structured_residual, d.error_after);
+    if !d.moved_declared.is_empty() {
+        notes.push(format!("the answer's re-fit moved the declared mechanics: {}", d.moved_declared.join("; ")));
+    }
     for e in &d.model.effects {
         if let plant::Effect::CoulombFriction(plant::CoulombFriction { smoothing_speed, .. }) = e {
             notes.push(format!(

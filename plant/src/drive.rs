@@ -20,7 +20,9 @@ use crate::line::{Line, Quantity};
 use crate::statespace::zoh;
 
 mod effect;
-pub use effect::{ActuatorLag, Backlash, CoulombFriction, Effect, EffectModel, EffectParameter, Element, TimeDelay};
+pub use effect::{
+    ActuatorLag, Backlash, CoulombFriction, Effect, EffectModel, EffectParameter, Element, Moves, TimeDelay,
+};
 
 /// Most RK4 steps per sample within a smooth piece (the fine sub-steps across pieces may be
 /// [`FINE_PER_COARSE`] times as many): a model stiffer than this at the record's sample rate is

@@ -281,6 +281,7 @@ pub fn diagnose(
                 score: bic(e * e, n, n as f64, *k),
                 fitted_parameters: *k,
                 implausible: false,
+                implausible_because: Vec::new(),
             }
         })
         .collect();

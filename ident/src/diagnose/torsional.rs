@@ -10,6 +10,7 @@ use plant::effects::{DriveEffects, Powertrain};
 use plant::rig::{RigParams, Variant};
 use serde::Serialize;
 
+use super::verdict::{self, DeclaredSettings, Moves, Refitted};
 use super::{
     bic, effective_count, lag1_autocorrelation, lm, rms, CandidateScore, FRICTION_SMOOTHING_FRACTION, LM_REL_TOL,
 };
@@ -53,7 +54,7 @@ pub struct TorsionalDiagnosis {
     /// there are any, the record does not determine the answer's parameters.
     pub equivalents: Vec<BTreeMap<String, f64>>,
     /// Why the answer is no finding although it fits: its re-fit moved what the declared model
-    /// measured beyond [`DECLARED_TOLERANCE_FACTOR`] (`None`: it did not).
+    /// measured beyond what its effects explain ([`verdict::declared_moved`]; `None`: it did not).
     pub distorted: Option<String>,
     /// The first effect found (`none` if none).
     pub effect: String,
@@ -105,6 +106,12 @@ struct Problem<'a> {
     sweep: &'a Sweep,
     declared: RigParams,
     variant: Variant,
+    /// The declared side shafts' stiffness in series on the differential's twist s, Nm/rad
+    /// (eq. (A1)).
+    c_s: f64,
+    /// Top of the band the drive torque excites, Hz ([`BoundSettings::excited_power_share`] of
+    /// its power below it).
+    excited_hz: f64,
     speed0: f64,
     measured: [Vec<f64>; 2],
     norm: f64,
@@ -197,6 +204,48 @@ impl Problem<'_> {
             .chain(self.measured[1].iter().zip(&s[1]))
             .map(|(m, y)| (m - y) / self.norm)
             .collect()
+    }
+
+    /// Why fit `f` is no finding (empty: plausible): how it moved the declared mechanics beyond
+    /// what its effects explain, by the one rule of [`verdict::declared_moved`], or a
+    /// compliance's mode where the record does not excite the rig. The declared mechanics: j_drive is the drive's total
+    /// inertia (a compliance splits it), c_short is judged with the compliance in series where
+    /// there is one (eq. (A1): the drive torque reaches the twist s through k on the motor,
+    /// so the pair's stiffness on s is 1/(1/c_s + 4/k)).
+    fn moved(&self, f: &Fit) -> Vec<String> {
+        let series_ratio = f.effects.iter().position(|c| c.moves() == Moves::SeriesSpring).map(|i| {
+            let at = 2 + f.effects[..i].iter().map(|c| c.own_len()).sum::<usize>();
+            let k = f.x[at].exp();
+            1.0 / ((-f.x[1]).exp() + 4.0 * self.c_s / k)
+        });
+        let mut why = verdict::declared_moved(
+            &[
+                Refitted::Inertia { name: "j_drive", ratio: f.x[0].exp() },
+                Refitted::Stiffness { name: "c_short", ratio: f.x[1].exp(), series_ratio },
+            ],
+            &DeclaredSettings::default(),
+        );
+        // a compliance's mode must lie where the record excites the rig: above it, only its
+        // series spring shows, and its frequency and motor share are not determined
+        if f.effects.contains(&Candidate::DriveCompliance) {
+            let m = self.build(&f.effects, &f.x);
+            let upper = Powertrain::new(&m.rig, m.variant, &m.effects)
+                .ok()
+                .and_then(|p| p.frequencies_hz().last().copied())
+                .unwrap_or(f64::NAN);
+            if upper.is_nan() || upper > self.excited_hz {
+                why.push(format!(
+                    "the compliance's mode at {upper:.1} Hz lies above the {:.1} Hz below which the drive torque excites the rig: the record cannot show it",
+                    self.excited_hz
+                ));
+            }
+        }
+        why
+    }
+
+    /// Whether fit `f` keeps the declared mechanics where its effects allow ([`Problem::moved`]).
+    fn plausible(&self, f: &Fit) -> bool {
+        self.moved(f).is_empty()
     }
 
     /// The model of parameter vector `x` for `effects`: x[0], x[1] ln of j_drive and c_short
@@ -316,6 +365,21 @@ impl Candidate {
         match self {
             Candidate::CoulombFriction(m) => Some(m.name().to_string()),
             _ => None,
+        }
+    }
+
+    /// What it may change of the declared mechanics: a compliance splits j_drive and puts a
+    /// spring in series with the side shafts; the others, as their effects state, nothing
+    /// (damping changes no stiffness).
+    pub fn moves(self) -> Moves {
+        use plant::drive::EffectModel;
+        match self {
+            Candidate::DriveCompliance => Moves::SeriesSpring,
+            Candidate::TimeDelay => plant::drive::TimeDelay::MOVES,
+            Candidate::ActuatorLag => plant::drive::ActuatorLag::MOVES,
+            Candidate::Backlash => plant::drive::Backlash::MOVES,
+            Candidate::CoulombFriction(_) => plant::drive::CoulombFriction::MOVES,
+            Candidate::ShaftDamping => Moves::Nothing,
         }
     }
 
@@ -481,9 +545,7 @@ fn best_per_share(costs: &[f64]) -> Vec<usize> {
         .collect()
 }
 
-/// Two fits whose BIC differ by at most this fit a record equally well (Kass & Raftery 1995:
-/// a difference below 2 is "not worth more than a bare mention").
-pub const EQUIVALENT_BIC: f64 = 2.0;
+pub use super::EQUIVALENT_BIC;
 /// Two fits' compliance stiffnesses this far apart (ln: 25 %) are different solutions.
 pub const EQUIVALENT_APART_LN: f64 = 0.223_143_551_314_209_7;
 /// Two fits' motor shares this far apart are different solutions.
@@ -523,12 +585,6 @@ pub const BACKLASH_FINE_STEPS: usize = 10;
 /// Fastest rate the friction's slope T_c/(v_s J) may have, 1/s: what RK4 steps of 0.25 ms
 /// (`Powertrain::rk4_steps_s`: h·rate ≤ 0.5) resolve, four per millisecond.
 pub const MAX_FRICTION_RATE: f64 = 0.5 / (2.0 * plant::effects::BACKLASH_STEP_S);
-
-/// A re-fitted j_drive or c_short more than this factor from its declared value is
-/// implausible: such a candidate imitates a missing effect by distorting the declared
-/// mechanics and is not chosen (reported with `implausible`); an answer that needs it is no
-/// finding ([`TorsionalDiagnosis::distorted`]).
-pub const DECLARED_TOLERANCE_FACTOR: f64 = 1.3;
 
 /// Most RK4 steps per sample within a smooth piece of a candidate with play or friction: a
 /// model needing more has a time scale below an eighth of the sample time (a lag, an overdamped
@@ -610,12 +666,6 @@ impl Fit {
         self.cost.sqrt()
     }
 
-    /// Whether the re-fit keeps j_drive and c_short within [`DECLARED_TOLERANCE_FACTOR`] of
-    /// their declared values.
-    fn plausible(&self) -> bool {
-        self.x[..2].iter().all(|v| v.abs() <= DECLARED_TOLERANCE_FACTOR.ln())
-    }
-
     /// This fit as a step of the selection's path.
     fn step(&self) -> PathStep {
         PathStep { effects: self.effects.iter().map(|c| label(*c)).collect(), error: self.error(), score: self.score }
@@ -690,10 +740,17 @@ pub fn diagnose(
     spectrogram.magnitudes(&measured[1], &mut measured_spectra);
     let spectra_norm = measured_spectra.iter().map(|v| v * v).sum::<f64>().sqrt();
     let spectra_norm = if spectra_norm.is_finite() { spectra_norm } else { 0.0 };
+    let shafts = rig.effective(variant).map_err(|e| IdentError::Data(format!("the declared model: {e}")))?;
     let problem = Problem {
         sweep,
         declared: rig.clone(),
         variant,
+        c_s: shafts.c_left * shafts.c_right / (shafts.c_left + shafts.c_right),
+        excited_hz: crate::signal::excited_band_hz(
+            &sweep.torque_nm,
+            dt,
+            verdict::BoundSettings::default().excited_power_share,
+        ),
         speed0,
         measured,
         norm,
@@ -759,7 +816,7 @@ pub fn diagnose(
         // implausible model (one followed a round ahead) also from the declared ones
         let mut bases: Vec<Vec<f64>> = Vec::new();
         let bent = base.x[..2].iter().any(|v| v.abs() > PROFILE_BENT_LN);
-        if base.effects.is_empty() || (c == Candidate::Backlash && bent) || !base.plausible() {
+        if base.effects.is_empty() || (c == Candidate::Backlash && bent) || !problem.plausible(base) {
             let mut x = base.x.clone();
             x[..2].fill(0.0);
             bases.push(x);
@@ -771,7 +828,7 @@ pub fn diagnose(
         // lacks), that effect re-seated from its own starts too, with the declared j_drive and
         // c_short: its value was fitted without the candidate that explains the rest
         if let [own] = base.effects[..] {
-            if !base.plausible() {
+            if !problem.plausible(base) {
                 for s in own.starts(&problem, shuffle_hz) {
                     let mut x = base.x.clone();
                     x[..2].fill(0.0);
@@ -855,7 +912,7 @@ pub fn diagnose(
             cost: f64::INFINITY,
             score: f64::INFINITY,
         });
-        if !best.cost.is_finite() || best.plausible() {
+        if !best.cost.is_finite() || problem.plausible(&best) {
             return best;
         }
         // The fit bent j_drive or c_short beyond the plausible factor: the candidate is fitted
@@ -909,7 +966,7 @@ pub fn diagnose(
         });
         let fits: Vec<Fit> = polished.into_iter().filter(|f| f.cost.is_finite()).chain(std::iter::once(b)).collect();
         let lowest = |plausible: bool| {
-            fits.iter().filter(|f| !plausible || f.plausible()).min_by(|a, b| a.cost.total_cmp(&b.cost)).cloned()
+            fits.iter().filter(|f| !plausible || problem.plausible(f)).min_by(|a, b| a.cost.total_cmp(&b.cost)).cloned()
         };
         lowest(true).or_else(|| lowest(false)).expect("the accepted fit is there")
     };
@@ -943,7 +1000,7 @@ pub fn diagnose(
     // the best fit of `fits` (plausible or not) that beats `base` clearly
     let best_beating = |fits: &[Fit], base: &Fit, plausible: bool| -> Option<Fit> {
         fits.iter()
-            .filter(|f| f.cost.is_finite() && f.plausible() == plausible && f.beats(base))
+            .filter(|f| f.cost.is_finite() && problem.plausible(f) == plausible && f.beats(base))
             .min_by(|a, b| a.score.total_cmp(&b.score))
             .cloned()
     };
@@ -964,7 +1021,7 @@ pub fn diagnose(
             let refitted = each_left_out(&current);
             let weakest = refitted
                 .iter()
-                .filter(|w| w.cost.is_finite() && w.plausible() && !current.beats(w))
+                .filter(|w| w.cost.is_finite() && problem.plausible(w) && !current.beats(w))
                 .min_by(|a, b| a.score.total_cmp(&b.score));
             match weakest {
                 Some(w) => {
@@ -1082,7 +1139,7 @@ pub fn diagnose(
             let swapped: Vec<Fit> = super::on_two_workers(trials.len(), &|t| swap(&current, trials[t].0, trials[t].1));
             let best = swapped
                 .into_iter()
-                .filter(|f| f.cost.is_finite() && f.plausible() && f.score < current.score)
+                .filter(|f| f.cost.is_finite() && problem.plausible(f) && f.score < current.score)
                 .min_by(|a, b| a.score.total_cmp(&b.score));
             match best {
                 Some(b) => {
@@ -1110,7 +1167,7 @@ pub fn diagnose(
     let runner_up = main
         .first_round
         .iter()
-        .filter(|f| f.cost.is_finite() && f.plausible() && f.beats(&none))
+        .filter(|f| f.cost.is_finite() && problem.plausible(f) && f.beats(&none))
         .filter(|f| f.effects.iter().all(|c| !main.current.effects.iter().any(|m| m.overlaps(*c))))
         .min_by(|a, b| a.score.total_cmp(&b.score))
         .cloned();
@@ -1165,7 +1222,7 @@ pub fn diagnose(
                 || (logistic(a.x[at + 1]) - logistic(b.x[at + 1])).abs() > EQUIVALENT_APART_SHARE
         };
         // a fit better than the answer (the selection's valley was not the deepest) is the answer
-        let mut fits: Vec<Fit> = fits.into_iter().filter(|f| f.cost.is_finite() && f.plausible()).collect();
+        let mut fits: Vec<Fit> = fits.into_iter().filter(|f| f.cost.is_finite() && problem.plausible(f)).collect();
         if let Some(k) = (0..fits.len()).min_by(|&a, &b| fits[a].score.total_cmp(&fits[b].score)) {
             if fits[k].score < current.score {
                 let better = fits.swap_remove(k);
@@ -1246,7 +1303,8 @@ pub fn diagnose(
             error_after: f.error(),
             score: f.score,
             fitted_parameters: f.x.len(),
-            implausible: !f.plausible(),
+            implausible: !problem.plausible(f),
+            implausible_because: problem.moved(f),
         }
     };
     let mut candidates: Vec<CandidateScore> =
@@ -1266,7 +1324,8 @@ pub fn diagnose(
             score: none.score + n_eff.max(2.0).ln(),
             fitted_parameters: none.x.len() + 1,
             // it is the re-fitted declared model, judged as that
-            implausible: !none.plausible(),
+            implausible: !problem.plausible(&none),
+            implausible_because: problem.moved(&none),
         });
     }
     candidates.sort_by(|a, b| a.score.total_cmp(&b.score));
@@ -1302,13 +1361,9 @@ pub fn diagnose(
         after,
     };
     // the answer's re-fit of the declared mechanics, judged by the rule every candidate is
-    let distorted = (!current.plausible()).then(|| {
-        format!(
-            "the model fits only with the declared mechanics moved beyond a factor {DECLARED_TOLERANCE_FACTOR} (j_drive ×{:.3}, c_short ×{:.3} of the declared values)",
-            current.x[0].exp(),
-            current.x[1].exp()
-        )
-    });
+    let moved = problem.moved(&current);
+    let distorted = (!moved.is_empty())
+        .then(|| format!("the model fits only with the declared mechanics moved: {}", moved.join("; ")));
     let equivalents: Vec<BTreeMap<String, f64>> = equivalent_fits
         .iter()
         .map(|f| {

@@ -48,11 +48,21 @@ pub struct BoundSettings {
     /// A dead time or time constant is at most this fraction of the record (default 0.1: a
     /// longer one leaves too little of the record to show it).
     pub time_per_record: f64,
+    /// A mode an effect adds (a compliance's) lies below the frequency under which this share
+    /// of the input's power lies (default 0.99: a 1–30 Hz sweep excites up to 30 Hz; a mode
+    /// above every frequency the record excites shows only as a softer spring, and its
+    /// frequency and inertia share are then not determined).
+    pub excited_power_share: f64,
 }
 
 impl Default for BoundSettings {
     fn default() -> Self {
-        BoundSettings { friction_per_force: 1.0, smoothing_per_speed: 0.25, time_per_record: 0.1 }
+        BoundSettings {
+            friction_per_force: 1.0,
+            smoothing_per_speed: 0.25,
+            time_per_record: 0.1,
+            excited_power_share: 0.99,
+        }
     }
 }
 
@@ -73,6 +83,81 @@ pub fn out_of_bounds(parameters: &BTreeMap<String, f64>, scales: &RecordScales, 
         };
         if !v.is_finite() || v >= bound {
             out.push(format!("{key} = {v:.4e} is at or beyond its bound {bound:.4e} ({what})"));
+        }
+    }
+    out
+}
+
+/// How far the declared mechanics may move in a re-fit, with its default.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct DeclaredSettings {
+    /// A declared inertia or stiffness is trusted to within this factor (default 1.3: the
+    /// spread of inertias from drawings and stiffnesses from shaft geometry against a rig's
+    /// measured modes; beyond it a re-fit imitates a missing effect). Applied to what each
+    /// effect leaves unchanged ([`Moves`]), not to every raw parameter.
+    pub tolerance_factor: f64,
+}
+
+impl Default for DeclaredSettings {
+    fn default() -> Self {
+        DeclaredSettings { tolerance_factor: 1.3 }
+    }
+}
+
+pub use plant::drive::Moves;
+
+/// A declared quantity as a fit left it, relative to its declared value.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Refitted<'a> {
+    /// An inertia (one that an effect split in two: their total).
+    Inertia {
+        /// Its name in the report.
+        name: &'a str,
+        /// Re-fitted over declared value.
+        ratio: f64,
+    },
+    /// A stiffness.
+    Stiffness {
+        /// Its name in the report.
+        name: &'a str,
+        /// Re-fitted over declared value.
+        ratio: f64,
+        /// Where an effect put a spring in series with it ([`Moves::SeriesSpring`]): the pair's
+        /// stiffness over the declared one.
+        series_ratio: Option<f64>,
+    },
+}
+
+/// How `refitted` moved the declared mechanics beyond what the effects beside it explain, each
+/// as a sentence for the report (empty: plausible). The one rule for every model: an inertia's
+/// total and a stiffness no effect put a spring in series with stay within the tolerance factor
+/// either way; a stiffness with a spring in series may be stiffer (the series pair is what was
+/// measured) but not softer than declared within it, and the pair no stiffer.
+pub fn declared_moved(refitted: &[Refitted], s: &DeclaredSettings) -> Vec<String> {
+    let f = s.tolerance_factor;
+    let within = |r: f64| r.is_finite() && r > 0.0 && r.ln().abs() <= f.ln();
+    let mut out = Vec::new();
+    for q in refitted {
+        match *q {
+            Refitted::Inertia { name, ratio } | Refitted::Stiffness { name, ratio, series_ratio: None } => {
+                if !within(ratio) {
+                    out.push(format!(
+                        "{name} ×{ratio:.3} of its declared value, beyond the factor {f} it is trusted to"
+                    ));
+                }
+            }
+            Refitted::Stiffness { name, ratio, series_ratio: Some(series) } => {
+                if !(ratio.is_finite() && ratio >= 1.0 / f) {
+                    out.push(format!(
+                        "{name} ×{ratio:.3} of its declared value: a spring in series cannot make it softer than measured (factor {f})"
+                    ));
+                }
+                if !(series.is_finite() && series <= f) {
+                    out.push(format!(
+                        "{name} in series with the compliance ×{series:.3} of the declared value: stiffer than measured (factor {f})"
+                    ));
+                }
+            }
         }
     }
     out
@@ -109,6 +194,24 @@ mod tests {
         let v = out_of_bounds(&p, &scales(), &BoundSettings::default());
         assert!(v.is_empty(), "{v:?}");
         assert_eq!(verdict("coulomb_friction", true, &v), Verdict::Explained);
+    }
+
+    #[test]
+    fn a_compliance_may_stiffen_the_shafts_but_nothing_else_may() {
+        let s = DeclaredSettings::default();
+        // the record: the compliance's fit moved c_short ×1.37, which a series spring
+        // explains (the pair measured ×0.9 of the declared value)
+        let c = |ratio, series_ratio| Refitted::Stiffness { name: "c_short", ratio, series_ratio };
+        assert!(declared_moved(&[c(1.37, Some(0.9))], &s).is_empty());
+        // the same move beside a friction is a distortion
+        assert_eq!(declared_moved(&[c(1.37, None)], &s).len(), 1);
+        // a compliance does not make the shafts softer, nor the pair stiffer, than measured
+        assert_eq!(declared_moved(&[c(0.7, Some(0.5))], &s).len(), 1);
+        assert_eq!(declared_moved(&[c(2.0, Some(1.5))], &s).len(), 1);
+        // inertias: within the factor either way; NaN is never plausible
+        let j = |ratio| Refitted::Inertia { name: "j_drive", ratio };
+        assert!(declared_moved(&[j(1.29), j(1.0 / 1.29)], &s).is_empty());
+        assert_eq!(declared_moved(&[j(1.31), j(f64::NAN), j(0.0)], &s).len(), 3);
     }
 
     #[test]

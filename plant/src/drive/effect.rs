@@ -90,6 +90,23 @@ pub struct EffectParameter {
     pub what: &'static str,
 }
 
+/// What an effect may change of the declared mechanics that a record measured: the diagnosis
+/// re-fits the declared inertias and stiffnesses beside every candidate effect, and a fit that
+/// moves them in a way the effect cannot explain imitates a missing effect by distorting the
+/// declared model (`ident::diagnose::verdict::declared_moved` judges it, one rule for every
+/// model).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Moves {
+    /// Nothing: it acts beside the declared inertias and stiffnesses (a friction, a play, a dead
+    /// time, a lag, damping), which keep the values the record measured.
+    Nothing,
+    /// It splits an inertia in two, their total the declared one, and puts a spring in series
+    /// with the declared stiffness (a compliance inside a machine): what the declared stiffness
+    /// measured is the series pair, so the declared spring itself may be stiffer than declared,
+    /// never softer, and the pair never stiffer.
+    SeriesSpring,
+}
+
 /// What one effect is and does.
 pub trait EffectModel: Copy + Into<Effect> {
     /// The vocabulary name (as in model files and reports).
@@ -98,6 +115,8 @@ pub trait EffectModel: Copy + Into<Effect> {
     const PARAMETERS: &'static [EffectParameter];
     /// Whether it makes the right-hand side nonlinear (integrated by RK4, not the exact ZOH).
     const NONLINEAR: bool = false;
+    /// What it may change of the declared mechanics (the diagnosis's plausibility).
+    const MOVES: Moves = Moves::Nothing;
 
     /// Where it acts.
     fn element(&self) -> Element;
@@ -344,6 +363,14 @@ impl Effect {
             E::NONLINEAR
         }
         each!(self, e => nonlinear(e))
+    }
+
+    /// What it may change of the declared mechanics.
+    pub fn moves(&self) -> Moves {
+        fn moves<E: EffectModel>(_: &E) -> Moves {
+            E::MOVES
+        }
+        each!(self, e => moves(e))
     }
 
     /// Where it acts.
