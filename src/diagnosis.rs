@@ -236,34 +236,6 @@ fn frequency_response(u: &[f64], y: &[f64], dt: f64, f_max: f64) -> Vec<(f64, f6
     bands.values().map(|&(f, h, c)| (f / c as f64, h / c as f64)).collect()
 }
 
-/// The verdict of a diagnosis that chose `effect`, with the parameters of everything it found
-/// judged against the record's bounds (`ident::diagnose::verdict`, default settings) beside
-/// the reason the diagnosis itself gave why its answer is no finding, if it gave one.
-fn judge<'a>(
-    effect: &str,
-    structured_residual: bool,
-    parameters: impl Iterator<Item = &'a BTreeMap<String, f64>>,
-    scales: &ident::diagnose::verdict::RecordScales,
-    no_finding: Option<&String>,
-) -> (ident::diagnose::verdict::Verdict, Vec<String>) {
-    use ident::diagnose::verdict::{out_of_bounds, verdict, BoundSettings, Verdict};
-    let mut reasons: Vec<String> = no_finding.into_iter().cloned().collect();
-    if effect != "none" {
-        for p in parameters {
-            for r in out_of_bounds(p, scales, &BoundSettings::default()) {
-                if !reasons.contains(&r) {
-                    reasons.push(r);
-                }
-            }
-        }
-    }
-    let v = verdict(effect, structured_residual, &reasons);
-    if v == Verdict::NotExplained && reasons.is_empty() {
-        reasons.push("the residual is structured and no candidate explains it with physical parameters".into());
-    }
-    (v, reasons)
-}
-
 /// The notes of a time-domain diagnosis: `none` chosen (nothing beats re-fitting `refitted`),
 /// a residual still far from white.
 fn fit_notes(effect: &str, refitted: &str, structured_residual: bool, error_after: f64) -> Vec<String> {
@@ -390,7 +362,14 @@ fn torsional(file: &Path, progress: &(dyn Fn(&str) + Sync)) -> anyhow::Result<Di
         duration_s: b.sweep.torque_nm.len() as f64 * dt,
     };
     let judged = std::iter::once(&d.parameters).chain(d.effects.iter().map(|e| &e.parameters));
-    let (verdict, verdict_reasons) = judge(&d.effect, d.structured_residual, judged, &scales, d.distorted.as_ref());
+    let (verdict, verdict_reasons) = ident::diagnose::verdict::judge(
+        &d.effect,
+        d.structured_residual,
+        judged,
+        &scales,
+        d.distorted.as_ref(),
+        &ident::diagnose::verdict::BoundSettings::default(),
+    );
     Ok(Diagnosis {
         report: DiagnosisReport {
             verdict,
@@ -528,8 +507,14 @@ fn bearing(file: &Path, _progress: &(dyn Fn(&str) + Sync)) -> anyhow::Result<Dia
         rms_speed: f64::INFINITY,
         duration_s: test.force_x_n.len() as f64 * test.dt_s,
     };
-    let (verdict, verdict_reasons) =
-        judge(&d.effect, d.structured_residual, std::iter::once(&d.parameters), &scales, None);
+    let (verdict, verdict_reasons) = ident::diagnose::verdict::judge(
+        &d.effect,
+        d.structured_residual,
+        std::iter::once(&d.parameters),
+        &scales,
+        None,
+        &ident::diagnose::verdict::BoundSettings::default(),
+    );
     Ok(Diagnosis {
         report: DiagnosisReport {
             verdict,
@@ -794,8 +779,14 @@ fn drive(file: &Path, progress: &(dyn Fn(&str) + Sync)) -> anyhow::Result<Diagno
         rms_speed: if scales.rms_speed.is_nan() { f64::INFINITY } else { scales.rms_speed },
         ..scales
     };
-    let (verdict, verdict_reasons) =
-        judge(&d.effect, d.structured_residual, std::iter::once(&d.parameters), &scales, None);
+    let (verdict, verdict_reasons) = ident::diagnose::verdict::judge(
+        &d.effect,
+        d.structured_residual,
+        std::iter::once(&d.parameters),
+        &scales,
+        None,
+        &ident::diagnose::verdict::BoundSettings::default(),
+    );
     Ok(Diagnosis {
         report: DiagnosisReport {
             verdict,

@@ -328,7 +328,11 @@ impl DriveDynamics {
                 *value = if tau > 0.0 { delays[j].value_at(mid - tau, u[j]) } else { u[j] };
             }
             if nonlinear {
-                self.rk.advance(&mut HeldInputs { d: &self.dynamics, u: &self.u_piece }, state.as_mut_slice(), len);
+                self.rk.advance(
+                    &mut HeldInputs { d: &self.dynamics, u: &self.u_piece, maps: None },
+                    state.as_mut_slice(),
+                    len,
+                );
             } else {
                 let i = match self.cache.index(&self.a, &self.b, len, self.max_piece_s) {
                     Ok(i) => i,

@@ -15,7 +15,8 @@ use nalgebra::{DMatrix, DVector};
 
 use crate::params::FmuParams;
 use crate::variables::{powertrain_states, Table};
-use plant::effects::{DelayLine, PieceMaps, Powertrain};
+use plant::effects::{DelayLine, Powertrain};
+use plant::integrate::PieceMaps;
 use plant::integrate::{PiecewiseRk4, PiecewiseSmooth};
 
 /// Number of inputs: M_m2, M_drive, M_m3, bearing F_x, F_y.

@@ -15,7 +15,7 @@ use nalgebra::{DMatrix, DVector};
 use serde::{Deserialize, Serialize};
 
 use crate::error::{PlantError, Result};
-use crate::integrate::{PiecewiseRk4, PiecewiseSmooth};
+use crate::integrate::{PieceMaps, PiecewiseRk4, PiecewiseSmooth, AFFINE_MAX_STATES};
 use crate::line::{Line, Quantity};
 use crate::statespace::zoh;
 
@@ -563,7 +563,7 @@ impl Dynamics {
     pub fn piece(&self, x: &[f64]) -> u64 {
         let n = self.n;
         let mut key: u64 = 0;
-        let mut mix = |class: u64| key = (key ^ class).wrapping_mul(0x9E37_79B9_7F4A_7C15).wrapping_add(1);
+        let mut mix = |class: u64| key = mix_piece(key, class);
         for s in &self.couplings {
             if s.half > 0.0 {
                 let twist = self.elastic_twist(s, x);
@@ -709,6 +709,18 @@ impl Dynamics {
             }
         }
         e
+    }
+
+    /// The exact steps of each of `lengths` (s) of the three pieces of a model whose only
+    /// nonlinearity is one coupling's play (no friction, at most [`AFFINE_MAX_STATES`] states):
+    /// inside the play, beyond it, below it. `None` for any other model.
+    pub fn single_play_maps(&self, lengths: &[f64]) -> Option<Vec<PieceMaps>> {
+        let plays = self.couplings.iter().filter(|s| s.half > 0.0).count();
+        if plays != 1 || self.friction.iter().any(|f| f.0 > 0.0) || self.nstates > AFFINE_MAX_STATES {
+            return None;
+        }
+        let offset = self.play_offset();
+        lengths.iter().map(|&h| PieceMaps::new(h, &|contact| self.linear_piece(contact), &offset)).collect()
     }
 
     /// The friction's contribution to ∂v̇_i/∂v_i at state `x`: (speed's state index, slope
@@ -904,15 +916,19 @@ impl Dynamics {
                 worst.unwrap_or(f64::INFINITY)
             )));
         }
-        // each step starts in the piece the last one ended in (pieces do not depend on inputs)
+        // each step starts in the piece the last one ended in (pieces do not depend on inputs);
+        // with one play and nothing else nonlinear, a step that stays in its piece is exact
+        let lengths: Vec<f64> = pieces.iter().map(|&(_, frac)| frac * dt).collect();
+        let exact = self.single_play_maps(&lengths);
         let mut piece = None;
         for k in 0..len {
             for (yo, &o) in y.iter_mut().zip(outputs) {
                 yo.push(self.output(&x, o));
             }
-            for &(phase, frac) in &pieces {
+            for (p, &(phase, frac)) in pieces.iter().enumerate() {
                 input_at(&mut u, k, phase);
-                piece = rk.advance_from(&mut HeldInputs { d: self, u: &u }, &mut x, frac * dt, piece).1;
+                let maps = exact.as_ref().and_then(|maps| maps.get(p));
+                piece = rk.advance_from(&mut HeldInputs { d: self, u: &u, maps }, &mut x, frac * dt, piece).1;
             }
             if !x.iter().all(|v| v.is_finite()) {
                 return Err(PlantError::Numerical(format!("the simulation diverged at sample {k}")));
@@ -922,12 +938,20 @@ impl Dynamics {
     }
 }
 
+/// One element's class folded into a piece key ([`Dynamics::piece`]).
+fn mix_piece(key: u64, class: u64) -> u64 {
+    (key ^ class).wrapping_mul(0x9E37_79B9_7F4A_7C15).wrapping_add(1)
+}
+
 /// The dynamics with the inputs held over a step.
 pub struct HeldInputs<'a> {
     /// The model.
     pub d: &'a Dynamics,
     /// The inputs after their dead times.
     pub u: &'a [f64],
+    /// The exact steps of its pieces where its only nonlinearity is one play
+    /// ([`Dynamics::single_play_maps`]).
+    pub maps: Option<&'a PieceMaps>,
 }
 
 impl PiecewiseSmooth for HeldInputs<'_> {
@@ -938,6 +962,13 @@ impl PiecewiseSmooth for HeldInputs<'_> {
     #[inline]
     fn piece(&mut self, x: &[f64]) -> u64 {
         self.d.piece(x)
+    }
+    /// With one play and nothing else nonlinear, the piece's key is that play's class alone:
+    /// inside (0), beyond (1), below (2), the order of [`PieceMaps`].
+    fn exact(&mut self, piece: u64, x: &[f64], h: f64, out: &mut [f64]) -> bool {
+        let Some(maps) = self.maps else { return false };
+        let Some(index) = (0..3).find(|&class| mix_piece(0, class) == piece) else { return false };
+        maps.step(index, x, self.u, h, out)
     }
 }
 
@@ -1164,6 +1195,74 @@ mod tests {
             }
         }
         assert!(y[1][1999] > 0.0);
+    }
+
+    /// A rattling play stepped exactly within its pieces ([`Dynamics::single_play_maps`])
+    /// against RK4 written out here over 10 µs steps, the dead zone as its own branches: two
+    /// bodies, a spring with 20 mrad of play damped to 35 % of critical (lighter damping makes
+    /// the impacts' timing, and so any two integrations, drift apart), a two-tone torque that
+    /// drives the twist through the play and back many times a second.
+    #[test]
+    fn a_rattling_play_stepped_exactly_matches_a_fine_rk4() {
+        let (j1, j2, c, d, b, dt) = (0.01, 0.05, 1000.0, 2.0, 0.02, 1e-3);
+        let model = DriveModel {
+            line: Line {
+                domain: Domain::Rotational,
+                bodies: vec![
+                    LineBody { name: "a".into(), inertia: j1, drag: 0.01 },
+                    LineBody { name: "b".into(), inertia: j2, drag: 0.02 },
+                ],
+                couplings: vec![Coupling::new(c, d, 1.0)],
+            },
+            inputs: vec![0],
+            effects: vec![Effect::Backlash(Backlash { coupling: 0, backlash: b })],
+        };
+        assert!(Dynamics::new(&model).unwrap().single_play_maps(&[dt]).is_some(), "the exact path is taken");
+        let u: Vec<f64> = (0..2000)
+            .map(|k| {
+                let t = k as f64 * dt;
+                0.5 * (std::f64::consts::TAU * 3.0 * t).sin() + 0.2 * (std::f64::consts::TAU * 17.0 * t).sin()
+            })
+            .collect();
+        let y =
+            model.simulate(std::slice::from_ref(&u), dt, 0.0, &[(Quantity::Speed, 0), (Quantity::Speed, 1)]).unwrap();
+        // x = [q1, q2, w1, w2]; force in the shaft on the twist q1 − q2 beyond ±b/2
+        let f = |x: [f64; 4], torque: f64| -> [f64; 4] {
+            let (s, r) = (x[0] - x[1], x[2] - x[3]);
+            let t = if s > b / 2.0 {
+                c * (s - b / 2.0) + d * r
+            } else if s < -b / 2.0 {
+                c * (s + b / 2.0) + d * r
+            } else {
+                0.0
+            };
+            [x[2], x[3], (torque - t - 0.01 * x[2]) / j1, (t - 0.02 * x[3]) / j2]
+        };
+        let (mut x, sub) = ([0.0; 4], 100);
+        let h = dt / sub as f64;
+        let peak = y[0].iter().chain(&y[1]).fold(0.0f64, |m, v| m.max(v.abs()));
+        let mut contacts = 0;
+        let mut inside = true;
+        let mut worst = 0.0f64;
+        for (k, &uk) in u.iter().enumerate() {
+            worst = worst.max((y[0][k] - x[2]).abs().max((y[1][k] - x[3]).abs()));
+            for _ in 0..sub {
+                let add = |a: [f64; 4], k: [f64; 4], s: f64| std::array::from_fn::<f64, 4, _>(|i| a[i] + s * k[i]);
+                let k1 = f(x, uk);
+                let k2 = f(add(x, k1, h / 2.0), uk);
+                let k3 = f(add(x, k2, h / 2.0), uk);
+                let k4 = f(add(x, k3, h), uk);
+                x = std::array::from_fn(|i| x[i] + h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]));
+            }
+            let now_inside = (x[0] - x[1]).abs() < b / 2.0;
+            contacts += usize::from(inside && !now_inside);
+            inside = now_inside;
+        }
+        assert!(contacts > 20, "the play was crossed {contacts} times: the test must rattle");
+        // Within a piece the step is exact; each crossing is taken in fine RK4 sub-steps, whose
+        // error at the kink both paths share: measured 2.7 % of the peak speed with the exact
+        // pieces, 2.65 % with RK4 throughout (the same sub-steps), so 3.5 %.
+        assert!(worst < 0.035 * peak, "worst difference {worst:.3e} of a peak speed {peak:.3}");
     }
 
     #[test]

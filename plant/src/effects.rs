@@ -8,7 +8,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::drive::{ActuatorLag, Backlash, CoulombFriction, DriveModel, Dynamics, Effect, TimeDelay};
 use crate::error::{non_negative, PlantError, Result};
-use crate::integrate::{AffineStep, PiecewiseRk4, PiecewiseSmooth};
+use crate::integrate::{AffineStep, PieceMaps, PiecewiseRk4, PiecewiseSmooth};
 use crate::line::{Coupling, Domain, Line, LineBody, Quantity};
 use crate::rig::{RigParams, Variant};
 use crate::statespace::StateSpace;
@@ -554,48 +554,6 @@ impl Powertrain {
             },
             &offset,
         )
-    }
-}
-
-/// The exact steps of a backlash model's pieces (inside the play, beyond it, below it: the keys
-/// of [`Powertrain::piece`]) over `h` seconds.
-#[derive(Debug, Clone)]
-pub struct PieceMaps {
-    h: f64,
-    maps: [AffineStep; 3],
-}
-
-impl PieceMaps {
-    /// The maps of `h` for the system `(A, B)` of `linear(contact)` and the play's offset
-    /// (state derivative beyond the positive edge): x⁺ = Φ x + Γ u + e per piece.
-    pub fn new(h: f64, linear: &dyn Fn(bool) -> (DMatrix<f64>, DMatrix<f64>), offset: &[f64]) -> Option<PieceMaps> {
-        let ns = offset.len();
-        let map = |contact: bool, sign: f64| -> Option<AffineStep> {
-            let (a, b) = linear(contact);
-            let m = b.ncols();
-            let mut inputs = DMatrix::zeros(ns, m + 1);
-            inputs.columns_mut(0, m).copy_from(&b);
-            for (i, &e) in offset.iter().enumerate() {
-                inputs[(i, m)] = sign * e;
-            }
-            let (phi, gamma) = crate::statespace::zoh(&a, &inputs, h).ok()?;
-            let g = gamma.as_slice();
-            AffineStep::new(phi.as_slice(), &g[..ns * m], &g[ns * m..])
-        };
-        Some(PieceMaps { h, maps: [map(false, 0.0)?, map(true, 1.0)?, map(true, -1.0)?] })
-    }
-
-    /// The step length, s.
-    pub fn h(&self) -> f64 {
-        self.h
-    }
-
-    /// x⁺ of piece `piece` under the inputs `u` held over `h`; false for another step length or
-    /// an unknown piece.
-    pub fn step(&self, piece: u64, x: &[f64], u: &[f64], h: f64, out: &mut [f64]) -> bool {
-        let Some(m) = self.maps.get(piece as usize).filter(|_| h == self.h) else { return false };
-        m.apply(x, u, out);
-        true
     }
 }
 

@@ -12,6 +12,8 @@
 //! alone) the system may step a piece exactly instead, kept when the end lies in the start's
 //! piece.
 
+use nalgebra::DMatrix;
+
 /// A right-hand side that is smooth within pieces.
 pub trait PiecewiseSmooth {
     /// ẋ at `x` (inputs held over the step).
@@ -238,6 +240,49 @@ fn rk4(
         return None;
     }
     Some(check.unwrap_or(0))
+}
+
+/// The exact steps of the three pieces of a model whose only nonlinearity is a play (inside the
+/// play, beyond it, below it: pieces 0, 1, 2, as `effects::Powertrain::piece` and
+/// [`crate::drive::Dynamics::piece`] key them) over `h` seconds.
+#[derive(Debug, Clone)]
+pub struct PieceMaps {
+    h: f64,
+    maps: [AffineStep; 3],
+}
+
+impl PieceMaps {
+    /// The maps of `h` for the system `(A, B)` of `linear(contact)` and the play's offset
+    /// (state derivative beyond the positive edge): x⁺ = Φ x + Γ u + e per piece.
+    pub fn new(h: f64, linear: &dyn Fn(bool) -> (DMatrix<f64>, DMatrix<f64>), offset: &[f64]) -> Option<PieceMaps> {
+        let ns = offset.len();
+        let map = |contact: bool, sign: f64| -> Option<AffineStep> {
+            let (a, b) = linear(contact);
+            let m = b.ncols();
+            let mut inputs = DMatrix::zeros(ns, m + 1);
+            inputs.columns_mut(0, m).copy_from(&b);
+            for (i, &e) in offset.iter().enumerate() {
+                inputs[(i, m)] = sign * e;
+            }
+            let (phi, gamma) = crate::statespace::zoh(&a, &inputs, h).ok()?;
+            let g = gamma.as_slice();
+            AffineStep::new(phi.as_slice(), &g[..ns * m], &g[ns * m..])
+        };
+        Some(PieceMaps { h, maps: [map(false, 0.0)?, map(true, 1.0)?, map(true, -1.0)?] })
+    }
+
+    /// The step length, s.
+    pub fn h(&self) -> f64 {
+        self.h
+    }
+
+    /// x⁺ of piece `piece` under the inputs `u` held over `h`; false for another step length or
+    /// an unknown piece.
+    pub fn step(&self, piece: u64, x: &[f64], u: &[f64], h: f64, out: &mut [f64]) -> bool {
+        let Some(m) = self.maps.get(piece as usize).filter(|_| h == self.h) else { return false };
+        m.apply(x, u, out);
+        true
+    }
 }
 
 #[cfg(test)]

@@ -174,6 +174,36 @@ pub fn verdict(effect: &str, structured_residual: bool, violations: &[String]) -
     }
 }
 
+/// The verdict of a diagnosis that chose `effect` with a structured residual or not: the
+/// parameters of everything it found judged against the record's bounds ([`out_of_bounds`],
+/// `settings`; the declared model's `none` has no effect parameters to judge), beside the reason
+/// the diagnosis itself gave why its answer is no finding (`no_finding`, if any). Returns the
+/// verdict and its reasons (a *not explained* always has one).
+pub fn judge<'a>(
+    effect: &str,
+    structured_residual: bool,
+    parameters: impl Iterator<Item = &'a BTreeMap<String, f64>>,
+    scales: &RecordScales,
+    no_finding: Option<&String>,
+    settings: &BoundSettings,
+) -> (Verdict, Vec<String>) {
+    let mut reasons: Vec<String> = no_finding.into_iter().cloned().collect();
+    if effect != "none" {
+        for p in parameters {
+            for r in out_of_bounds(p, scales, settings) {
+                if !reasons.contains(&r) {
+                    reasons.push(r);
+                }
+            }
+        }
+    }
+    let v = verdict(effect, structured_residual, &reasons);
+    if v == Verdict::NotExplained && reasons.is_empty() {
+        reasons.push("the residual is structured and no candidate explains it with physical parameters".into());
+    }
+    (v, reasons)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
