@@ -1,0 +1,35 @@
+//! The survey's CI subset (issue 32, item 5): `scripts/survey.py` writes 30 records of the paper
+//! rig with a simulator that shares no code with rigtwin (scipy's LSODA, its own play, Stribeck
+//! friction, coloured noise, drift, quantisation; seeds 0-29, every effect and `none`, sweeps,
+//! multisines, steps and PRBS) and diagnoses each with this build's `rigtwin diagnose`.
+//!
+//! What it holds is today's measured result, a guard against regressions, not the issue's aim
+//! (≥ 95 % of single effects right): on these 30 records 28 are right, one is said to be not
+//! explained (seed 10, play under a multisine about zero torque) and one is wrong (seed 25, a
+//! compliance reported with shaft damping beside it). The full survey's table, with its
+//! held-out part, is docs/validation.md.
+
+mod common;
+
+use std::process::Command;
+
+#[test]
+fn the_survey_subset_keeps_its_verdicts() {
+    let dir = common::scratch("survey", "subset");
+    let summary = dir.join("summary.json");
+    let out = Command::new(common::python())
+        .arg(concat!(env!("CARGO_MANIFEST_DIR"), "/scripts/survey.py"))
+        .args(["--rigtwin", env!("CARGO_BIN_EXE_rigtwin"), "--seeds", "0-29", "--out"])
+        .arg(&dir)
+        .arg("--summary")
+        .arg(&summary)
+        .output()
+        .unwrap();
+    let log = String::from_utf8_lossy(&out.stderr);
+    eprintln!("{log}");
+    assert!(out.status.success(), "the survey failed: {log}");
+    let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&summary).unwrap()).unwrap();
+    assert_eq!(v["records"], 30);
+    assert!(v["right"].as_u64().unwrap() >= 28, "{v}");
+    assert!(v["wrong"].as_u64().unwrap() <= 1, "a confident wrong answer more than today: {v}");
+}
