@@ -20,6 +20,7 @@ import os
 import subprocess
 import sys
 import time
+from concurrent.futures import ProcessPoolExecutor
 
 import numpy as np
 from scipy.integrate import solve_ivp
@@ -234,13 +235,18 @@ def main():
     ap.add_argument("--rigtwin", required=True)
     ap.add_argument("--seeds", default="0-34")
     ap.add_argument("--out", required=True)
+    ap.add_argument("--jobs", type=int, default=os.cpu_count() or 1, help="processes simulating the records")
     ap.add_argument("--summary", help="write the counts (right, not explained, wrong, records) as JSON here")
     args = ap.parse_args()
     os.makedirs(args.out, exist_ok=True)
+    seeds = parse_seeds(args.seeds)
+    truths = [truth_of(seed) for seed in seeds]
+    # the records are simulated on every core (the simulations are independent and
+    # single-threaded); the diagnoses then run one at a time (each uses two threads)
+    with ProcessPoolExecutor(max_workers=args.jobs) as pool:
+        bundles = list(pool.map(write_bundle, [args.out] * len(truths), truths))
     rows = []
-    for seed in parse_seeds(args.seeds):
-        t = truth_of(seed)
-        bundle = write_bundle(args.out, t)
+    for seed, t, bundle in zip(seeds, truths, bundles):
         out = os.path.join(args.out, f"seed_{seed:04d}.json")
         start = time.time()
         p = subprocess.run([args.rigtwin, "diagnose", bundle, "--json", out], capture_output=True, text=True)
