@@ -242,14 +242,7 @@ const MOTOR_HEAVY: [(f64, f64, f64, u64); 9] = [
 fn motor_heavy_compliances_are_right_or_said_to_be_undetermined() {
     let mut misses = Vec::new();
     for (k, f, shafts, seed) in MOTOR_HEAVY {
-        let d = motor_heavy(k, f, shafts, seed);
-        let p = &d.parameters;
-        let near = |key: &str, truth: f64, tol: f64| p.get(key).is_some_and(|v| (v - truth).abs() <= tol);
-        let right = d.effect == "drive_compliance"
-            && near("stiffness_Nm_per_rad", k, 0.2 * k)
-            && near("motor_fraction", f, 0.125)
-            && near("c_short_Nm_per_rad", declared().c_short * shafts, 0.2 * declared().c_short * shafts);
-        let said = !d.equivalents.is_empty() || d.distorted.is_some();
+        let (right, said) = motor_heavy_outcome(k, f, shafts, seed);
         if !(right || said) {
             misses.push(seed);
         }
@@ -280,15 +273,8 @@ fn held_out_motor_heavy_compliances_with_stiffer_shafts() {
     let mut misses = Vec::new();
     let mut right_count = 0;
     for (k, f, shafts, seed) in MOTOR_HEAVY_STIFFER_SHAFTS {
-        let d = motor_heavy(k, f, shafts, seed);
-        let p = &d.parameters;
-        let near = |key: &str, truth: f64, tol: f64| p.get(key).is_some_and(|v| (v - truth).abs() <= tol);
-        let right = d.effect == "drive_compliance"
-            && near("stiffness_Nm_per_rad", k, 0.2 * k)
-            && near("motor_fraction", f, 0.125)
-            && near("c_short_Nm_per_rad", declared().c_short * shafts, 0.2 * declared().c_short * shafts);
+        let (right, said) = motor_heavy_outcome(k, f, shafts, seed);
         right_count += usize::from(right);
-        let said = !d.equivalents.is_empty() || d.distorted.is_some();
         if !(right || said) {
             misses.push(seed);
         }
@@ -296,6 +282,21 @@ fn held_out_motor_heavy_compliances_with_stiffer_shafts() {
     eprintln!("right: {right_count} of {}", MOTOR_HEAVY_STIFFER_SHAFTS.len());
     const MISSES: [u64; 0] = [];
     assert_eq!(misses, MISSES, "records with a confident wrong answer (by seed)");
+}
+
+/// Whether the diagnosis of a motor-heavy record ([`motor_heavy`]) is right (the compliance
+/// found, stiffness and c_short within 20 %, motor share within 0.125) and whether it says the
+/// record does not determine the answer (equally good fits) or that the answer is no finding.
+fn motor_heavy_outcome(k: f64, f: f64, shafts: f64, seed: u64) -> (bool, bool) {
+    let d = motor_heavy(k, f, shafts, seed);
+    let p = &d.parameters;
+    let near = |key: &str, truth: f64, tol: f64| p.get(key).is_some_and(|v| (v - truth).abs() <= tol);
+    let c_short = declared().c_short * shafts;
+    let right = d.effect == "drive_compliance"
+        && near("stiffness_Nm_per_rad", k, 0.2 * k)
+        && near("motor_fraction", f, 0.125)
+        && near("c_short_Nm_per_rad", c_short, 0.2 * c_short);
+    (right, !d.equivalents.is_empty() || d.distorted.is_some())
 }
 
 /// The diagnosis of a sweep of the declared rig with its shafts × `shafts` and a compliance
