@@ -374,28 +374,27 @@ pub fn filtfilt_high_pass_pair(x: &mut [f64], y: &mut [f64], dt_s: f64, cutoff_h
 #[cfg(test)]
 mod tests {
     use super::*;
+    use approx::assert_relative_eq;
+    use std::f64::consts::PI;
 
     #[test]
     fn the_excited_band_ends_where_the_excitation_does() {
         let dt = 1e-3;
         // a 10 Hz sine on an offset: all its power at 10 Hz
-        let sine: Vec<f64> =
-            (0..10_000).map(|k| 5.0 + (2.0 * std::f64::consts::PI * 10.0 * k as f64 * dt).sin()).collect();
+        let sine: Vec<f64> = (0..10_000).map(|k| 5.0 + (2.0 * PI * 10.0 * k as f64 * dt).sin()).collect();
         assert!((excited_band_hz(&sine, dt, 0.99) - 10.0).abs() <= 0.1, "{}", excited_band_hz(&sine, dt, 0.99));
         // a linear sweep 1 -> 30 Hz over 20 s spreads its power evenly: 99 % lies below
         // 1 + 0.99 x 29 = 29.7 Hz (within the sweep's spectral leakage, a few tenths of a hertz)
         let sweep: Vec<f64> = (0..20_000)
             .map(|k| {
                 let t = k as f64 * dt;
-                (2.0 * std::f64::consts::PI * (t + 0.5 * 29.0 / 20.0 * t * t)).sin()
+                (2.0 * PI * (t + 0.5 * 29.0 / 20.0 * t * t)).sin()
             })
             .collect();
         let top = excited_band_hz(&sweep, dt, 0.99);
         assert!((top - 29.7).abs() < 0.5, "{top}");
         assert_eq!(excited_band_hz(&[1.0; 100], dt, 0.99), 0.0);
     }
-    use approx::assert_relative_eq;
-    use std::f64::consts::PI;
 
     #[test]
     fn rfft_of_a_cosine_has_one_line() {

@@ -27,10 +27,6 @@ pub fn high_pass_corner_hz(n: usize, dt_s: f64, min_hz: f64) -> f64 {
 /// samples, far below what the information criterion tells apart.
 pub const LM_REL_TOL: f64 = 1e-5;
 
-/// Two fits whose BIC differ by at most this fit a record equally well (Kass & Raftery 1995:
-/// a difference below 2 is "not worth more than a bare mention").
-pub const EQUIVALENT_BIC: f64 = 2.0;
-
 /// Smoothing speed of a fitted Coulomb friction, as a fraction of an RMS speed of the record
 /// (or wider, where the friction's slope would be faster than the integration resolves).
 pub const FRICTION_SMOOTHING_FRACTION: f64 = 0.01;

@@ -46,6 +46,17 @@ pub struct TorsionalModel {
     pub effects: DriveEffects,
 }
 
+impl TorsionalModel {
+    /// Its highest natural frequency, Hz (a compliance's mode where it has one; NaN where the
+    /// model cannot be built).
+    fn upper_mode_hz(&self) -> f64 {
+        Powertrain::new(&self.rig, self.variant, &self.effects)
+            .ok()
+            .and_then(|p| p.frequencies_hz().last().copied())
+            .unwrap_or(f64::NAN)
+    }
+}
+
 /// The diagnosis of one record.
 #[derive(Debug, Clone, Serialize)]
 pub struct TorsionalDiagnosis {
@@ -228,11 +239,7 @@ impl Problem<'_> {
         // a compliance's mode must lie where the record excites the rig: above it, only its
         // series spring shows, and its frequency and motor share are not determined
         if f.effects.contains(&Candidate::DriveCompliance) {
-            let m = self.build(&f.effects, &f.x);
-            let upper = Powertrain::new(&m.rig, m.variant, &m.effects)
-                .ok()
-                .and_then(|p| p.frequencies_hz().last().copied())
-                .unwrap_or(f64::NAN);
+            let upper = self.build(&f.effects, &f.x).upper_mode_hz();
             if upper.is_nan() || upper > self.excited_hz {
                 why.push(format!(
                     "the compliance's mode at {upper:.1} Hz lies above the {:.1} Hz below which the drive torque excites the rig: the record cannot show it",
@@ -469,8 +476,7 @@ impl Candidate {
             }
             Candidate::DriveCompliance => {
                 b.insert("stiffness_Nm_per_rad".into(), m.effects.compliance_stiffness_nm_per_rad);
-                let f = Powertrain::new(&m.rig, m.variant, &m.effects).map(|p| p.frequencies_hz()).unwrap_or_default();
-                b.insert("frequency_hz".into(), f.last().copied().unwrap_or(f64::NAN));
+                b.insert("frequency_hz".into(), m.upper_mode_hz());
                 b.insert("motor_fraction".into(), m.effects.compliance_motor_fraction);
             }
             Candidate::CoulombFriction(machine) => {
@@ -545,7 +551,9 @@ fn best_per_share(costs: &[f64]) -> Vec<usize> {
         .collect()
 }
 
-pub use super::EQUIVALENT_BIC;
+/// Two fits whose BIC differ by at most this fit a record equally well (Kass & Raftery 1995:
+/// a difference below 2 is "not worth more than a bare mention").
+pub const EQUIVALENT_BIC: f64 = 2.0;
 /// Two fits' compliance stiffnesses this far apart (ln: 25 %) are different solutions.
 pub const EQUIVALENT_APART_LN: f64 = 0.223_143_551_314_209_7;
 /// Two fits' motor shares this far apart are different solutions.
@@ -1291,6 +1299,7 @@ pub fn diagnose(
 
     // the first round's table: every candidate beside the declared parameters
     let entry = |f: &Fit| -> CandidateScore {
+        let why = problem.moved(f);
         let m = problem.build(&f.effects, &f.x);
         let mut parameters = declared_keys(&m);
         if let Some(c) = f.effects.last() {
@@ -1303,14 +1312,15 @@ pub fn diagnose(
             error_after: f.error(),
             score: f.score,
             fitted_parameters: f.x.len(),
-            implausible: !problem.plausible(f),
-            implausible_because: problem.moved(f),
+            implausible: !why.is_empty(),
+            implausible_because: why,
         }
     };
     let mut candidates: Vec<CandidateScore> =
         std::iter::once(&none).chain(first_round.iter().filter(|f| f.cost.is_finite())).map(entry).collect();
     // A candidate the data cannot show scores as the re-fitted declared model with one more
     // parameter (its own, at zero).
+    let none_moved = problem.moved(&none);
     for c in skipped {
         let mut parameters = declared_keys(&problem.build(&[], &none.x));
         for k in c.report(&problem.build(&[], &none.x)).keys() {
@@ -1324,8 +1334,8 @@ pub fn diagnose(
             score: none.score + n_eff.max(2.0).ln(),
             fitted_parameters: none.x.len() + 1,
             // it is the re-fitted declared model, judged as that
-            implausible: !problem.plausible(&none),
-            implausible_because: problem.moved(&none),
+            implausible: !none_moved.is_empty(),
+            implausible_because: none_moved.clone(),
         });
     }
     candidates.sort_by(|a, b| a.score.total_cmp(&b.score));
