@@ -784,7 +784,7 @@ fn drive(file: &Path, progress: &(dyn Fn(&str) + Sync)) -> anyhow::Result<Diagno
         d.structured_residual,
         std::iter::once(&d.parameters),
         &scales,
-        None,
+        d.distorted.as_ref(),
         &ident::diagnose::verdict::BoundSettings::default(),
     );
     Ok(Diagnosis {

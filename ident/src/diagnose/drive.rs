@@ -144,8 +144,11 @@ pub struct DriveDiagnosis {
     /// The best model still leaves a structured (non-white) residual.
     pub structured_residual: bool,
     /// How the answer's re-fit moved the declared inertias or stiffnesses beyond what its effect
-    /// explains ([`super::verdict::declared_moved`]): reported, not yet judged.
+    /// explains ([`super::verdict::declared_moved`]): reported, not yet judged for an effect.
     pub moved_declared: Vec<String>,
+    /// Why the answer is no finding although it fits: the declared model (`none`) fits only
+    /// with its mechanics moved beyond what it may (`None` otherwise).
+    pub distorted: Option<String>,
     /// Corner of the high-pass that removes offsets and drift, Hz.
     pub high_pass_hz: f64,
     /// The extended model.
@@ -599,6 +602,8 @@ pub fn diagnose(rec: DriveRecord, progress: &(dyn Fn(&str) + Sync)) -> Result<Dr
     }
     let (chosen, model, rho) = scored[best].clone();
     let moved_declared = moved_declared(m0, &model);
+    let distorted = (chosen.effect == "none" && !moved_declared.is_empty())
+        .then(|| format!("the declared model fits only with its mechanics moved: {}", moved_declared.join("; ")));
     let structured_residual = rho.abs() > 0.5 && chosen.error_after > 0.02;
     let before = simulate_declared()?;
     let after = problem.simulate(&model).unwrap_or_else(|| before.clone());
@@ -619,6 +624,7 @@ pub fn diagnose(rec: DriveRecord, progress: &(dyn Fn(&str) + Sync)) -> Result<Dr
         candidates,
         structured_residual,
         moved_declared,
+        distorted,
         high_pass_hz,
         model,
         traces,
