@@ -197,29 +197,31 @@ def write_bundle(folder, t):
 
 
 def score(t, report):
-    """'right', 'not explained' (an honest miss) or 'wrong', and the scored parameter's relative
-    error where right."""
+    """'right', 'not explained' (an honest miss) or 'wrong'; where right, the scored parameter's
+    relative error and whether its 95 % interval (the report's `intervals`) holds the truth."""
     verdict = report.get("verdict")
     found = [e["effect"] for e in report.get("effects", [])]
     if t["effect"] == "none":
         if verdict == "declared_model_fits":
-            return "right", None
-        return ("not explained" if verdict == "not_explained" else "wrong"), None
+            return "right", None, None
+        return ("not explained" if verdict == "not_explained" else "wrong"), None, None
     if verdict == "not_explained":
-        return "not explained", None
+        return "not explained", None, None
     if verdict != "explained" or found != [t["effect"]]:
-        return "wrong", None
+        return "wrong", None, None
     e = report["effects"][0]
     if t["effect"] == "coulomb_friction" and e.get("at") != t["friction_at"]:
-        return "wrong", None
+        return "wrong", None, None
     key = SCORED[t["effect"]]
     truth = {"time_delay": t.get("delay_s"), "actuator_lag": t.get("lag_s"), "backlash": t.get("backlash_rad"),
              "drive_compliance": t.get("stiffness"), "coulomb_friction": t.get("friction_nm"),
              "shaft_damping": t.get("damping_ratio")}[t["effect"]]
     value = e["parameters"].get(key)
     if value is None:
-        return "wrong", None
-    return "right", abs(value - truth) / truth
+        return "wrong", None, None
+    interval = e.get("intervals", {}).get(key)
+    covered = None if interval is None or None in interval else bool(interval[0] <= truth <= interval[1])
+    return "right", abs(value - truth) / truth, covered
 
 
 def parse_seeds(text):
@@ -252,16 +254,17 @@ def main():
         p = subprocess.run([args.rigtwin, "diagnose", bundle, "--json", out], capture_output=True, text=True)
         elapsed = time.time() - start
         if p.returncode not in (0, 3) or not os.path.exists(out):
-            rows.append((t, "error", None, elapsed))
+            rows.append((t, "error", None, elapsed, None))
             print(f"seed {seed}: rigtwin failed ({p.returncode}): {p.stderr.strip()[:200]}", file=sys.stderr)
             continue
         report = json.load(open(out))
-        outcome, err = score(t, report)
-        rows.append((t, outcome, err, elapsed))
+        outcome, err, covered = score(t, report)
+        rows.append((t, outcome, err, elapsed, covered))
         found = "+".join(e["effect"] + (f"@{e['at']}" if e.get("at") else "") for e in report.get("effects", []))
         print(f"seed {seed:4d} {t['effect']:17s} {t['excitation']:9s} {t['set_point_nm']:4.0f} Nm -> "
               f"{report.get('verdict'):20s} {found or 'none':30s} {outcome}"
-              + (f" ({100 * err:.0f} %)" if err is not None else "") + f" {elapsed:.1f} s", file=sys.stderr)
+              + (f" ({100 * err:.0f} %{', interval misses' if covered is False else ''})" if err is not None else "")
+              + f" {elapsed:.1f} s", file=sys.stderr)
     print(table(rows))
     if args.summary:
         with open(args.summary, "w") as f:
@@ -269,12 +272,17 @@ def main():
                        "right": sum(1 for r in rows if r[1] == "right"),
                        "not_explained": sum(1 for r in rows if r[1] == "not explained"),
                        "wrong": sum(1 for r in rows if r[1] in ("wrong", "error")),
-                       "right_beyond_20_percent": sum(1 for r in rows if r[2] is not None and r[2] > 0.2)}, f)
+                       "right_beyond_20_percent": sum(1 for r in rows if r[2] is not None and r[2] > 0.2),
+                       "intervals": sum(1 for r in rows if r[4] is not None),
+                       "intervals_covering": sum(1 for r in rows if r[4])}, f)
 
 
 def table(rows):
-    lines = ["| truth | records | right | not explained | wrong | parameter error of the right: median / max (beyond 20 %) | run time, median |",
-             "| --- | --- | --- | --- | --- | --- | --- |"]
+    lines = ["| truth | records | right | not explained | wrong | parameter error of the right: median / max (beyond 20 %) "
+             "| 95 % interval holds the truth | run time, median |",
+             "| --- | --- | --- | --- | --- | --- | --- | --- |"]
+    cover = lambda r: (f"{sum(1 for row in r if row[4])} of {sum(1 for row in r if row[4] is not None)}"
+                       if any(row[4] is not None for row in r) else "–")
     for effect in EFFECTS:
         r = [row for row in rows if row[0]["effect"] == effect]
         if not r:
@@ -284,11 +292,11 @@ def table(rows):
         beyond = sum(1 for e in errs if e > 0.2)
         err = f"{100 * np.median(errs):.1f} % / {100 * max(errs):.0f} % ({beyond})" if errs else "–"
         lines.append(f"| {effect} | {len(r)} | {count('right')} | {count('not explained')} | "
-                     f"{count('wrong') + count('error')} | {err} | {np.median([row[3] for row in r]):.1f} s |")
+                     f"{count('wrong') + count('error')} | {err} | {cover(r)} | {np.median([row[3] for row in r]):.1f} s |")
     total = len(rows)
     lines.append(f"| all | {total} | {sum(1 for r in rows if r[1] == 'right')} | "
                  f"{sum(1 for r in rows if r[1] == 'not explained')} | "
-                 f"{sum(1 for r in rows if r[1] in ('wrong', 'error'))} | | |")
+                 f"{sum(1 for r in rows if r[1] in ('wrong', 'error'))} | | {cover(rows)} | |")
     return "\n".join(lines)
 
 

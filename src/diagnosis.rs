@@ -26,6 +26,14 @@ pub struct DiagnosisReport {
     pub at: Option<String>,
     /// Its fitted parameters (SI; the declared ones re-fitted beside them).
     pub parameters: BTreeMap<String, f64>,
+    /// 95 % intervals of `parameters`: their spread over the answer fitted without each
+    /// held-out fold (`ident::diagnose::jackknife_interval`; `torsional_sweep`, `drive_test`).
+    #[serde(skip_serializing_if = "BTreeMap::is_empty")]
+    pub intervals: BTreeMap<String, [f64; 2]>,
+    /// The answer on the folds of the record its fit did not see (`torsional_sweep`,
+    /// `drive_test`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub held_out: Option<ident::diagnose::HeldOut>,
     /// Other solutions that fit as well as `parameters` (BIC within
     /// `ident::diagnose::torsional::EQUIVALENT_BIC`), each with its error: when there are any,
     /// the record does not determine the parameters.
@@ -367,7 +375,7 @@ fn torsional(file: &Path, progress: &(dyn Fn(&str) + Sync)) -> anyhow::Result<Di
         d.structured_residual,
         judged,
         &scales,
-        d.distorted.as_ref(),
+        d.distorted.iter().chain(&d.unsupported),
         &ident::diagnose::verdict::BoundSettings::default(),
     );
     Ok(Diagnosis {
@@ -377,6 +385,8 @@ fn torsional(file: &Path, progress: &(dyn Fn(&str) + Sync)) -> anyhow::Result<Di
             effect: d.effect,
             at: d.at,
             parameters: d.parameters,
+            intervals: d.intervals,
+            held_out: Some(d.held_out),
             equivalents: d.equivalents,
             effects: d.effects,
             search: if same_steps { Vec::new() } else { d.search },
@@ -522,6 +532,8 @@ fn bearing(file: &Path, _progress: &(dyn Fn(&str) + Sync)) -> anyhow::Result<Dia
             effect: d.effect,
             at: None,
             parameters: d.parameters,
+            intervals: BTreeMap::new(),
+            held_out: None,
             equivalents: Vec::new(),
             effects: vec![],
             path: vec![],
@@ -599,8 +611,8 @@ pub fn human(r: &DiagnosisReport) -> String {
     } else {
         format!("{kind}: the declared model lacks {}\n", named(&r.effect, r.at.as_ref()))
     };
-    let show = |p: &mut dyn Iterator<Item = (&String, &f64)>| {
-        p.map(|(k, v)| crate::units::display(k, *v)).collect::<Vec<_>>().join(", ")
+    let show = |p: &mut dyn Iterator<Item = (&String, &f64)>, intervals: &BTreeMap<String, [f64; 2]>| {
+        p.map(|(k, v)| crate::units::display_within(k, *v, intervals.get(k))).collect::<Vec<_>>().join(", ")
     };
     if explained && !r.equivalents.is_empty() {
         s += &format!(
@@ -613,22 +625,31 @@ pub fn human(r: &DiagnosisReport) -> String {
         // no parameter of an unexplained record is shown as a finding
     } else if r.effects.len() > 1 {
         for e in &r.effects {
-            s += &format!("  {}: {}\n", named(&e.effect, e.at.as_ref()), show(&mut e.parameters.iter()));
+            s += &format!("  {}: {}\n", named(&e.effect, e.at.as_ref()), show(&mut e.parameters.iter(), &e.intervals));
         }
         let of_effects = |k: &String| r.effects.iter().any(|e| e.parameters.contains_key(k));
         let rest: Vec<(&String, &f64)> = r.parameters.iter().filter(|(k, _)| !of_effects(k)).collect();
         if !rest.is_empty() {
-            s += &format!("  declared, re-fitted: {}\n", show(&mut rest.into_iter()));
+            s += &format!("  declared, re-fitted: {}\n", show(&mut rest.into_iter(), &r.intervals));
         }
     } else {
         for (k, v) in &r.parameters {
-            s += &format!("  {}\n", crate::units::display(k, *v));
+            s += &format!("  {}\n", crate::units::display_within(k, *v, r.intervals.get(k)));
         }
     }
     for e in r.equivalents.iter().filter(|_| explained) {
-        s += &format!("  as good: {}\n", show(&mut e.iter()));
+        s += &format!("  as good: {}\n", show(&mut e.iter(), &BTreeMap::new()));
     }
     s += &format!("  error {:.4} → {:.4}  ({})\n", r.error_before, r.error_after, r.error_definition);
+    if let Some(h) = &r.held_out {
+        s += &format!(
+            "  held out: error {:.4} on the folds its fit did not see (the declared model re-fitted: {:.4}; {} folds of {} blocks)\n",
+            h.error_held_out,
+            h.declared_error_held_out,
+            h.folds,
+            crate::units::quantity(h.block_s, "s")
+        );
+    }
     if explained && r.structured_residual {
         s += "  the residual is still structured: something the candidates do not describe remains\n";
     }
@@ -784,7 +805,7 @@ fn drive(file: &Path, progress: &(dyn Fn(&str) + Sync)) -> anyhow::Result<Diagno
         d.structured_residual,
         std::iter::once(&d.parameters),
         &scales,
-        d.distorted.as_ref(),
+        d.distorted.iter().chain(&d.unsupported),
         &ident::diagnose::verdict::BoundSettings::default(),
     );
     Ok(Diagnosis {
@@ -794,6 +815,8 @@ fn drive(file: &Path, progress: &(dyn Fn(&str) + Sync)) -> anyhow::Result<Diagno
             effect: d.effect.clone(),
             at: d.at.clone(),
             parameters: d.parameters.clone(),
+            intervals: d.intervals.clone(),
+            held_out: Some(d.held_out.clone()),
             equivalents: Vec::new(),
             effects: vec![],
             path: vec![],

@@ -273,11 +273,9 @@ pub fn quantity_unit(q: plant::Quantity, domain: plant::Domain) -> &'static str 
     }
 }
 
-/// Report keys (their unit as a suffix, as in the JSON) as a person reads them: the name without
-/// the suffix and the value with its unit, in engineering form — `delay_s` 0.0055 → `delay 5.50
-/// ms`, `c_short` 1478.27 → `c_short 1478.3 N·m/rad`, `backlash_rad` 0.00274 → `backlash 2.740
-/// mrad`. Keys the rig reports without a suffix (`j_drive`, `c_short`, …) have their unit here.
-pub fn display(key: &str, value: f64) -> String {
+/// A report key's name without its unit suffix, and the unit (as in the JSON). Keys the rig
+/// reports without a suffix (`j_drive`, `c_short`, …) have their unit here.
+fn name_and_unit(key: &str) -> (&str, &'static str) {
     // (suffix, unit shown, scales to try: (factor, prefixed unit))
     const SUFFIXES: [(&str, &str); 18] = [
         ("_Nm_per_rad", "N·m/rad"),
@@ -313,7 +311,28 @@ pub fn display(key: &str, value: f64) -> String {
         .find_map(|(suffix, unit)| key.strip_suffix(suffix).filter(|n| !n.is_empty()).map(|n| (n, *unit)))
         .or_else(|| BARE.iter().find(|(k, _)| *k == key).map(|(k, u)| (*k, *u)))
         .unwrap_or((key, ""));
+    (name, unit)
+}
+
+/// Report keys (their unit as a suffix, as in the JSON) as a person reads them: the name without
+/// the suffix and the value with its unit, in engineering form — `delay_s` 0.0055 → `delay 5.50
+/// ms`, `c_short` 1478.27 → `c_short 1478.3 N·m/rad`, `backlash_rad` 0.00274 → `backlash 2.740
+/// mrad`.
+pub fn display(key: &str, value: f64) -> String {
+    let (name, unit) = name_and_unit(key);
     format!("{name} {}", quantity(value, unit))
+}
+
+/// [`display`] with the value's 95 % interval behind it where there is a finite one
+/// (`backlash 2.740 mrad (95 %: 2.701 … 2.779 mrad)`).
+pub fn display_within(key: &str, value: f64, interval: Option<&[f64; 2]>) -> String {
+    match interval.filter(|i| i.iter().all(|v| v.is_finite())) {
+        Some([lo, hi]) => {
+            let (name, unit) = name_and_unit(key);
+            format!("{name} {} (95 %: {} … {})", quantity(value, unit), quantity(*lo, unit), quantity(*hi, unit))
+        }
+        None => display(key, value),
+    }
 }
 
 /// A value with its unit in engineering form: a small time, angle or length with a prefix

@@ -7,7 +7,7 @@
 //! (≥ 95 % of single effects right): on these 30 records 28 are right, one is said to be not
 //! explained (seed 10, play under a multisine about zero torque) and one is wrong (seed 25, a
 //! compliance reported with shaft damping beside it). The full survey's table, with its
-//! held-out part, is docs/validation.md.
+//! held-out part and the intervals' coverage, is docs/validation.md.
 
 mod common;
 
@@ -32,4 +32,8 @@ fn the_survey_subset_keeps_its_verdicts() {
     assert_eq!(v["records"], 30);
     assert!(v["right"].as_u64().unwrap() >= 28, "{v}");
     assert!(v["wrong"].as_u64().unwrap() <= 1, "a confident wrong answer more than today: {v}");
+    // the 95 % intervals over the held-out folds (issue 32, item 3): of the 23 right answers
+    // with a scored parameter, 21 hold the truth today (the misses: seed 4, a compliance 0.6 %
+    // off with an interval of ±0.1 %; seed 17, a play 0.3 % off with ±0.03 %)
+    assert!(v["intervals_covering"].as_u64().unwrap() >= 21, "fewer intervals hold the truth than today: {v}");
 }

@@ -12,6 +12,42 @@ pub fn rfft(x: &[f64]) -> Vec<Complex64> {
     buf
 }
 
+/// The sample autocorrelation ρ(k), k = 0..=`max_lag`, of `x` (its mean removed; ρ(0) = 1, all
+/// zero for a constant), by FFT zero-padded to twice the length (no wrap-around).
+pub fn autocorrelation(x: &[f64], max_lag: usize) -> Vec<f64> {
+    let n = x.len();
+    let max_lag = max_lag.min(n.saturating_sub(1));
+    if n == 0 {
+        return Vec::new();
+    }
+    let mean = x.iter().sum::<f64>() / n as f64;
+    let mut buf: Vec<Complex64> = x.iter().map(|&v| Complex64::new(v - mean, 0.0)).collect();
+    buf.resize(2 * n, Complex64::new(0.0, 0.0));
+    let mut planner = FftPlanner::new();
+    planner.plan_fft_forward(2 * n).process(&mut buf);
+    for v in buf.iter_mut() {
+        *v = Complex64::new(v.norm_sqr(), 0.0);
+    }
+    planner.plan_fft_inverse(2 * n).process(&mut buf);
+    let r0 = buf[0].re;
+    if r0.is_nan() || r0 <= 0.0 {
+        return vec![0.0; max_lag + 1];
+    }
+    buf[..=max_lag].iter().map(|v| v.re / r0).collect()
+}
+
+/// The lag beyond which the correlation of `x` is negligible, samples: Politis' empirical rule
+/// (Politis 2003; Politis & White 2004, section 3.2), the smallest m with |ρ(m + k)| <
+/// 2 √(log₁₀ n / n) for k = 1..=K_n, K_n = max(5, √log₁₀ n). At most `max_lag` (where no m
+/// below it passes).
+pub fn correlation_lag(x: &[f64], max_lag: usize) -> usize {
+    let n = x.len().max(2) as f64;
+    let band = 2.0 * (n.log10() / n).sqrt();
+    let k_n = (n.log10().sqrt().ceil() as usize).max(5);
+    let rho = autocorrelation(x, max_lag + k_n);
+    (0..=max_lag).find(|&m| (1..=k_n).all(|k| rho.get(m + k).is_none_or(|r| r.abs() < band))).unwrap_or(max_lag)
+}
+
 /// The frequency below which `share` of the power of `x` (its mean removed) lies, Hz: the top of
 /// the band a record's excitation covers (a 1–30 Hz sweep: about 30 Hz), 0 for a constant.
 pub fn excited_band_hz(x: &[f64], dt_s: f64, share: f64) -> f64 {
@@ -373,6 +409,29 @@ pub fn filtfilt_high_pass_pair(x: &mut [f64], y: &mut [f64], dt_s: f64, cutoff_h
 
 #[cfg(test)]
 mod tests {
+    #[test]
+    fn the_correlation_lag_of_white_noise_is_short_and_of_an_ar1_series_its_decay() {
+        use rand::SeedableRng;
+        use rand_distr::{Distribution, StandardNormal};
+        let mut rng = rand::rngs::StdRng::seed_from_u64(3);
+        let white: Vec<f64> = (0..20_000).map(|_| Distribution::<f64>::sample(&StandardNormal, &mut rng)).collect();
+        // white noise: ρ(k) = 0 for k ≥ 1, within the band 2√(log₁₀ n/n) = 0.029 but for the
+        // chance excursion (5 % of lags pass 1.96/√n = 0.014, far fewer 0.029)
+        assert!(correlation_lag(&white, 1000) <= 2, "{}", correlation_lag(&white, 1000));
+        // AR(1) with φ = 0.99: ρ(k) = 0.99^k falls below 0.029 at k = ln 0.029 / ln 0.99 = 352;
+        // the estimate's own noise (Bartlett: σ ≈ √((1+φ²)/(1−φ²)/n) = 0.07) moves it by
+        // about a hundred lags either way
+        let mut ar = vec![0.0; 20_000];
+        for k in 1..ar.len() {
+            ar[k] = 0.99 * ar[k - 1] + white[k];
+        }
+        let m = correlation_lag(&ar, 5000);
+        assert!((150..700).contains(&m), "{m}");
+        let rho = autocorrelation(&ar, 10);
+        assert!((rho[1] - 0.99).abs() < 0.01, "{}", rho[1]);
+        assert_eq!(autocorrelation(&[1.0; 10], 3), vec![0.0; 4]);
+    }
+
     use super::*;
     use approx::assert_relative_eq;
     use std::f64::consts::PI;

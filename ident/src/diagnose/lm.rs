@@ -18,26 +18,7 @@ pub fn minimise_to(
     let mut cost: f64 = r.iter().map(|v| v * v).sum();
     let mut lambda = 1e-3;
     for _ in 0..max_iter {
-        // Jacobian by forward differences, its columns kept in single precision (half the
-        // memory of a long record; a forward difference is good to a few digits anyway), JᵀJ
-        // and Jᵀr summed in double.
-        let column = |j: usize| -> Option<Vec<f32>> {
-            // 0.1 % steps (log parameters): large enough to step over the roughness that
-            // contact switching in the backlash model puts into the cost.
-            let h = 1e-3 * x[j].abs().max(1.0);
-            let mut xp = x.clone();
-            xp[j] += h;
-            let rp = f(&xp)?;
-            Some(rp.iter().zip(&r).map(|(a, b)| ((a - b) / h) as f32).collect())
-        };
-        // on both cores where one is idle (this fit the only work, or the other worker out of
-        // jobs): the same columns, sooner
-        let columns: Option<Vec<Vec<f32>>> = if p >= 2 && super::spare_core() {
-            super::on_two_workers(p, &column).into_iter().collect()
-        } else {
-            (0..p).map(column).collect()
-        };
-        let Some(columns) = columns else { break };
+        let Some(columns) = jacobian_columns(f, &x, &r) else { break };
         let mut jtj = DMatrix::zeros(p, p);
         let mut g = DVector::zeros(p);
         for j in 0..p {
@@ -85,6 +66,33 @@ pub fn minimise_to(
         }
     }
     (x, cost)
+}
+
+/// The Jacobian of `f` at `x` (where `f(x)` = `r`) by forward differences, column by column,
+/// kept in single precision (half the memory of a long record; a forward difference is good to
+/// a few digits anyway); `None` where `f` cannot be evaluated beside `x`.
+pub fn jacobian_columns(
+    f: &(dyn Fn(&[f64]) -> Option<Vec<f64>> + Sync),
+    x: &[f64],
+    r: &[f64],
+) -> Option<Vec<Vec<f32>>> {
+    let p = x.len();
+    let column = |j: usize| -> Option<Vec<f32>> {
+        // 0.1 % steps (log parameters): large enough to step over the roughness that contact
+        // switching in the backlash model puts into the cost.
+        let h = 1e-3 * x[j].abs().max(1.0);
+        let mut xp = x.to_vec();
+        xp[j] += h;
+        let rp = f(&xp)?;
+        Some(rp.iter().zip(r).map(|(a, b)| ((a - b) / h) as f32).collect())
+    };
+    // on both cores where one is idle (this fit the only work, or the other worker out of
+    // jobs): the same columns, sooner
+    if p >= 2 && super::spare_core() {
+        super::on_two_workers(p, &column).into_iter().collect()
+    } else {
+        (0..p).map(column).collect()
+    }
 }
 
 /// Golden-section minimisation of a 1-D function on [a, b].

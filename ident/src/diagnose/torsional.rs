@@ -12,10 +12,11 @@ use serde::Serialize;
 
 use super::verdict::{self, DeclaredSettings, Moves, Refitted};
 use super::{
-    bic, effective_count, lag1_autocorrelation, lm, rms, CandidateScore, FRICTION_SMOOTHING_FRACTION, LM_REL_TOL,
+    bic, effective_count, lag1_autocorrelation, lm, rms, CandidateScore, Folds, HeldOut, HeldOutSettings,
+    FRICTION_SMOOTHING_FRACTION, LM_REL_TOL,
 };
 use crate::error::{IdentError, Result};
-use crate::signal::{filtfilt_high_pass, filtfilt_high_pass_pair, rfft, Spectrogram};
+use crate::signal::{self, filtfilt_high_pass, filtfilt_high_pass_pair, rfft, Spectrogram};
 use crate::sweep::Sweep;
 
 /// What the residual shows before any candidate is fitted.
@@ -73,6 +74,14 @@ pub struct TorsionalDiagnosis {
     pub at: Option<String>,
     /// Its parameters and the re-fitted j_drive and c_short.
     pub parameters: BTreeMap<String, f64>,
+    /// 95 % intervals of `parameters` over the held-out folds ([`super::jackknife_interval`]
+    /// of the answer fitted without each fold).
+    pub intervals: BTreeMap<String, [f64; 2]>,
+    /// The answer on data its fit did not see ([`super::HeldOutSettings`]).
+    pub held_out: HeldOut,
+    /// Why the answer is no finding although it fits the record: its effects do not predict
+    /// the held-out folds better than the re-fitted declared model (`None`: they do).
+    pub unsupported: Option<String>,
     /// Every effect found, in the order found, with its parameters in the final model.
     pub effects: Vec<FoundEffect>,
     /// The answer's path: declared (re-fitted) → +A → +A+B, the kept effects in the order
@@ -644,6 +653,8 @@ pub struct FoundEffect {
     pub at: Option<String>,
     /// Its parameters in the final model.
     pub parameters: BTreeMap<String, f64>,
+    /// 95 % intervals of its parameters over the held-out folds.
+    pub intervals: BTreeMap<String, [f64; 2]>,
     /// The answer's error with this effect left out and the others re-fitted (the declared
     /// model re-fitted for a single effect): what the effect explains.
     pub error_without: f64,
@@ -1341,6 +1352,41 @@ pub fn diagnose(
     candidates.sort_by(|a, b| a.score.total_cmp(&b.score));
 
     let model = problem.build(&current.effects, &current.x);
+    // The answer on data its fit did not see ([`HeldOutSettings`]): it and the re-fitted
+    // declared model fitted again without each fold, from their own values, each scored on the
+    // fold it did not see; the answer's fold fits give its parameters' intervals. A re-fit of
+    // the declared model that moved its mechanics beyond what they may (it imitates an effect)
+    // is no model to compare with: the declared model is then taken as declared, its error
+    // fitted on nothing.
+    let settings = HeldOutSettings::default();
+    let correlated = problem.residual(&model).map_or(n, |r| {
+        let over = n / settings.folds.max(1);
+        signal::correlation_lag(&r[..n], over).max(signal::correlation_lag(&r[n..], over))
+    });
+    let folds = Folds::new(n, correlated, &settings);
+    let none_compared = !current.effects.is_empty() && problem.plausible(&none);
+    let answer_residual = |x: &[f64]| problem.residual(&problem.build(&current.effects, x));
+    let none_residual = |x: &[f64]| problem.residual(&problem.build(&none.effects, x));
+    let mut jobs: Vec<(super::ResidualFn, &[f64])> = vec![(&answer_residual, &current.x)];
+    if none_compared {
+        jobs.push((&none_residual, &none.x));
+    }
+    let refits = super::refit_without_folds(&folds, &jobs);
+    let held_out = HeldOut {
+        folds: folds.count(),
+        block_s: folds.block_len() as f64 * dt,
+        error_held_out: super::held_out_error(&refits[0]),
+        declared_error_held_out: match (refits.get(1), current.effects.is_empty()) {
+            (Some(none_refits), _) => super::held_out_error(none_refits),
+            (None, true) => super::held_out_error(&refits[0]),
+            (None, false) => error_before,
+        },
+    };
+    let fold_models: Vec<TorsionalModel> = refits[0].iter().map(|f| problem.build(&current.effects, &f.x)).collect();
+    let intervals_of = |of: &dyn Fn(&TorsionalModel) -> BTreeMap<String, f64>| {
+        super::fold_intervals(&of(&model), &fold_models.iter().map(of).collect::<Vec<_>>())
+    };
+    let unsupported = if current.effects.is_empty() { None } else { super::unsupported(&held_out) };
     let effects: Vec<FoundEffect> = current
         .effects
         .iter()
@@ -1354,12 +1400,20 @@ pub fn diagnose(
                     .find(|f| !f.effects.contains(c) && f.effects.len() + 1 == current.effects.len())
                     .map_or(f64::NAN, |f| f.error())
             };
-            FoundEffect { effect: c.name().into(), at: c.at(), parameters: c.report(&model), error_without }
+            FoundEffect {
+                effect: c.name().into(),
+                at: c.at(),
+                parameters: c.report(&model),
+                intervals: intervals_of(&|m| c.report(m)),
+                error_without,
+            }
         })
         .collect();
     let mut parameters = declared_keys(&model);
+    let mut intervals = intervals_of(&declared_keys);
     if let Some(first) = effects.first() {
         parameters.extend(first.parameters.clone());
+        intervals.extend(first.intervals.clone());
     }
     let after = problem.simulate(&model).unwrap_or_else(|| [vec![0.0; n], vec![0.0; n]]);
     let rho = lag1_autocorrelation(&problem.residual_of(&after));
@@ -1392,6 +1446,9 @@ pub fn diagnose(
         effect: effects.first().map_or_else(|| "none".to_string(), |e| e.effect.clone()),
         at: effects.first().and_then(|e| e.at.clone()),
         parameters,
+        intervals,
+        held_out,
+        unsupported,
         effects,
         path,
         search,

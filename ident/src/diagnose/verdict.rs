@@ -177,14 +177,15 @@ pub fn verdict(effect: &str, structured_residual: bool, violations: &[String]) -
 /// The verdict of a diagnosis that chose `effect` with a structured residual or not: the
 /// parameters of everything it found judged against the record's bounds ([`out_of_bounds`],
 /// `settings`; the declared model's `none` has no effect parameters to judge), beside the reason
-/// the diagnosis itself gave why its answer is no finding (`no_finding`, if any). Returns the
+/// the diagnosis itself gave why its answer is no finding (`no_finding`: none, one or several).
+/// Returns the
 /// verdict and its reasons (a *not explained* always has one).
 pub fn judge<'a>(
     effect: &str,
     structured_residual: bool,
     parameters: impl Iterator<Item = &'a BTreeMap<String, f64>>,
     scales: &RecordScales,
-    no_finding: Option<&String>,
+    no_finding: impl IntoIterator<Item = &'a String>,
     settings: &BoundSettings,
 ) -> (Verdict, Vec<String>) {
     let mut reasons: Vec<String> = no_finding.into_iter().cloned().collect();
