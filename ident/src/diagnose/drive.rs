@@ -557,7 +557,12 @@ pub fn diagnose(rec: DriveRecord, progress: &(dyn Fn(&str) + Sync)) -> Result<Dr
         let problem = &problem;
         let f = |x: &[f64]| problem.residual(c, x);
         let x0 = &screened.iter().find(|s| s.0 == i).expect("screened").1;
-        let (x, cost) = lm::minimise_to(&f, x0, 20, LM_REL_TOL);
+        // the declared model's smooth cost to its minimum ([`lm::minimise_smooth`])
+        let (x, cost) = if c == Candidate::None && m0.effects.is_empty() {
+            lm::minimise_smooth(&f, x0, super::torsional::DECLARED_REFIT_ITERATIONS, LM_REL_TOL)
+        } else {
+            lm::minimise_to(&f, x0, 20, LM_REL_TOL)
+        };
         progress(&label(c));
         (i, x, cost)
     };

@@ -1,0 +1,39 @@
+//! The re-fit of the declared model reaches the least-squares minimum of its own cost (issue 32,
+//! item 6): `scripts/refit_check.py` simulates the declared paper rig on its own (the open
+//! differential's four states stepped exactly with scipy's matrix exponential, rigtwin's
+//! high-pass written again), checks that its cost of the declared model is rigtwin's
+//! `error_before`², and minimises the same cost with scipy's `least_squares` over the same two
+//! parameters. Two survey records with play (seeds 17 and 31: the declared model's valley is long
+//! and curved there; seed 31's re-fit stopped at twice the minimum before the damping of the
+//! fits could grow without limit).
+
+mod common;
+
+use std::process::Command;
+
+#[test]
+fn the_declared_model_is_refitted_to_the_least_squares_minimum() {
+    let dir = common::scratch("refit", "check");
+    let rows = dir.join("rows.json");
+    let out = Command::new(common::python())
+        .arg(concat!(env!("CARGO_MANIFEST_DIR"), "/scripts/refit_check.py"))
+        .args(["--rigtwin", env!("CARGO_BIN_EXE_rigtwin"), "--seeds", "17,31", "--out"])
+        .arg(&dir)
+        .arg("--json")
+        .arg(&rows)
+        .output()
+        .unwrap();
+    let log = String::from_utf8_lossy(&out.stdout).to_string() + &String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "the check failed: {log}");
+    eprintln!("{log}");
+    let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&rows).unwrap()).unwrap();
+    for r in v.as_array().unwrap() {
+        // the same cost: both step the same linear model exactly and filter alike, so they
+        // differ by rounding only (1e-4 leaves room for the matrix exponentials' own)
+        let same = r["same_cost"].as_f64().unwrap();
+        assert!((same - 1.0).abs() < 1e-4, "seed {}: the declared model's cost here / rigtwin's = {same}", r["seed"]);
+        // the issue's criterion: within 1 % of the minimum scipy reaches
+        let ratio = r["ratio"].as_f64().unwrap();
+        assert!(ratio <= 1.01, "seed {}: rigtwin's re-fit costs {ratio} × scipy's minimum", r["seed"]);
+    }
+}
