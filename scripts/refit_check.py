@@ -28,6 +28,7 @@ import sys
 import numpy as np
 from scipy.linalg import expm
 from scipy.optimize import least_squares
+from scipy.signal import dlsim, lfilter, lfilter_zi
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import survey  # noqa: E402  (the records and the declared model)
@@ -52,7 +53,6 @@ def high_pass(x, dt, fc):
             out[i] = y
         return out
 
-    from scipy.signal import lfilter, lfilter_zi
     # the same recursion in C: at rest at v[0] is lfilter's steady state for a constant v[0]
     # (a high-pass's output to a constant is 0)
     def fast(v):
@@ -96,9 +96,6 @@ class Record:
         e = expm(big * self.dt)
         ad, bd = e[:4, :4], e[:4, 4]
         xk = np.array([self.u[0] / 2 / cs, self.speed0, self.speed0, self.speed0])
-        n = self.u.size
-        # the free response and the forced one (a linear recursion per state, in C)
-        from scipy.signal import dlsim
         _, y, _ = dlsim((ad, bd.reshape(4, 1), np.eye(4)[[1, 3]], np.zeros((2, 1)), self.dt), self.u, x0=xk)
         return high_pass(y[:, 0], self.dt, self.fc), high_pass(y[:, 1], self.dt, self.fc)
 

@@ -643,7 +643,7 @@ pub fn human(r: &DiagnosisReport) -> String {
     s += &format!("  error {:.4} → {:.4}  ({})\n", r.error_before, r.error_after, r.error_definition);
     if let Some(h) = &r.held_out {
         s += &format!(
-            "  held out: error {:.4} on the folds its fit did not see (the declared model re-fitted: {:.4}; {} folds of {} blocks)\n",
+            "  held out: error {:.4} on the folds its fit did not see (the declared model: {:.4}; {} folds of {} blocks)\n",
             h.error_held_out,
             h.declared_error_held_out,
             h.folds,

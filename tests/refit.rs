@@ -9,25 +9,12 @@
 
 mod common;
 
-use std::process::Command;
-
 #[test]
 fn the_declared_model_is_refitted_to_the_least_squares_minimum() {
-    let dir = common::scratch("refit", "check");
-    let rows = dir.join("rows.json");
-    let out = Command::new(common::python())
-        .arg(concat!(env!("CARGO_MANIFEST_DIR"), "/scripts/refit_check.py"))
-        .args(["--rigtwin", env!("CARGO_BIN_EXE_rigtwin"), "--seeds", "17,31", "--out"])
-        .arg(&dir)
-        .arg("--json")
-        .arg(&rows)
-        .output()
-        .unwrap();
-    let log = String::from_utf8_lossy(&out.stdout).to_string() + &String::from_utf8_lossy(&out.stderr);
-    assert!(out.status.success(), "the check failed: {log}");
-    eprintln!("{log}");
-    let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&rows).unwrap()).unwrap();
-    for r in v.as_array().unwrap() {
+    let v = common::survey_script("refit_check.py", "17,31", "--json");
+    let rows = v.as_array().unwrap();
+    assert_eq!(rows.len(), 2, "one row per record: {v}");
+    for r in rows {
         // the same cost: both step the same linear model exactly and filter alike, so they
         // differ by rounding only (1e-4 leaves room for the matrix exponentials' own)
         let same = r["same_cost"].as_f64().unwrap();

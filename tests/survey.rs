@@ -11,24 +11,9 @@
 
 mod common;
 
-use std::process::Command;
-
 #[test]
 fn the_survey_subset_keeps_its_verdicts() {
-    let dir = common::scratch("survey", "subset");
-    let summary = dir.join("summary.json");
-    let out = Command::new(common::python())
-        .arg(concat!(env!("CARGO_MANIFEST_DIR"), "/scripts/survey.py"))
-        .args(["--rigtwin", env!("CARGO_BIN_EXE_rigtwin"), "--seeds", "0-29", "--out"])
-        .arg(&dir)
-        .arg("--summary")
-        .arg(&summary)
-        .output()
-        .unwrap();
-    let log = String::from_utf8_lossy(&out.stderr);
-    eprintln!("{log}");
-    assert!(out.status.success(), "the survey failed: {log}");
-    let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&summary).unwrap()).unwrap();
+    let v = common::survey_script("survey.py", "0-29", "--summary");
     assert_eq!(v["records"], 30);
     assert!(v["right"].as_u64().unwrap() >= 28, "{v}");
     assert!(v["wrong"].as_u64().unwrap() <= 1, "a confident wrong answer more than today: {v}");

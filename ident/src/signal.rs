@@ -409,6 +409,10 @@ pub fn filtfilt_high_pass_pair(x: &mut [f64], y: &mut [f64], dt_s: f64, cutoff_h
 
 #[cfg(test)]
 mod tests {
+    use super::*;
+    use approx::assert_relative_eq;
+    use std::f64::consts::PI;
+
     #[test]
     fn the_correlation_lag_of_white_noise_is_short_and_of_an_ar1_series_its_decay() {
         use rand::SeedableRng;
@@ -431,10 +435,6 @@ mod tests {
         assert!((rho[1] - 0.99).abs() < 0.01, "{}", rho[1]);
         assert_eq!(autocorrelation(&[1.0; 10], 3), vec![0.0; 4]);
     }
-
-    use super::*;
-    use approx::assert_relative_eq;
-    use std::f64::consts::PI;
 
     #[test]
     fn the_excited_band_ends_where_the_excitation_does() {

@@ -73,3 +73,24 @@ pub fn scratch(file: &str, case: &str) -> PathBuf {
     std::fs::create_dir_all(&d).unwrap();
     d
 }
+
+/// Runs `scripts/<script>` (a survey script: `--rigtwin`, `--seeds`, `--out`) with this build's
+/// rigtwin on survey seeds `seeds`, its records in a scratch folder, and returns the JSON it
+/// writes to the file given with `result_flag`; its log is printed, and a failed run fails the
+/// test with it.
+pub fn survey_script(script: &str, seeds: &str, result_flag: &str) -> serde_json::Value {
+    let dir = scratch(script.trim_end_matches(".py"), "records");
+    let result = dir.join("result.json");
+    let out = Command::new(python())
+        .arg(Path::new(env!("CARGO_MANIFEST_DIR")).join("scripts").join(script))
+        .args(["--rigtwin", env!("CARGO_BIN_EXE_rigtwin"), "--seeds", seeds, "--out"])
+        .arg(&dir)
+        .arg(result_flag)
+        .arg(&result)
+        .output()
+        .unwrap();
+    let log = String::from_utf8_lossy(&out.stdout).to_string() + &String::from_utf8_lossy(&out.stderr);
+    eprintln!("{log}");
+    assert!(out.status.success(), "{script} failed: {log}");
+    serde_json::from_str(&std::fs::read_to_string(&result).unwrap()).unwrap()
+}

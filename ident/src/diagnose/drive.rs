@@ -18,11 +18,11 @@ use serde::Serialize;
 
 use super::verdict::{declared_moved, DeclaredSettings, Refitted};
 use super::{
-    bic, effective_count, lag1_autocorrelation, lm, rms, CandidateScore, Folds, HeldOut, HeldOutSettings,
-    FRICTION_SMOOTHING_FRACTION, LM_REL_TOL,
+    bic, effective_count, lag1_autocorrelation, lm, rms, CandidateScore, HeldOut, FRICTION_SMOOTHING_FRACTION,
+    LM_REL_TOL,
 };
 use crate::error::{IdentError, Result};
-use crate::signal::{correlation_lag, filtfilt_high_pass_in_place, filtfilt_high_pass_pair};
+use crate::signal::{filtfilt_high_pass_in_place, filtfilt_high_pass_pair};
 
 /// Lowest high-pass corner, Hz.
 pub const HIGH_PASS_MIN_HZ: f64 = 0.02;
@@ -621,42 +621,28 @@ pub fn diagnose(rec: DriveRecord, progress: &(dyn Fn(&str) + Sync)) -> Result<Dr
     let none_moved = moved_declared(m0, &scored[none].1);
     let moved_declared = moved_declared(m0, &model);
 
-    // The answer on data its fit did not see (as for the torsional sweep): it and the
-    // re-fitted declared model fitted again without each fold, from their own parameters (those
-    // the answer fitted: an effect kept from the screen has the declared inertias and
-    // stiffnesses held), each scored on the fold it did not see. A re-fit of the declared model
-    // that moved its mechanics beyond what they may is no model to compare with: the declared
-    // model is then taken as declared.
-    let answer_residual = problem.residual(chosen_candidate, &chosen_x);
-    let settings = HeldOutSettings::default();
-    let over = len / settings.folds.max(1);
-    let correlated =
-        answer_residual.as_ref().map_or(len, |r| r.chunks(len).map(|c| correlation_lag(c, over)).max().unwrap_or(len));
-    drop(answer_residual);
-    let folds = Folds::new(len, correlated, &settings);
-    let held_base = chosen.fitted_parameters < chosen_x.len();
-    let free_from = if held_base { nbase } else { 0 };
+    // The answer on data its fit did not see ([`super::check_held_out`], as for the torsional
+    // sweep): it and the re-fitted declared model (where its re-fit is plausible) fitted again
+    // without each fold, from their own parameters (those the answer fitted: an effect kept from
+    // the screen has the declared inertias and stiffnesses held), each scored on the fold it did
+    // not see.
+    let after = problem.simulate(&model);
+    let answer_residual = after.as_ref().map(|y| problem.residual_of(y));
+    let free_from = if chosen.fitted_parameters < chosen_x.len() { nbase } else { 0 };
     let answer = |s: &[f64]| problem.residual(chosen_candidate, &[&chosen_x[..free_from], s].concat());
-    let none_x = &scored[none].4;
-    let none_residual = |x: &[f64]| problem.residual(Candidate::None, x);
-    let is_none = chosen.effect == "none";
-    let none_compared = !is_none && none_moved.is_empty();
-    let mut jobs: Vec<(super::ResidualFn, &[f64])> = vec![(&answer, &chosen_x[free_from..])];
-    if none_compared {
-        jobs.push((&none_residual, none_x));
-    }
-    let refits = super::refit_without_folds(&folds, &jobs);
-    let held_out = HeldOut {
-        folds: folds.count(),
-        block_s: folds.block_len() as f64 * dt,
-        error_held_out: super::held_out_error(&refits[0]),
-        declared_error_held_out: match refits.get(1) {
-            Some(none_refits) => super::held_out_error(none_refits),
-            None if is_none => super::held_out_error(&refits[0]),
-            None => error_before,
-        },
-    };
-    let fold_parameters: Vec<BTreeMap<String, f64>> = refits[0]
+    let declared = |x: &[f64]| problem.residual(Candidate::None, x);
+    let has_effects = chosen.effect != "none";
+    let check = super::check_held_out(
+        len,
+        dt,
+        answer_residual.as_deref(),
+        (&answer, &chosen_x[free_from..]),
+        (has_effects && none_moved.is_empty()).then_some((&declared as super::ResidualFn, scored[none].4.as_slice())),
+        has_effects,
+        error_before,
+    );
+    let fold_parameters: Vec<BTreeMap<String, f64>> = check
+        .answer_folds
         .iter()
         .map(|f| {
             problem
@@ -665,13 +651,12 @@ pub fn diagnose(rec: DriveRecord, progress: &(dyn Fn(&str) + Sync)) -> Result<Dr
         })
         .collect();
     let intervals = super::fold_intervals(&chosen.parameters, &fold_parameters);
-    let unsupported = if is_none { None } else { super::unsupported(&held_out) };
 
     let distorted = (chosen.effect == "none" && !moved_declared.is_empty())
         .then(|| format!("the declared model fits only with its mechanics moved: {}", moved_declared.join("; ")));
     let structured_residual = rho.abs() > 0.5 && chosen.error_after > 0.02;
     let before = simulate_declared()?;
-    let after = problem.simulate(&model).unwrap_or_else(|| before.clone());
+    let after = after.unwrap_or_else(|| before.clone());
     let traces = DriveTraces {
         time_s: (0..len).map(|k| k as f64 * dt).collect(),
         measured: problem.measured.clone(),
@@ -685,8 +670,8 @@ pub fn diagnose(rec: DriveRecord, progress: &(dyn Fn(&str) + Sync)) -> Result<Dr
         at: chosen.at,
         parameters: chosen.parameters,
         intervals,
-        held_out,
-        unsupported,
+        held_out: check.held_out,
+        unsupported: check.unsupported,
         error_before,
         error_after: chosen.error_after,
         candidates,

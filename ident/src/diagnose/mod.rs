@@ -219,10 +219,10 @@ impl Folds {
         ((k % self.n) * self.blocks / self.n) % self.folds
     }
 
-    /// The values of residual `r` (channels of `n` samples one after another) in fold `fold`
-    /// (`inside`) or outside it.
-    pub(crate) fn select(&self, r: &[f64], fold: usize, inside: bool) -> Vec<f64> {
-        r.iter().enumerate().filter(|(k, _)| (self.fold_of(*k) == fold) == inside).map(|(_, v)| *v).collect()
+    /// The sum of squares of residual `r` (channels of `n` samples one after another) in fold
+    /// `fold` (`inside`) or outside it.
+    pub(crate) fn sum_of_squares(&self, r: &[f64], fold: usize, inside: bool) -> f64 {
+        r.iter().enumerate().filter(|(k, _)| (self.fold_of(*k) == fold) == inside).map(|(_, v)| v * v).sum()
     }
 }
 
@@ -245,7 +245,7 @@ pub(crate) type ResidualFn<'a> = &'a (dyn Fn(&[f64]) -> Option<Vec<f64>> + Sync)
 /// of a rattling play), the step is halved until it does not raise the error outside the fold
 /// ([`STEP_HALVINGS`] times at most, then not taken): it is a fit's step, never a worse fit.
 /// The error on the fold is simulated.
-pub(crate) fn refit_without_folds(folds: &Folds, fits: &[(ResidualFn, &[f64])]) -> Vec<Vec<FoldFit>> {
+fn refit_without_folds(folds: &Folds, fits: &[(ResidualFn, &[f64])]) -> Vec<Vec<FoldFit>> {
     let k = folds.count();
     // per fit: its residual over the whole record and each fold's step
     let prepared: Vec<Option<Prepared>> = fits
@@ -262,7 +262,7 @@ pub(crate) fn refit_without_folds(folds: &Folds, fits: &[(ResidualFn, &[f64])]) 
     let fold_fits = on_two_workers(jobs.len(), &|t| {
         let (i, j) = jobs[t];
         let ((residual, x0), (r0, steps)) = (fits[i], prepared[i].as_ref().expect("a job is prepared"));
-        let ssr = |r: &[f64], inside: bool| folds.select(r, j, inside).iter().map(|v| v * v).sum::<f64>();
+        let ssr = |r: &[f64], inside: bool| folds.sum_of_squares(r, j, inside);
         let outside0 = ssr(r0, false);
         let mut t = 1.0;
         for _ in 0..=STEP_HALVINGS {
@@ -331,8 +331,60 @@ fn fold_steps(folds: &Folds, columns: &[Vec<f32>], r: &[f64]) -> Vec<Vec<f64>> {
 
 /// The normalised error over all folds of fold fits `f`, each fold predicted by the fit that
 /// did not see it.
-pub(crate) fn held_out_error(f: &[FoldFit]) -> f64 {
+fn held_out_error(f: &[FoldFit]) -> f64 {
     f.iter().map(|f| f.held_ssr).sum::<f64>().sqrt()
+}
+
+/// An answer checked on the folds of its record ([`check_held_out`]).
+pub(crate) struct HeldOutCheck {
+    /// The answer's and the declared model's errors on the folds.
+    pub(crate) held_out: HeldOut,
+    /// The answer fitted without each fold (its parameters' intervals).
+    pub(crate) answer_folds: Vec<FoldFit>,
+    /// Why an answer with effects is no finding ([`unsupported`]).
+    pub(crate) unsupported: Option<String>,
+}
+
+/// The answer on data its fit did not see, as both engines check it ([`HeldOutSettings`]): the
+/// record of `n` samples per channel (sample time `dt_s`) cut into folds by the correlation of
+/// the answer's residual `answer_residual` (all channels; `None` where the answer cannot be
+/// simulated: one block a fold), the `answer` (its residual over its fitted parameters, and
+/// those) and the re-fitted `declared` model fitted again without each fold. `declared` is
+/// `None` where the answer is the declared model itself (`has_effects` false: its own errors
+/// are the declared model's) or where its re-fit moved the mechanics beyond what they may (it
+/// imitates an effect: no model to compare with, and the declared model as declared is taken,
+/// its error `error_before` fitted on nothing).
+pub(crate) fn check_held_out(
+    n: usize,
+    dt_s: f64,
+    answer_residual: Option<&[f64]>,
+    answer: (ResidualFn, &[f64]),
+    declared: Option<(ResidualFn, &[f64])>,
+    has_effects: bool,
+    error_before: f64,
+) -> HeldOutCheck {
+    let settings = HeldOutSettings::default();
+    let over = n / settings.folds.max(1);
+    let correlated = answer_residual
+        .map_or(n, |r| r.chunks(n.max(1)).map(|c| crate::signal::correlation_lag(c, over)).max().unwrap_or(n));
+    let folds = Folds::new(n, correlated, &settings);
+    let jobs: Vec<(ResidualFn, &[f64])> = std::iter::once(answer).chain(declared).collect();
+    let mut refits = refit_without_folds(&folds, &jobs).into_iter();
+    let answer_folds = refits.next().expect("the answer's fold fits");
+    let error_held_out = held_out_error(&answer_folds);
+    let declared_error_held_out = match refits.next() {
+        Some(declared) => held_out_error(&declared),
+        None if has_effects => error_before,
+        None => error_held_out,
+    };
+    let held_out = HeldOut {
+        folds: folds.count(),
+        block_s: folds.block_len() as f64 * dt_s,
+        error_held_out,
+        declared_error_held_out,
+    };
+    let unsupported = if has_effects { unsupported(&held_out) } else { None };
+    HeldOutCheck { held_out, answer_folds, unsupported }
 }
 
 /// 95 % intervals of the parameters `estimate` from their values `leave_outs` in the fits
@@ -352,7 +404,7 @@ pub(crate) fn fold_intervals(
 
 /// Why an answer with effects is no finding on data its fit did not see: its held-out error
 /// is not below the declared model's (`None`: it is).
-pub(crate) fn unsupported(h: &HeldOut) -> Option<String> {
+fn unsupported(h: &HeldOut) -> Option<String> {
     let predicts_better = h.error_held_out < h.declared_error_held_out;
     (!predicts_better).then(|| {
         format!(
@@ -425,17 +477,21 @@ mod tests {
     fn folds_spread_over_the_record_and_partition_it() {
         let f = Folds::new(1000, 10, &HeldOutSettings { folds: 5, max_blocks_per_fold: 8 });
         assert_eq!(f.block_len(), 25);
-        // two channels of 1000 samples: each fold holds a fifth of each, in 8 blocks spread out
-        let r: Vec<f64> = (0..2000).map(|k| k as f64).collect();
-        let mut total = 0;
+        // two channels of 1000 samples: each fold holds a fifth of each (a sum of squares of
+        // ones counts the samples), in 8 blocks spread out (samples of the first and of the
+        // last fifth of the first channel)
+        let ones = vec![1.0; 2000];
+        let first: Vec<f64> = (0..2000).map(|k| f64::from(k < 200)).collect();
+        let last: Vec<f64> = (0..2000).map(|k| f64::from((800..1000).contains(&k))).collect();
+        let mut total = 0.0;
         for fold in 0..5 {
-            let inside = f.select(&r, fold, true);
-            assert_eq!(inside.len(), 400);
-            assert_eq!(f.select(&r, fold, false).len(), 1600);
-            assert!(inside.iter().any(|&v| v < 200.0) && inside.iter().any(|&v| v > 800.0 && v < 1000.0));
-            total += inside.len();
+            let inside = f.sum_of_squares(&ones, fold, true);
+            assert_eq!(inside, 400.0);
+            assert_eq!(f.sum_of_squares(&ones, fold, false), 1600.0);
+            assert!(f.sum_of_squares(&first, fold, true) > 0.0 && f.sum_of_squares(&last, fold, true) > 0.0);
+            total += inside;
         }
-        assert_eq!(total, 2000);
+        assert_eq!(total, 2000.0);
         // the default: ten blocks; a residual correlated over 60 samples: blocks of at least
         // 120, one a fold
         assert_eq!(Folds::new(1000, 10, &HeldOutSettings::default()).block_len(), 100);

@@ -12,11 +12,11 @@ use serde::Serialize;
 
 use super::verdict::{self, DeclaredSettings, Moves, Refitted};
 use super::{
-    bic, effective_count, lag1_autocorrelation, lm, rms, CandidateScore, Folds, HeldOut, HeldOutSettings,
-    FRICTION_SMOOTHING_FRACTION, LM_REL_TOL,
+    bic, effective_count, lag1_autocorrelation, lm, rms, CandidateScore, HeldOut, FRICTION_SMOOTHING_FRACTION,
+    LM_REL_TOL,
 };
 use crate::error::{IdentError, Result};
-use crate::signal::{self, filtfilt_high_pass, filtfilt_high_pass_pair, rfft, Spectrogram};
+use crate::signal::{filtfilt_high_pass, filtfilt_high_pass_pair, rfft, Spectrogram};
 use crate::sweep::Sweep;
 
 /// What the residual shows before any candidate is fitted.
@@ -1363,41 +1363,28 @@ pub fn diagnose(
     candidates.sort_by(|a, b| a.score.total_cmp(&b.score));
 
     let model = problem.build(&current.effects, &current.x);
-    // The answer on data its fit did not see ([`HeldOutSettings`]): it and the re-fitted
-    // declared model fitted again without each fold, from their own values, each scored on the
-    // fold it did not see; the answer's fold fits give its parameters' intervals. A re-fit of
-    // the declared model that moved its mechanics beyond what they may (it imitates an effect)
-    // is no model to compare with: the declared model is then taken as declared, its error
-    // fitted on nothing.
-    let settings = HeldOutSettings::default();
-    let correlated = problem.residual(&model).map_or(n, |r| {
-        let over = n / settings.folds.max(1);
-        signal::correlation_lag(&r[..n], over).max(signal::correlation_lag(&r[n..], over))
-    });
-    let folds = Folds::new(n, correlated, &settings);
-    let none_compared = !current.effects.is_empty() && problem.plausible(&none);
-    let answer_residual = |x: &[f64]| problem.residual(&problem.build(&current.effects, x));
-    let none_residual = |x: &[f64]| problem.residual(&problem.build(&none.effects, x));
-    let mut jobs: Vec<(super::ResidualFn, &[f64])> = vec![(&answer_residual, &current.x)];
-    if none_compared {
-        jobs.push((&none_residual, &none.x));
-    }
-    let refits = super::refit_without_folds(&folds, &jobs);
-    let held_out = HeldOut {
-        folds: folds.count(),
-        block_s: folds.block_len() as f64 * dt,
-        error_held_out: super::held_out_error(&refits[0]),
-        declared_error_held_out: match (refits.get(1), current.effects.is_empty()) {
-            (Some(none_refits), _) => super::held_out_error(none_refits),
-            (None, true) => super::held_out_error(&refits[0]),
-            (None, false) => error_before,
-        },
-    };
-    let fold_models: Vec<TorsionalModel> = refits[0].iter().map(|f| problem.build(&current.effects, &f.x)).collect();
+    // The answer on data its fit did not see ([`super::check_held_out`]): it and the re-fitted
+    // declared model (where its re-fit is plausible) fitted again without each fold, each
+    // scored on the fold it did not see; the answer's fold fits give its parameters' intervals.
+    let after = problem.simulate(&model);
+    let answer_residual = after.as_ref().map(|a| problem.residual_of(a));
+    let answer = |x: &[f64]| problem.residual(&problem.build(&current.effects, x));
+    let declared = |x: &[f64]| problem.residual(&problem.build(&[], x));
+    let has_effects = !current.effects.is_empty();
+    let check = super::check_held_out(
+        n,
+        dt,
+        answer_residual.as_deref(),
+        (&answer, &current.x),
+        (has_effects && problem.plausible(&none)).then_some((&declared as super::ResidualFn, none.x.as_slice())),
+        has_effects,
+        error_before,
+    );
+    let fold_models: Vec<TorsionalModel> =
+        check.answer_folds.iter().map(|f| problem.build(&current.effects, &f.x)).collect();
     let intervals_of = |of: &dyn Fn(&TorsionalModel) -> BTreeMap<String, f64>| {
         super::fold_intervals(&of(&model), &fold_models.iter().map(of).collect::<Vec<_>>())
     };
-    let unsupported = if current.effects.is_empty() { None } else { super::unsupported(&held_out) };
     let effects: Vec<FoundEffect> = current
         .effects
         .iter()
@@ -1426,8 +1413,8 @@ pub fn diagnose(
         parameters.extend(first.parameters.clone());
         intervals.extend(first.intervals.clone());
     }
-    let after = problem.simulate(&model).unwrap_or_else(|| [vec![0.0; n], vec![0.0; n]]);
-    let rho = lag1_autocorrelation(&problem.residual_of(&after));
+    let after = after.unwrap_or_else(|| [vec![0.0; n], vec![0.0; n]]);
+    let rho = lag1_autocorrelation(&answer_residual.unwrap_or_else(|| problem.residual_of(&after)));
     let structured_residual = rho.abs() > 0.5 && current.error() > 0.02;
     let traces = Traces {
         time_s: (0..n).map(|k| k as f64 * dt).collect(),
@@ -1458,8 +1445,8 @@ pub fn diagnose(
         at: effects.first().and_then(|e| e.at.clone()),
         parameters,
         intervals,
-        held_out,
-        unsupported,
+        held_out: check.held_out,
+        unsupported: check.unsupported,
         effects,
         path,
         search,

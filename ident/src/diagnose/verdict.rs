@@ -178,8 +178,7 @@ pub fn verdict(effect: &str, structured_residual: bool, violations: &[String]) -
 /// parameters of everything it found judged against the record's bounds ([`out_of_bounds`],
 /// `settings`; the declared model's `none` has no effect parameters to judge), beside the reason
 /// the diagnosis itself gave why its answer is no finding (`no_finding`: none, one or several).
-/// Returns the
-/// verdict and its reasons (a *not explained* always has one).
+/// Returns the verdict and its reasons (a *not explained* always has one).
 pub fn judge<'a>(
     effect: &str,
     structured_residual: bool,
