@@ -25,6 +25,23 @@ fn json(args: &[&str]) -> Value {
     serde_json::from_slice(&out.stdout).unwrap()
 }
 
+/// The generator as this checkout builds it: `cargo test` has built it beside this test
+/// (target/<profile>/examples); a run filtered to this file builds it with `cargo run`. Running
+/// it through cargo after `cargo test --workspace` would build the whole tree again, because a
+/// build of the root package alone unifies its dependencies' features differently.
+fn generator() -> Command {
+    let exe = std::env::current_exe().unwrap();
+    let built = exe.parent().and_then(Path::parent).map(|profile| profile.join("examples").join("make_examples"));
+    match built.filter(|b| b.is_file()) {
+        Some(b) => Command::new(b),
+        None => {
+            let mut cmd = Command::new(env!("CARGO"));
+            cmd.args(["run", "--quiet", "--example", "make_examples", "--"]).current_dir(env!("CARGO_MANIFEST_DIR"));
+            cmd
+        }
+    }
+}
+
 fn close(found: f64, truth: f64, rel: f64, what: &str) {
     assert!((found / truth - 1.0).abs() < rel, "{what}: {found} for {truth} (±{} %)", rel * 100.0);
 }
@@ -33,14 +50,7 @@ fn close(found: f64, truth: f64, rel: f64, what: &str) {
 fn the_shipped_examples_are_what_the_generator_writes() {
     let dir = std::env::temp_dir().join(format!("rigtwin-examples-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
-    // the generator as this checkout builds it (`cargo test` has built it with the package's
-    // examples; a run filtered to this file builds it here)
-    let out = Command::new(env!("CARGO"))
-        .args(["run", "--quiet", "--example", "make_examples", "--"])
-        .arg(&dir)
-        .current_dir(env!("CARGO_MANIFEST_DIR"))
-        .output()
-        .unwrap();
+    let out = generator().arg(&dir).output().unwrap();
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let mut n = 0;
     for kind in ["sweep", "variants", "bearing", "gear_bench", "linear_axis"] {

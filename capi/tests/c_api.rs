@@ -13,14 +13,16 @@ use mpc::{Controller, MpcSettings};
 
 /// target/<profile>, where cargo puts this crate's static and shared library: `cargo test`
 /// builds only the rlib the tests link, so the libraries a C program links are built here (in
-/// the same target directory and profile, so only this crate's last step is compiled).
+/// the same target directory and profile). The build selects the whole workspace with its tests,
+/// as `cargo test --workspace` does: a build of this package alone unifies its dependencies'
+/// features differently and would compile the tree again.
 fn library_dir() -> PathBuf {
     let exe = std::env::current_exe().unwrap();
     let dir = exe.parent().unwrap().parent().unwrap().to_path_buf();
     let profile = dir.file_name().unwrap().to_str().unwrap().to_string();
     let target = dir.parent().unwrap();
     let mut cmd = Command::new(env!("CARGO"));
-    cmd.args(["build", "--quiet", "-p", "rigtwin-mpc", "--lib", "--target-dir"]).arg(target);
+    cmd.args(["build", "--quiet", "--workspace", "--lib", "--tests", "--target-dir"]).arg(target);
     match profile.as_str() {
         "debug" => {}
         "release" => {
