@@ -21,7 +21,7 @@ use std::f64::consts::{PI, TAU};
 use std::fmt::Write as _;
 use std::path::Path;
 
-use plant::effects::DriveEffects;
+use plant::rig::DriveEffects;
 use plant::{CoulombFriction, Coupling, Domain, DriveModel, Effect, Line, LineBody, Quantity, Variant};
 
 /// A small seeded generator (xorshift) and its normal draws (Box–Muller).

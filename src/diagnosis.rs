@@ -558,7 +558,7 @@ fn bearing(file: &Path, _progress: &(dyn Fn(&str) + Sync)) -> anyhow::Result<Dia
 pub fn rig_toml(
     rig: &plant::RigParams,
     variant: plant::Variant,
-    effects: &plant::effects::DriveEffects,
+    effects: &plant::rig::DriveEffects,
     bearing: Option<&plant::BearingModel>,
 ) -> anyhow::Result<String> {
     #[derive(Serialize)]
@@ -567,7 +567,7 @@ pub fn rig_toml(
         variant: plant::Variant,
         model: &'a plant::RigParams,
         #[serde(skip_serializing_if = "Option::is_none")]
-        effects: Option<&'a plant::effects::DriveEffects>,
+        effects: Option<&'a plant::rig::DriveEffects>,
         #[serde(skip_serializing_if = "Option::is_none")]
         bearing: Option<&'a plant::BearingModel>,
     }

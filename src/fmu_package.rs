@@ -138,7 +138,7 @@ pub fn loop_connections(plant: &FmuParams, controller: &FmuParams) -> anyhow::Re
         anyhow::bail!("the plant is a controller FMU");
     }
     let ports = spec.ports(controller).map_err(|e| anyhow::anyhow!("the controller: {e}"))?;
-    let table = rigtwin_fmu::variables::Table::new(plant);
+    let table = rigtwin_fmu::table(plant);
     let has = |name: &str, causality: rigtwin_fmu::variables::Causality| {
         table.variables.iter().any(|v| v.name == name && v.causality == causality)
     };

@@ -484,7 +484,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                 None => (rigtwin_fmu::FmuParams::default(), mpc::MpcSection::default()),
             };
             if controller {
-                let spec = rigtwin_fmu::controller::ControllerSpec::of_model(&p, &section, horizon, blocks);
+                let spec = rigtwin_fmu::ControllerSpec::of_model(&p, &section, horizon, blocks);
                 let named = || params.as_ref().map_or("the embedded rig".into(), |f| f.display().to_string());
                 p.controller = Some(spec.map_err(|e| anyhow::anyhow!("--controller: {}: {e}", named()))?);
             }

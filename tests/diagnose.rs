@@ -198,7 +198,7 @@ fn drive_compliance_is_found() {
     let p = plant::effects::Powertrain::new(
         &truth_rig,
         Variant::V1,
-        &plant::effects::DriveEffects {
+        &plant::rig::DriveEffects {
             compliance_stiffness_nm_per_rad: k,
             compliance_motor_fraction: f,
             ..Default::default()
@@ -305,7 +305,7 @@ fn motor_heavy(k: f64, f: f64, shafts: f64, seed: u64) -> torsional::TorsionalDi
     let mut truth = declared();
     truth.c_short *= shafts;
     truth.c_long = truth.c_long.map(|c| c * shafts);
-    let effects = plant::effects::DriveEffects {
+    let effects = plant::rig::DriveEffects {
         compliance_stiffness_nm_per_rad: k,
         compliance_motor_fraction: f,
         ..Default::default()

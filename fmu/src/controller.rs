@@ -11,12 +11,8 @@
 //! input before the next (Jacobi, as OSP libcosim) gets the commands of the step before: one
 //! sample of computational delay.
 
-use std::borrow::Cow;
-
-use serde::{Deserialize, Serialize};
-
-use crate::params::FmuParams;
-use crate::variables::{unit_of, Constraint};
+use crate::params::{ControllerSpec, FmuParams};
+use crate::variables::{unit_of, Constraint, Port, Ports};
 use mpc::{Design, MpcSection, MpcSettings, Prediction, RealTime, Status};
 use plant::drive::{Dimension, MAX_INPUTS};
 use plant::{Domain, DriveModel};
@@ -72,57 +68,6 @@ pub const PARAMETERS: [(&str, &str, &str, Constraint); 9] = [
         Constraint::Positive,
     ),
 ];
-
-/// One variable of the controller FMU: a tunable parameter, an input or an output.
-#[derive(Debug, Clone, PartialEq)]
-pub struct Port {
-    /// Name (structured naming convention).
-    pub name: Cow<'static, str>,
-    /// Unit.
-    pub unit: &'static str,
-    /// Description.
-    pub description: Cow<'static, str>,
-    /// The values a parameter accepts (`Finite` for inputs and outputs).
-    pub constraint: Constraint,
-}
-
-impl Port {
-    fn of(name: impl Into<Cow<'static, str>>, unit: &'static str, description: impl Into<Cow<'static, str>>) -> Port {
-        Port { name: name.into(), unit, description: description.into(), constraint: Constraint::Finite }
-    }
-}
-
-/// The controller FMU's variables, generated from its model: tunable parameters (in
-/// [`ControllerSpec::values`] order), inputs (measured, then references), outputs (commands).
-#[derive(Debug, Clone, PartialEq)]
-pub struct Ports {
-    /// Tunable parameters.
-    pub parameters: Vec<Port>,
-    /// Inputs: the measured outputs, then the references.
-    pub inputs: Vec<Port>,
-    /// How many of the inputs are measurements.
-    pub measured: usize,
-    /// Outputs: the commands.
-    pub outputs: Vec<Port>,
-}
-
-/// The controller an FMU carries: horizon and move blocks (fixed at export), the tunable
-/// settings (start values of its parameters) and, for a drive model, its `[mpc]` section
-/// (the signals tracked, penalised and measured; the tunables override its weights and bounds).
-/// The rig's defaults are `mpc::MpcSettings::powertrain`'s.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct ControllerSpec {
-    /// Prediction horizon, steps of 1 ms.
-    pub horizon: usize,
-    /// Number of move blocks (0: every step free).
-    pub move_blocks: usize,
-    /// The tunable settings, in the order of [`ControllerSpec::ports`]' parameters.
-    pub values: Vec<f64>,
-    /// A drive model's `[mpc]` section (`None` for the paper rig).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub section: Option<MpcSection>,
-}
 
 /// The rig's tunable settings of `s`, in [`PARAMETERS`] order.
 fn rig_values(s: &MpcSettings) -> Vec<f64> {

@@ -5,7 +5,7 @@
 use std::fmt::Write as _;
 
 use crate::params::FmuParams;
-use crate::variables::{parameter_values, variant_number, Causality, Constraint, Kind, Slot, Table, Variable};
+use crate::variables::{parameter_values, variant_number, Causality, Constraint, Kind, Slot, Variable};
 
 /// The model identifier: the shared library's name inside the FMU.
 pub const MODEL_IDENTIFIER: &str = "rigtwin";
@@ -136,14 +136,14 @@ fn drive_description(m: &plant::DriveModel) -> (String, bool) {
 pub const CONTROL_PERIOD_S: f64 = 1e-3;
 
 /// The controller FMU's description: what it controls and with which prediction model.
-fn controller_description(p: &FmuParams, c: &crate::controller::ControllerSpec) -> String {
+fn controller_description(p: &FmuParams, c: &crate::params::ControllerSpec) -> String {
     if let Some(m) = &p.drive {
         let ports = match c.ports(p) {
             Ok(ports) => ports,
             Err(e) => return format!("rigtwin's model-predictive controller of a drive model (not valid: {e})"),
         };
         let names =
-            |list: &[crate::controller::Port]| list.iter().map(|q| q.name.as_ref()).collect::<Vec<_>>().join(", ");
+            |list: &[crate::variables::Port]| list.iter().map(|q| q.name.as_ref()).collect::<Vec<_>>().join(", ");
         let mut d = format!(
             "rigtwin's model-predictive controller of a drive model of {} bodies (Clarabel QP, horizon {} steps of {} s, Kalman filter with input disturbances): it measures {}, follows {}, commands {}",
             m.line.bodies.len(),
@@ -232,7 +232,7 @@ pub fn model_name(p: &FmuParams) -> String {
 }
 
 fn describe_with(p: &FmuParams, version: Version, token: &str) -> String {
-    let table = Table::new(p);
+    let table = crate::table(p);
     let vars = &table.variables;
     let params = parameter_values(p);
     let mut x = String::new();

@@ -21,7 +21,7 @@ use plant::effects::DelayLine;
 use plant::integrate::PiecewiseRk4;
 use plant::{DriveModel, Dynamics, Quantity};
 
-use crate::model::{longest_exact_piece, ZohCache, MAX_PIECES};
+use crate::zoh::{longest_exact_piece, ZohCache, MAX_PIECES};
 
 /// Most states a drive model has: positions and speeds of the largest line, one lag per input.
 pub const MAX_STATES: usize = 2 * plant::MAX_BODIES + plant::drive::MAX_INPUTS;

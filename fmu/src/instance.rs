@@ -286,7 +286,7 @@ impl Instance {
     pub fn new(name: &str, interface: Interface, logger: Box<dyn Logger>, logging_on: bool, p: &FmuParams) -> Instance {
         let params = parameter_values(p);
         let variant = variant_number(p.variant);
-        let table = Table::new(p);
+        let table = crate::table(p);
         let nu = table.nu();
         let delay_param = match &p.drive {
             // the controller's inputs act at once (the dead time is in its prediction)

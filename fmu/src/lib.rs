@@ -8,7 +8,8 @@
 //! - [`variables`]: the one variable table — both modelDescription.xml files ([`description`]),
 //!   the value-reference map and the instantiation token come from it;
 //! - [`controller`]: rigtwin's MPC as a co-simulation FMU;
-//! - [`model`]: the linear dynamics, with the exact zero-order-hold co-simulation step;
+//! - [`model`]: the paper rig's dynamics, [`drive`]: a drive model's, each with its
+//!   co-simulation step (the exact zero-order-hold step of the linear part in `zoh`);
 //! - [`instance`]: the state machine every call goes through, version-independent;
 //! - [`fmi3`], [`fmi2`]: thin `extern "C"` glue, the exported C API. Every body runs under `catch_unwind`, so no panic
 //!   crosses into the importer; every signature is checked at compile time against the
@@ -28,9 +29,10 @@ pub mod instance;
 pub mod model;
 pub mod params;
 pub mod variables;
+mod zoh;
 
 pub use description::{describe, token, Version, MODEL_IDENTIFIER};
-pub use params::FmuParams;
+pub use params::{ControllerSpec, FmuParams};
 
 use std::path::{Path, PathBuf};
 
@@ -46,6 +48,15 @@ pub fn check(p: &FmuParams) -> Result<(), String> {
     match &p.drive {
         None => model::Model::new(p).map(|_| ()),
         Some(m) => drive::DriveDynamics::new(m).map(|_| ()),
+    }
+}
+
+/// The variable table of parameter set `p`: the controller FMU's (its ports, generated from the
+/// model and its `[mpc]` section), or the plant's (the paper rig's or a drive model's).
+pub fn table(p: &FmuParams) -> variables::Table {
+    match &p.controller {
+        Some(spec) => variables::Table::of_ports(&spec.ports(p).unwrap_or_default()),
+        None => variables::Table::of_plant(p),
     }
 }
 

@@ -15,6 +15,7 @@ use nalgebra::{DMatrix, DVector};
 
 use crate::params::FmuParams;
 use crate::variables::{powertrain_states, Table};
+use crate::zoh::{longest_exact_piece, ZohCache, CACHE, MAX_PIECES};
 use plant::effects::{DelayLine, Powertrain};
 use plant::integrate::PieceMaps;
 use plant::integrate::{PiecewiseRk4, PiecewiseSmooth};
@@ -69,18 +70,6 @@ pub struct Model {
     pt_dx: Vec<f64>,
 }
 
-/// Discretisations kept: a co-simulation master uses one or a few step sizes (a dead time
-/// adds two piece lengths per step size).
-const CACHE: usize = 8;
-
-/// Most pieces (exact ZOH pieces, or RK4 sub-steps with backlash) one communication step is
-/// split into; a longer step is refused rather than taking unbounded time.
-pub const MAX_PIECES: usize = 1_000_000;
-
-/// Fastest time scale a model may have, s (‖[A B]‖₁ ≤ its inverse): below it the parameters are
-/// not a machine (an inertia of 1e-300 kg m², say) and no step could be taken.
-const FASTEST_TIME_SCALE_S: f64 = 1e-15;
-
 impl Model {
     /// Builds the model; the error names the offending parameter.
     pub fn new(p: &FmuParams) -> Result<Self, String> {
@@ -89,7 +78,7 @@ impl Model {
         }
         let powertrain = Powertrain::new(&p.powertrain, p.variant, &p.effects).map_err(|e| e.to_string())?;
         let br = p.bearing.as_ref().map(|b| b.state_space()).transpose().map_err(|e| e.to_string())?;
-        let table = Table::new(p);
+        let table = Table::of_plant(p);
         // the bearing block's states are next to the powertrain's speeds (`variables::STATES`)
         let bearing_at = table.states.iter().position(|&s| s == 6);
         let nx = table.nx();
@@ -151,7 +140,7 @@ impl Model {
         let bearing_rate =
             br.as_ref().map_or(0.0, |br| br.a.complex_eigenvalues().iter().map(|l| l.norm()).fold(0.0, f64::max));
         let (coarse, fine) = powertrain.rk4_steps_s();
-        let coarse = coarse.min(plant::drive::RK4_STEP_TIMES_RATE / bearing_rate.max(1e-300));
+        let coarse = coarse.min(plant::integrate::RK4_STEP_TIMES_RATE / bearing_rate.max(1e-300));
         let rk = PiecewiseRk4::new(nx, coarse, fine);
         let mut play_offset_x = vec![0.0; nx];
         for (&i, e) in map.iter().zip(powertrain.play_offset()) {
@@ -423,185 +412,6 @@ impl Model {
     fn discretise(&mut self, h: f64) -> Result<usize, String> {
         self.cache.index(&self.a, &self.b, h, self.max_piece_s)
     }
-}
-
-/// The exact (ZOH) discretisations of one linear model, per piece length: a co-simulation master
-/// uses one or a few step sizes, a dead time adds piece lengths. Shared by the rig's and the
-/// drive models' steps. A piece longer than the model's exponential is accurate for
-/// (`max_piece_s`: ‖[A B]‖·h within `plant::statespace::ZOH_MAX_NORM`) is the composition of
-/// k equal sub-pieces, composed once here — (Ad, Bd)ₖ = (Ad^k, Σⱼ Ad^j Bd), by doubling — so a
-/// step is one pass x ← [Ad Bd][x; u] over a contiguous column-major block, as a C loop over
-/// the same matrices makes it.
-#[derive(Debug, Clone, Default)]
-pub(crate) struct ZohCache {
-    entries: Vec<ZohEntry>,
-    /// The entry used last: a master's steps hit it.
-    last: usize,
-    /// The step's accumulator beyond 16 states.
-    acc: Vec<f64>,
-}
-
-#[derive(Debug, Clone)]
-struct ZohEntry {
-    h: f64,
-    ad: DMatrix<f64>,
-    bd: DMatrix<f64>,
-    /// [Ad Bd], column-major.
-    fused: Vec<f64>,
-}
-
-/// (Ad, Bd) of k consecutive pieces of (Ad, Bd): x_k = Ad^k x_0 + Σ_{j<k} Ad^j Bd u, by doubling
-/// (log₂ k products).
-fn composed(ad: DMatrix<f64>, bd: DMatrix<f64>, k: usize) -> (DMatrix<f64>, DMatrix<f64>) {
-    let n = ad.nrows();
-    // (p, q): the map of 2^bit pieces; (acc_p, acc_q): of the pieces taken so far
-    let (mut p, mut q) = (ad, bd);
-    let (mut acc_p, mut acc_q) = (DMatrix::identity(n, n), DMatrix::zeros(q.nrows(), q.ncols()));
-    let mut k = k;
-    while k > 0 {
-        if k & 1 == 1 {
-            acc_q = &p * &acc_q + &q;
-            acc_p = &p * &acc_p;
-        }
-        k >>= 1;
-        if k > 0 {
-            q = &p * &q + &q;
-            p = &p * &p;
-        }
-    }
-    (acc_p, acc_q)
-}
-
-/// Most columns (states and inputs) the fixed-size step takes.
-const FIXED_COLUMNS: usize = 32;
-
-/// [Ad Bd][x; u] over `fused`'s columns of `R` rows (at most [`FIXED_COLUMNS`] columns), the sums
-/// in fixed-size arrays the compiler keeps in registers: two partial sums (even and odd
-/// columns), so that the additions form two chains of half the length.
-fn step_fixed<const R: usize>(fused: &[f64], x: &[f64], u: &[f64]) -> [f64; R] {
-    let cols = x.len() + u.len();
-    let mut values = [0.0; FIXED_COLUMNS];
-    values[..x.len()].copy_from_slice(x);
-    values[x.len()..cols].copy_from_slice(u);
-    let (mut even, mut odd) = ([0.0; R], [0.0; R]);
-    let mut k = 0;
-    while k + 1 < cols {
-        let (c0, c1) = (&fused[k * R..(k + 1) * R], &fused[(k + 1) * R..(k + 2) * R]);
-        let (v0, v1) = (values[k], values[k + 1]);
-        for r in 0..R {
-            even[r] += c0[r] * v0;
-            odd[r] += c1[r] * v1;
-        }
-        k += 2;
-    }
-    if k < cols {
-        let c0 = &fused[k * R..(k + 1) * R];
-        for r in 0..R {
-            even[r] += c0[r] * values[k];
-        }
-    }
-    for r in 0..R {
-        even[r] += odd[r];
-    }
-    even
-}
-
-/// z ← `next` when every value is finite; else the index of the first that is not, `z` unchanged.
-fn commit(z: &mut [f64], next: &[f64]) -> Result<(), usize> {
-    match next.iter().position(|v| !v.is_finite()) {
-        Some(k) => Err(k),
-        None => {
-            z.copy_from_slice(next);
-            Ok(())
-        }
-    }
-}
-
-impl ZohCache {
-    /// The entry of piece length `h`, discretised if new (the oldest of [`CACHE`] dropped): the
-    /// exponential of sub-pieces no longer than `max_piece_s`, composed.
-    pub(crate) fn index(
-        &mut self,
-        a: &DMatrix<f64>,
-        b: &DMatrix<f64>,
-        h: f64,
-        max_piece_s: f64,
-    ) -> Result<usize, String> {
-        // piece lengths from a dead time carry rounding: equal within 1e-12 is the same
-        let same = |e: &ZohEntry| (e.h - h).abs() <= 1e-12 * h;
-        if self.entries.get(self.last).is_some_and(same) {
-            return Ok(self.last);
-        }
-        let i = match self.entries.iter().position(same) {
-            Some(i) => i,
-            None => {
-                let k = (h / max_piece_s).ceil().max(1.0);
-                if k.is_nan() || k > MAX_PIECES as f64 {
-                    return Err(format!(
-                        "a piece of {h} s needs more than {MAX_PIECES} exact sub-pieces for this model"
-                    ));
-                }
-                let (ad, bd) = plant::zoh(a, b, h / k).map_err(|e| e.to_string())?;
-                let (ad, bd) = composed(ad, bd, k as usize);
-                if ad.iter().chain(bd.iter()).any(|v| !v.is_finite()) {
-                    return Err(format!("the exact step of {h} s is not finite"));
-                }
-                if self.entries.len() == CACHE {
-                    self.entries.remove(0);
-                }
-                let fused = ad.iter().chain(bd.iter()).copied().collect();
-                self.acc.resize(ad.nrows(), 0.0);
-                self.entries.push(ZohEntry { h, ad, bd, fused });
-                self.entries.len() - 1
-            }
-        };
-        self.last = i;
-        Ok(i)
-    }
-
-    /// (Ad, Bd) of entry `i`.
-    pub(crate) fn get(&self, i: usize) -> (&DMatrix<f64>, &DMatrix<f64>) {
-        (&self.entries[i].ad, &self.entries[i].bd)
-    }
-
-    /// z ← Ad z + Bd u with entry `i` (`u` of the inputs' length); a non-finite result is
-    /// refused (the index of the first such state), `z` unchanged. Allocation-free; up to 16
-    /// states (the rig has 6 to 13) the sums stay in registers.
-    pub(crate) fn advance(&mut self, i: usize, z: &mut [f64], u: &[f64]) -> Result<(), usize> {
-        let (fused, n) = (&self.entries[i].fused, z.len());
-        macro_rules! fixed {
-            ($($r:literal)*) => {
-                match n {
-                    $($r => return commit(z, &step_fixed::<$r>(fused, z, u)),)*
-                    _ => {}
-                }
-            };
-        }
-        if n + u.len() <= FIXED_COLUMNS {
-            fixed!(1 2 3 4 5 6 7 8 9 10 11 12 13 14 15 16);
-        }
-        let acc = &mut self.acc[..n];
-        acc.fill(0.0);
-        for (column, &v) in fused.chunks_exact(n).zip(z.iter().chain(u)) {
-            for (a, c) in acc.iter_mut().zip(column) {
-                *a += c * v;
-            }
-        }
-        commit(z, acc)
-    }
-}
-
-/// Longest exact piece of x' = A x + B u, s: ‖[A B]‖₁ · piece = `plant::statespace::ZOH_MAX_NORM`
-/// / 2^10; refuses time scales below `FASTEST_TIME_SCALE_S` (parameters that are no machine).
-pub(crate) fn longest_exact_piece(a: &DMatrix<f64>, b: &DMatrix<f64>) -> Result<f64, String> {
-    let norm = a.column_iter().chain(b.column_iter()).map(|c| c.lp_norm(1)).fold(0.0, f64::max);
-    if norm.is_nan() || norm * FASTEST_TIME_SCALE_S > 1.0 {
-        return Err(format!(
-            "the parameters give time scales of {:.1e} s (an inertia, mass or stiffness far off)",
-            1.0 / norm
-        ));
-    }
-    Ok(plant::statespace::ZOH_MAX_NORM / 1024.0 / norm.max(1e-300))
 }
 
 /// out = A x + B u (no allocation).

@@ -3,7 +3,8 @@
 
 use serde::{Deserialize, Serialize};
 
-use plant::effects::DriveEffects;
+use mpc::MpcSection;
+use plant::rig::DriveEffects;
 use plant::{paper, BearingModel, Coefficients, RigParams, Support, Variant};
 
 /// Everything that sets the FMU's start values.
@@ -29,7 +30,25 @@ pub struct FmuParams {
     /// The controller FMU: when given, the FMU is rigtwin's MPC of the rig above (with its
     /// effects) instead of the rig itself (`crate::controller`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub controller: Option<crate::controller::ControllerSpec>,
+    pub controller: Option<ControllerSpec>,
+}
+
+/// The controller an FMU carries: horizon and move blocks (fixed at export), the tunable
+/// settings (start values of its parameters) and, for a drive model, its `[mpc]` section
+/// (the signals tracked, penalised and measured; the tunables override its weights and bounds).
+/// The rig's defaults are `mpc::MpcSettings::powertrain`'s.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ControllerSpec {
+    /// Prediction horizon, steps of 1 ms.
+    pub horizon: usize,
+    /// Number of move blocks (0: every step free).
+    pub move_blocks: usize,
+    /// The tunable settings, in the order of `ControllerSpec::ports` (`crate::controller`)' parameters.
+    pub values: Vec<f64>,
+    /// A drive model's `[mpc]` section (`None` for the paper rig).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub section: Option<MpcSection>,
 }
 
 impl Default for FmuParams {

@@ -135,7 +135,7 @@ pub enum Presence {
     /// Those with a bearing block, at a fixed value reference (kept free without one).
     Bearing,
     /// Those whose effects make this true; after every fixed row.
-    Effect(fn(&plant::effects::DriveEffects) -> bool),
+    Effect(fn(&plant::rig::DriveEffects) -> bool),
 }
 
 impl Presence {
@@ -193,7 +193,7 @@ macro_rules! rig_param {
             unit: $unit,
             description: $desc,
             constraint: Constraint::$c,
-            present: Presence::Effect(|$e: &plant::effects::DriveEffects| $on),
+            present: Presence::Effect(|$e: &plant::rig::DriveEffects| $on),
             get: |$p: &FmuParams| $field,
             set: |$p: &mut FmuParams, v: f64| $field = v,
         }
@@ -201,7 +201,7 @@ macro_rules! rig_param {
 }
 
 /// The rig's float parameters in [`Slot::Param`] order: the powertrain and the bearing, then the
-/// drive-path effects (`plant::effects::DriveEffects`). New rows go at the end: the value
+/// drive-path effects (`plant::rig::DriveEffects`). New rows go at the end: the value
 /// references of the existing ones stay.
 pub const PARAMETERS: &[RigParameter] = &[
     rig_param!("j_m2", "kg.m2", "inertia of load machine M2 with adapters (left, short side shaft)", Positive, |p| p
@@ -380,6 +380,43 @@ pub const VR_INPUT: u32 = 48;
 /// The side shafts' twist (a state).
 pub const VR_TWIST: u32 = 53;
 
+/// One variable of the controller FMU: a tunable parameter, an input or an output.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Port {
+    /// Name (structured naming convention).
+    pub name: Cow<'static, str>,
+    /// Unit.
+    pub unit: &'static str,
+    /// Description.
+    pub description: Cow<'static, str>,
+    /// The values a parameter accepts (`Finite` for inputs and outputs).
+    pub constraint: Constraint,
+}
+
+impl Port {
+    pub(crate) fn of(
+        name: impl Into<Cow<'static, str>>,
+        unit: &'static str,
+        description: impl Into<Cow<'static, str>>,
+    ) -> Port {
+        Port { name: name.into(), unit, description: description.into(), constraint: Constraint::Finite }
+    }
+}
+
+/// The controller FMU's variables, generated from its model: tunable parameters (in
+/// [`crate::params::ControllerSpec::values`] order), inputs (measured, then references), outputs (commands).
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Ports {
+    /// Tunable parameters.
+    pub parameters: Vec<Port>,
+    /// Inputs: the measured outputs, then the references.
+    pub inputs: Vec<Port>,
+    /// How many of the inputs are measurements.
+    pub measured: usize,
+    /// Outputs: the commands.
+    pub outputs: Vec<Port>,
+}
+
 /// The variable table of one parameter set: what the model description lists, in order, with
 /// the continuous-state vector it implies.
 #[derive(Debug, Clone, PartialEq)]
@@ -400,7 +437,7 @@ pub struct Table {
 
 /// [`STATES`] indices of a powertrain's states (`plant::effects::Powertrain` order: angles,
 /// speeds, lagged torque).
-pub fn powertrain_states(effects: &plant::effects::DriveEffects) -> Vec<usize> {
+pub fn powertrain_states(effects: &plant::rig::DriveEffects) -> Vec<usize> {
     let mut v = if effects.compliance_stiffness_nm_per_rad > 0.0 {
         vec![0, 1, 2, 10, 3, 4, 5, 11]
     } else {
@@ -413,11 +450,9 @@ pub fn powertrain_states(effects: &plant::effects::DriveEffects) -> Vec<usize> {
 }
 
 impl Table {
-    /// The table of parameter set `p`: the paper rig's, or a drive model's.
-    pub fn new(p: &FmuParams) -> Table {
-        if let Some(c) = &p.controller {
-            return Table::of_controller(p, c);
-        }
+    /// The table of the plant of parameter set `p`: the paper rig's, or a drive model's (a
+    /// controller FMU's is [`Table::of_ports`]; `crate::table` chooses).
+    pub fn of_plant(p: &FmuParams) -> Table {
         if let Some(m) = &p.drive {
             return Table::of_drive(m);
         }
@@ -627,15 +662,9 @@ impl Table {
     /// measurements and references as inputs, the commands as outputs; no states. The paper
     /// rig's names and value references are fixed; a drive model's come from its model and
     /// `[mpc]` section (`ControllerSpec::ports`).
-    fn of_controller(p: &FmuParams, spec: &crate::controller::ControllerSpec) -> Table {
-        let ports = spec.ports(p).unwrap_or_else(|_| crate::controller::Ports {
-            parameters: Vec::new(),
-            inputs: Vec::new(),
-            measured: 0,
-            outputs: Vec::new(),
-        });
+    pub fn of_ports(ports: &Ports) -> Table {
         let mut rows = Rows { v: vec![time_row()], next_vr: 1 };
-        let mut push = |q: &crate::controller::Port, causality, slot| {
+        let mut push = |q: &Port, causality, slot| {
             rows.push_if(
                 true,
                 q.name.clone(),
@@ -799,7 +828,7 @@ pub fn parameter_values(p: &FmuParams) -> Vec<f64> {
 /// (the rig's, or a drive model's with its bodies, couplings, inputs and effects).
 pub fn parameter_set(like: &FmuParams, v: &[f64], variant: i32) -> Result<FmuParams, String> {
     if let Some(c) = &like.controller {
-        let spec = crate::controller::ControllerSpec { values: v.to_vec(), ..c.clone() };
+        let spec = crate::params::ControllerSpec { values: v.to_vec(), ..c.clone() };
         return Ok(FmuParams { controller: Some(spec), ..like.clone() });
     }
     if let Some(m) = &like.drive {
@@ -843,7 +872,7 @@ mod tests {
 
     #[test]
     fn value_references_are_unique_and_all_found() {
-        let t = Table::new(&FmuParams::with_sfd_bearing());
+        let t = Table::of_plant(&FmuParams::with_sfd_bearing());
         assert_eq!(t.nx(), 10);
         for (i, v) in t.variables.iter().enumerate() {
             assert_eq!(v.vr as usize, i, "with a bearing block the value references are the table's indices");
@@ -867,8 +896,8 @@ mod tests {
     /// derivatives and forces are absent and every other variable keeps its value reference.
     #[test]
     fn a_rig_without_a_bearing_keeps_the_other_value_references() {
-        let with = Table::new(&FmuParams::with_sfd_bearing());
-        let without = Table::new(&FmuParams::default());
+        let with = Table::of_plant(&FmuParams::with_sfd_bearing());
+        let without = Table::of_plant(&FmuParams::default());
         assert_eq!(without.nx(), 6);
         assert_eq!(without.nu(), 5, "the forces' slots stay, unlisted");
         let kept: Vec<(u32, &str)> =
@@ -884,10 +913,10 @@ mod tests {
     #[test]
     fn effects_add_their_parameters_and_states_after_the_rest() {
         let mut p = FmuParams::default();
-        let base = Table::new(&p);
+        let base = Table::of_plant(&p);
         p.effects.actuator_lag_s = 0.004;
         p.effects.compliance_stiffness_nm_per_rad = 2000.0;
-        let t = Table::new(&p);
+        let t = Table::of_plant(&p);
         assert_eq!(t.nx(), base.nx() + 3);
         assert_eq!(&t.variables[..base.variables.len()], &base.variables[..]);
         let names: Vec<&str> = t.variables[base.variables.len()..].iter().map(|v| v.name.as_ref()).collect();
@@ -918,10 +947,10 @@ mod tests {
     #[test]
     fn friction_rows_come_last_and_round_trip() {
         let mut p = FmuParams::default();
-        let base = Table::new(&p);
+        let base = Table::of_plant(&p);
         p.effects.coulomb_friction_nm = [0.8, 0.0, 1.1];
         p.effects.friction_smoothing_radps = 0.02;
-        let t = Table::new(&p);
+        let t = Table::of_plant(&p);
         assert_eq!(&t.variables[..base.variables.len()], &base.variables[..]);
         let names: Vec<&str> = t.variables[base.variables.len()..].iter().map(|v| v.name.as_ref()).collect();
         assert_eq!(names, ["m2.coulomb_friction", "m3.coulomb_friction", "friction_smoothing_speed"]);

@@ -12,8 +12,8 @@ use common::{instance, measured};
 #[test]
 fn a_communication_step_allocates_only_inside_clarabel() {
     for effects in [
-        plant::effects::DriveEffects::default(),
-        plant::effects::DriveEffects { time_delay_s: 0.0043, actuator_lag_s: 0.005, ..Default::default() },
+        plant::rig::DriveEffects::default(),
+        plant::rig::DriveEffects { time_delay_s: 0.0043, actuator_lag_s: 0.005, ..Default::default() },
     ] {
         let (mut inst, inputs, outputs) = instance(effects);
         let mut out = [0.0; 3];

@@ -12,7 +12,7 @@ impl Logger for Quiet {
     fn log(&self, _status: Status, _category: &str, _message: &str) {}
 }
 
-fn params(f: impl FnOnce(&mut plant::effects::DriveEffects)) -> FmuParams {
+fn params(f: impl FnOnce(&mut plant::rig::DriveEffects)) -> FmuParams {
     let mut p = FmuParams::default();
     f(&mut p.effects);
     p

@@ -10,7 +10,7 @@ use std::time::Duration;
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use ident::diagnose::torsional::diagnose;
-use plant::effects::DriveEffects;
+use plant::rig::DriveEffects;
 use plant::Variant;
 
 fn bench(c: &mut Criterion) {

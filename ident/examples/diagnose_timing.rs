@@ -8,7 +8,7 @@ use common::sweep;
 use std::time::Instant;
 
 use ident::diagnose::torsional::diagnose;
-use plant::effects::DriveEffects;
+use plant::rig::DriveEffects;
 use plant::Variant;
 
 fn main() {

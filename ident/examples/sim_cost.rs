@@ -1,6 +1,7 @@
 //! Cost of one 60 s, 1 kHz simulation of the rig with side-shaft play (the backlash candidate's
 //! unit of work): `cargo run --release -p ident --example sim_cost`.
-use plant::effects::{DriveEffects, Powertrain};
+use plant::effects::Powertrain;
+use plant::rig::DriveEffects;
 use std::time::Instant;
 fn main() {
     let rig = plant::paper::damped_params();

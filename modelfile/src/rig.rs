@@ -90,7 +90,7 @@ struct RigFile {
     bending: Option<BendingFile>,
     bearing: Option<plant::BearingModel>,
     #[serde(default)]
-    effects: plant::effects::DriveEffects,
+    effects: plant::rig::DriveEffects,
     /// The controller's section, read by [`crate::read`].
     #[allow(dead_code)]
     mpc: Option<toml::Value>,

@@ -26,7 +26,7 @@ struct Loop {
 impl Loop {
     fn new(horizon: usize, effects: bool) -> Self {
         let (ss, delays) = if effects {
-            let e = plant::effects::DriveEffects { time_delay_s: 0.0043, actuator_lag_s: 0.005, ..Default::default() };
+            let e = plant::rig::DriveEffects { time_delay_s: 0.0043, actuator_lag_s: 0.005, ..Default::default() };
             let p =
                 mpc::prediction::prediction(&plant::paper::damped_params(), plant::rig::Variant::V1, &e, 1e-3).unwrap();
             (p.model, p.input_delays_s)

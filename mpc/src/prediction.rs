@@ -2,7 +2,8 @@
 //! the settings its `[mpc]` section gives — the paper rig (the open-differential powertrain with
 //! the effects a rig file declares or the diagnosis found) and any drive model alike.
 
-use plant::effects::{DriveEffects, Powertrain};
+use plant::effects::Powertrain;
+use plant::rig::DriveEffects;
 use plant::rig::{RigParams, Variant};
 use plant::statespace::StateSpace;
 use plant::DriveModel;

@@ -15,7 +15,9 @@ use nalgebra::{DMatrix, DVector};
 use serde::{Deserialize, Serialize};
 
 use crate::error::{PlantError, Result};
-use crate::integrate::{PieceMaps, PiecewiseRk4, PiecewiseSmooth, AFFINE_MAX_STATES};
+use crate::integrate::{
+    friction_band, PieceMaps, PiecewiseRk4, PiecewiseSmooth, AFFINE_MAX_STATES, RK4_STEP_TIMES_RATE,
+};
 use crate::line::{Line, Quantity};
 use crate::statespace::zoh;
 
@@ -28,10 +30,6 @@ pub use effect::{
 /// [`FINE_PER_COARSE`] times as many): a model stiffer than this at the record's sample rate is
 /// refused instead of being integrated for minutes.
 pub const MAX_SUBSTEPS: usize = 2000;
-
-/// RK4 sub-step bound: h·|λ|max ≤ this (RK4 is stable to 2.8 on both axes; 0.5 keeps the
-/// amplitude error of the fastest mode per sub-step below 1e-4).
-pub const RK4_STEP_TIMES_RATE: f64 = 0.5;
 
 /// What a parameter measures; its unit follows from the line's domain.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -542,7 +540,7 @@ impl Dynamics {
         self.fine_s = if backlash { coarse / FINE_PER_COARSE } else { coarse }.min(friction_step);
         for i in bodies() {
             let (fc, vs) = self.friction[i];
-            self.friction_band[i] = crate::integrate::friction_band(coarse, fc, vs, 1.0 / self.inv_j[i]);
+            self.friction_band[i] = friction_band(coarse, fc, vs, 1.0 / self.inv_j[i]);
         }
         self.coarse_s = coarse;
     }
@@ -752,7 +750,7 @@ impl Dynamics {
         for i in 0..self.n {
             let (fc, vs) = self.friction[i];
             if fc > 0.0 {
-                self.friction_band[i] = crate::integrate::friction_band(coarse_s, fc, vs, 1.0 / self.inv_j[i]);
+                self.friction_band[i] = friction_band(coarse_s, fc, vs, 1.0 / self.inv_j[i]);
             }
         }
         self

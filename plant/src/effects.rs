@@ -1,114 +1,15 @@
-//! Effects in the drive path that the reduced rig model leaves out, and the powertrain that has
-//! them: a dead time and a first-order lag of the drive torque, backlash in the side shafts, and
-//! a compliance inside the drive unit (its inertia split into motor and cage). Used by the
-//! diagnosis (`ident::diagnose`) to extend a declared model; no I/O.
+//! The paper rig's powertrain with its drive-path effects ([`DriveEffects`]): its drive model
+//! ([`DriveModel::paper_rig`]) integrated the way the torsional diagnosis and the rig's FMU
+//! step it, and the delay line of a dead time. No I/O.
 
 use nalgebra::DMatrix;
-use serde::{Deserialize, Serialize};
 
-use crate::drive::{ActuatorLag, Backlash, CoulombFriction, DriveModel, Dynamics, Effect, TimeDelay};
-use crate::error::{non_negative, PlantError, Result};
+use crate::drive::{DriveModel, Dynamics};
+use crate::error::{PlantError, Result};
 use crate::integrate::{AffineStep, PieceMaps, PiecewiseRk4, PiecewiseSmooth};
-use crate::line::{Coupling, Domain, Line, LineBody, Quantity};
-use crate::rig::{RigParams, Variant};
+use crate::line::Quantity;
+use crate::rig::{DriveEffects, RigParams, Variant};
 use crate::statespace::StateSpace;
-
-/// The effects, each off at zero.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct DriveEffects {
-    /// Dead time of the drive torque, s.
-    #[serde(default)]
-    pub time_delay_s: f64,
-    /// Time constant of a first-order lag of the drive torque, s.
-    #[serde(default)]
-    pub actuator_lag_s: f64,
-    /// Total play of each side shaft (output side), rad.
-    #[serde(default)]
-    pub backlash_rad: f64,
-    /// Stiffness between the drive's motor and its cage, Nm/rad (0: rigid drive).
-    #[serde(default)]
-    pub compliance_stiffness_nm_per_rad: f64,
-    /// Share of j_drive on the motor side of that compliance (the rest is the cage).
-    #[serde(default = "half")]
-    pub compliance_motor_fraction: f64,
-    /// Coulomb friction of each machine [M2, drive, M3] (bearings, seals, brushes), Nm; the
-    /// drive's acts on its motor when the drive is compliant.
-    #[serde(default)]
-    pub coulomb_friction_nm: [f64; 3],
-    /// Smoothing speed v_s of the friction, rad/s: T = T_c w/√(w² + v_s²) (71 % of T_c at v_s,
-    /// 97 % at 4 v_s), so the right-hand side stays Lipschitz through a speed reversal.
-    #[serde(default = "default_smoothing")]
-    pub friction_smoothing_radps: f64,
-}
-
-/// Default friction smoothing speed, rad/s (0.5 rpm: well below the speeds at which a rig's
-/// machines reverse under a sweep, well above what the 0.125 ms integration step resolves for
-/// frictions of a few Nm on inertias of 0.1 kg m²).
-pub const FRICTION_SMOOTHING_RADPS: f64 = 0.05;
-
-fn default_smoothing() -> f64 {
-    FRICTION_SMOOTHING_RADPS
-}
-
-fn half() -> f64 {
-    0.5
-}
-
-impl Default for DriveEffects {
-    fn default() -> Self {
-        DriveEffects {
-            time_delay_s: 0.0,
-            actuator_lag_s: 0.0,
-            backlash_rad: 0.0,
-            compliance_stiffness_nm_per_rad: 0.0,
-            compliance_motor_fraction: 0.5,
-            coulomb_friction_nm: [0.0; 3],
-            friction_smoothing_radps: FRICTION_SMOOTHING_RADPS,
-        }
-    }
-}
-
-impl DriveEffects {
-    /// Checks ranges; names the key.
-    pub fn validate(&self) -> Result<()> {
-        non_negative(|| "effects.time_delay_s", self.time_delay_s, "s")?;
-        non_negative(|| "effects.actuator_lag_s", self.actuator_lag_s, "s")?;
-        non_negative(|| "effects.backlash_rad", self.backlash_rad, "rad")?;
-        non_negative(|| "effects.compliance_stiffness_nm_per_rad", self.compliance_stiffness_nm_per_rad, "Nm/rad")?;
-        for (k, name) in ["M2", "drive", "M3"].iter().enumerate() {
-            non_negative(|| format!("effects.coulomb_friction_nm[{k}] ({name})"), self.coulomb_friction_nm[k], "Nm")?;
-        }
-        if !(self.friction_smoothing_radps > 0.0 && self.friction_smoothing_radps.is_finite()) {
-            return Err(PlantError::Invalid(format!(
-                "`effects.friction_smoothing_radps` must be a positive speed, got {}",
-                self.friction_smoothing_radps
-            )));
-        }
-        if !(self.compliance_motor_fraction > 0.0 && self.compliance_motor_fraction < 1.0) {
-            return Err(PlantError::Invalid(format!(
-                "`effects.compliance_motor_fraction` must lie strictly between 0 and 1, got {}",
-                self.compliance_motor_fraction
-            )));
-        }
-        Ok(())
-    }
-
-    /// True when no effect is on.
-    pub fn is_empty(&self) -> bool {
-        self.time_delay_s == 0.0
-            && self.actuator_lag_s == 0.0
-            && self.backlash_rad == 0.0
-            && self.compliance_stiffness_nm_per_rad == 0.0
-            && self.coulomb_friction_nm == [0.0; 3]
-    }
-
-    /// True when the right-hand side is nonlinear (backlash or friction): integrated by RK4
-    /// with steps of at most [`BACKLASH_STEP_S`], in the diagnosis and in the FMU alike.
-    pub fn is_nonlinear(&self) -> bool {
-        self.backlash_rad > 0.0 || self.coulomb_friction_nm.iter().any(|&f| f > 0.0)
-    }
-}
 
 /// Largest integration step with backlash, s: the RK4 step of [`Powertrain::simulate`] (8 per
 /// 1 ms sample) and of the FMU's co-simulation step. Contact switching makes the response
@@ -139,83 +40,6 @@ pub struct Powertrain {
     pub effects: DriveEffects,
 }
 
-impl DriveModel {
-    /// The paper's rig in `variant` with `effects` as a drive model: bodies `m2`, `drive` (the
-    /// differential's cage), `m3` and, with a compliance, `motor` (the drive's inertia split,
-    /// `compliance_motor_fraction` of it on the motor); couplings `short_side_shaft` and
-    /// `long_side_shaft` on the open differential's twist s = 2φ_drive − φ_m2 − φ_m3, each on its
-    /// share of it (eq. (A1): c_r/(c_l + c_r) s and c_l/(c_l + c_r) s, so the pair's stiffness on
-    /// s is c_l c_r/(c_l + c_r)), and `drive_compliance` on φ_motor − φ_drive with the shafts'
-    /// stiffness-proportional damping; inputs M_m2, the drive torque (on the motor when
-    /// compliant), M_m3. The effects: the dead time and lag of the drive torque, the play on
-    /// both shafts so that they open together at |s| = `backlash_rad`, the machines' friction.
-    pub fn paper_rig(rig: &RigParams, variant: Variant, effects: &DriveEffects) -> Result<DriveModel> {
-        effects.validate()?;
-        let e = rig.effective(variant)?;
-        let (cl, cr) = (e.c_left, e.c_right);
-        let (share_l, share_r) = (cr / (cl + cr), cl / (cl + cr));
-        let compliant = effects.compliance_stiffness_nm_per_rad > 0.0;
-        let body = |name: &str, inertia: f64, drag: f64| LineBody { name: name.into(), inertia, drag };
-        let f = effects.compliance_motor_fraction;
-        let mut bodies = vec![
-            body("m2", e.j_m2, e.load_drag),
-            body("drive", if compliant { (1.0 - f) * e.j_drive } else { e.j_drive }, 0.0),
-            body("m3", e.j_m3, e.load_drag),
-        ];
-        let n = if compliant { 4 } else { 3 };
-        let shaft = |name: &str, share: f64, c: f64, d: f64| {
-            let mut el: Vec<f64> = [-1.0, 2.0, -1.0].iter().map(|a| a * share).collect();
-            el.resize(n, 0.0);
-            Coupling { name: Some(name.into()), elongation: Some(el), ..Coupling::new(c, d, 1.0) }
-        };
-        let mut couplings =
-            vec![shaft("short_side_shaft", share_l, cl, e.d_left), shaft("long_side_shaft", share_r, cr, e.d_right)];
-        if compliant {
-            bodies.push(body("motor", f * e.j_drive, 0.0));
-            // The compliance gets the side shafts' stiffness-proportional damping, d = (d_s/c_s) k
-            // (the generic damping of section 4.3): an undamped internal mode would be a
-            // resonance no measurement shows.
-            let c_s = cl * share_l;
-            let d_s = e.d_left * share_l.powi(2) + e.d_right * share_r.powi(2);
-            let k = effects.compliance_stiffness_nm_per_rad;
-            couplings.push(Coupling {
-                name: Some("drive_compliance".into()),
-                elongation: Some(vec![0.0, -1.0, 0.0, 1.0]),
-                ..Coupling::new(k, d_s / c_s * k, 1.0)
-            });
-        }
-        let drive = if compliant { 3 } else { 1 };
-        let mut list = Vec::new();
-        if effects.time_delay_s > 0.0 {
-            list.push(Effect::TimeDelay(TimeDelay { input: 1, delay_s: effects.time_delay_s }));
-        }
-        if effects.actuator_lag_s > 0.0 {
-            list.push(Effect::ActuatorLag(ActuatorLag { input: 1, time_constant_s: effects.actuator_lag_s }));
-        }
-        if effects.backlash_rad > 0.0 {
-            for (k, share) in [share_l, share_r].into_iter().enumerate() {
-                list.push(Effect::Backlash(Backlash { coupling: k, backlash: 2.0 * share * effects.backlash_rad }));
-            }
-        }
-        for (&b, &friction) in [0, drive, 2].iter().zip(&effects.coulomb_friction_nm) {
-            if friction > 0.0 {
-                list.push(Effect::CoulombFriction(CoulombFriction {
-                    body: b,
-                    friction,
-                    smoothing_speed: effects.friction_smoothing_radps,
-                }));
-            }
-        }
-        let m = DriveModel {
-            line: Line { domain: Domain::Rotational, bodies, couplings },
-            inputs: vec![0, drive, 2],
-            effects: list,
-        };
-        m.validate()?;
-        Ok(m)
-    }
-}
-
 impl Powertrain {
     /// The powertrain of `rig` in `variant` with `effects`.
     pub fn new(rig: &RigParams, variant: Variant, effects: &DriveEffects) -> Result<Self> {
@@ -230,13 +54,13 @@ impl Powertrain {
             // 1 ms sample; across pieces BACKLASH_STEP_S with backlash and h·rate ≤ 0.5 of the
             // friction's slopes T_c/(v_s J)
             let coarse =
-                (crate::drive::RK4_STEP_TIMES_RATE / dynamics.fastest_rate()).clamp(1e-9, 8.0 * BACKLASH_STEP_S);
+                (crate::integrate::RK4_STEP_TIMES_RATE / dynamics.fastest_rate()).clamp(1e-9, 8.0 * BACKLASH_STEP_S);
             let mut fine = if effects.backlash_rad > 0.0 { BACKLASH_STEP_S.min(coarse) } else { coarse };
             let v = effects.friction_smoothing_radps;
             for (&b, &tc) in [0, input_dof, 2].iter().zip(&effects.coulomb_friction_nm) {
                 if tc > 0.0 {
                     let j = model.line.bodies[b].inertia;
-                    fine = fine.min((crate::drive::RK4_STEP_TIMES_RATE * v * j / tc).max(1e-9));
+                    fine = fine.min((crate::integrate::RK4_STEP_TIMES_RATE * v * j / tc).max(1e-9));
                 }
             }
             dynamics = dynamics.with_steps(coarse, fine);

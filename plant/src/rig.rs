@@ -1,6 +1,7 @@
 //! The rig: the three-mass model with its variants V1–V4 (eqs. (13)–(19), (44), (45)), the open
 //! differential (section 2.4, eqs. (27)–(34), (A1)), and the full chain with the additional
-//! spring inserted (Table A2).
+//! spring inserted (Table A2); the rig's drive-path effects ([`DriveEffects`], as a rig file
+//! names them) and the rig as a drive model with them ([`DriveModel::paper_rig`]).
 
 use nalgebra::{DMatrix, DVector};
 use serde::{Deserialize, Serialize};
@@ -8,7 +9,9 @@ use std::fmt;
 use std::str::FromStr;
 
 use crate::chain::{Body, Chain};
+use crate::drive::{ActuatorLag, Backlash, CoulombFriction, DriveModel, Effect, TimeDelay};
 use crate::error::{in_range, non_negative, positive, PlantError, Result};
+use crate::line::{Coupling, Domain, Line, LineBody};
 use crate::mechanical::{Layout, MechanicalModel, Spring};
 
 /// Rig variant (section 3, Figure 10): where the additional spring c_delta is mounted.
@@ -222,7 +225,7 @@ impl RigParams {
     /// Built from the rig's one drive model ([`crate::drive::DriveModel::paper_rig`], no effects),
     /// the model the diagnosis, the FMU and the MPC integrate.
     pub fn open_differential(&self, variant: Variant) -> Result<MechanicalModel> {
-        let model = crate::drive::DriveModel::paper_rig(self, variant, &crate::effects::DriveEffects::default())?;
+        let model = DriveModel::paper_rig(self, variant, &DriveEffects::default())?;
         let mut m = model.line.model()?;
         m.layout = Some(Layout { m2: 0, drive: Some(1), m3: 2, short_shaft: (0, 1), long_shaft: (1, 2) });
         Ok(m)
@@ -441,6 +444,180 @@ fn locate(origins: &[usize], roles: Roles) -> Option<Layout> {
     })
 }
 
+/// The effects, each off at zero.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DriveEffects {
+    /// Dead time of the drive torque, s.
+    #[serde(default)]
+    pub time_delay_s: f64,
+    /// Time constant of a first-order lag of the drive torque, s.
+    #[serde(default)]
+    pub actuator_lag_s: f64,
+    /// Total play of each side shaft (output side), rad.
+    #[serde(default)]
+    pub backlash_rad: f64,
+    /// Stiffness between the drive's motor and its cage, Nm/rad (0: rigid drive).
+    #[serde(default)]
+    pub compliance_stiffness_nm_per_rad: f64,
+    /// Share of j_drive on the motor side of that compliance (the rest is the cage).
+    #[serde(default = "half")]
+    pub compliance_motor_fraction: f64,
+    /// Coulomb friction of each machine [M2, drive, M3] (bearings, seals, brushes), Nm; the
+    /// drive's acts on its motor when the drive is compliant.
+    #[serde(default)]
+    pub coulomb_friction_nm: [f64; 3],
+    /// Smoothing speed v_s of the friction, rad/s: T = T_c w/√(w² + v_s²) (71 % of T_c at v_s,
+    /// 97 % at 4 v_s), so the right-hand side stays Lipschitz through a speed reversal.
+    #[serde(default = "default_smoothing")]
+    pub friction_smoothing_radps: f64,
+}
+
+/// Default friction smoothing speed, rad/s (0.5 rpm: well below the speeds at which a rig's
+/// machines reverse under a sweep, well above what the 0.125 ms integration step resolves for
+/// frictions of a few Nm on inertias of 0.1 kg m²).
+pub const FRICTION_SMOOTHING_RADPS: f64 = 0.05;
+
+fn default_smoothing() -> f64 {
+    FRICTION_SMOOTHING_RADPS
+}
+
+fn half() -> f64 {
+    0.5
+}
+
+impl Default for DriveEffects {
+    fn default() -> Self {
+        DriveEffects {
+            time_delay_s: 0.0,
+            actuator_lag_s: 0.0,
+            backlash_rad: 0.0,
+            compliance_stiffness_nm_per_rad: 0.0,
+            compliance_motor_fraction: 0.5,
+            coulomb_friction_nm: [0.0; 3],
+            friction_smoothing_radps: FRICTION_SMOOTHING_RADPS,
+        }
+    }
+}
+
+impl DriveEffects {
+    /// Checks ranges; names the key.
+    pub fn validate(&self) -> Result<()> {
+        non_negative(|| "effects.time_delay_s", self.time_delay_s, "s")?;
+        non_negative(|| "effects.actuator_lag_s", self.actuator_lag_s, "s")?;
+        non_negative(|| "effects.backlash_rad", self.backlash_rad, "rad")?;
+        non_negative(|| "effects.compliance_stiffness_nm_per_rad", self.compliance_stiffness_nm_per_rad, "Nm/rad")?;
+        for (k, name) in ["M2", "drive", "M3"].iter().enumerate() {
+            non_negative(|| format!("effects.coulomb_friction_nm[{k}] ({name})"), self.coulomb_friction_nm[k], "Nm")?;
+        }
+        if !(self.friction_smoothing_radps > 0.0 && self.friction_smoothing_radps.is_finite()) {
+            return Err(PlantError::Invalid(format!(
+                "`effects.friction_smoothing_radps` must be a positive speed, got {}",
+                self.friction_smoothing_radps
+            )));
+        }
+        if !(self.compliance_motor_fraction > 0.0 && self.compliance_motor_fraction < 1.0) {
+            return Err(PlantError::Invalid(format!(
+                "`effects.compliance_motor_fraction` must lie strictly between 0 and 1, got {}",
+                self.compliance_motor_fraction
+            )));
+        }
+        Ok(())
+    }
+
+    /// True when no effect is on.
+    pub fn is_empty(&self) -> bool {
+        self.time_delay_s == 0.0
+            && self.actuator_lag_s == 0.0
+            && self.backlash_rad == 0.0
+            && self.compliance_stiffness_nm_per_rad == 0.0
+            && self.coulomb_friction_nm == [0.0; 3]
+    }
+
+    /// True when the right-hand side is nonlinear (backlash or friction): integrated by RK4
+    /// with steps of at most [`BACKLASH_STEP_S`], in the diagnosis and in the FMU alike.
+    pub fn is_nonlinear(&self) -> bool {
+        self.backlash_rad > 0.0 || self.coulomb_friction_nm.iter().any(|&f| f > 0.0)
+    }
+}
+
+impl DriveModel {
+    /// The paper's rig in `variant` with `effects` as a drive model: bodies `m2`, `drive` (the
+    /// differential's cage), `m3` and, with a compliance, `motor` (the drive's inertia split,
+    /// `compliance_motor_fraction` of it on the motor); couplings `short_side_shaft` and
+    /// `long_side_shaft` on the open differential's twist s = 2φ_drive − φ_m2 − φ_m3, each on its
+    /// share of it (eq. (A1): c_r/(c_l + c_r) s and c_l/(c_l + c_r) s, so the pair's stiffness on
+    /// s is c_l c_r/(c_l + c_r)), and `drive_compliance` on φ_motor − φ_drive with the shafts'
+    /// stiffness-proportional damping; inputs M_m2, the drive torque (on the motor when
+    /// compliant), M_m3. The effects: the dead time and lag of the drive torque, the play on
+    /// both shafts so that they open together at |s| = `backlash_rad`, the machines' friction.
+    pub fn paper_rig(rig: &RigParams, variant: Variant, effects: &DriveEffects) -> Result<DriveModel> {
+        effects.validate()?;
+        let e = rig.effective(variant)?;
+        let (cl, cr) = (e.c_left, e.c_right);
+        let (share_l, share_r) = (cr / (cl + cr), cl / (cl + cr));
+        let compliant = effects.compliance_stiffness_nm_per_rad > 0.0;
+        let body = |name: &str, inertia: f64, drag: f64| LineBody { name: name.into(), inertia, drag };
+        let f = effects.compliance_motor_fraction;
+        let mut bodies = vec![
+            body("m2", e.j_m2, e.load_drag),
+            body("drive", if compliant { (1.0 - f) * e.j_drive } else { e.j_drive }, 0.0),
+            body("m3", e.j_m3, e.load_drag),
+        ];
+        let n = if compliant { 4 } else { 3 };
+        let shaft = |name: &str, share: f64, c: f64, d: f64| {
+            let mut el: Vec<f64> = [-1.0, 2.0, -1.0].iter().map(|a| a * share).collect();
+            el.resize(n, 0.0);
+            Coupling { name: Some(name.into()), elongation: Some(el), ..Coupling::new(c, d, 1.0) }
+        };
+        let mut couplings =
+            vec![shaft("short_side_shaft", share_l, cl, e.d_left), shaft("long_side_shaft", share_r, cr, e.d_right)];
+        if compliant {
+            bodies.push(body("motor", f * e.j_drive, 0.0));
+            // The compliance gets the side shafts' stiffness-proportional damping, d = (d_s/c_s) k
+            // (the generic damping of section 4.3): an undamped internal mode would be a
+            // resonance no measurement shows.
+            let c_s = cl * share_l;
+            let d_s = e.d_left * share_l.powi(2) + e.d_right * share_r.powi(2);
+            let k = effects.compliance_stiffness_nm_per_rad;
+            couplings.push(Coupling {
+                name: Some("drive_compliance".into()),
+                elongation: Some(vec![0.0, -1.0, 0.0, 1.0]),
+                ..Coupling::new(k, d_s / c_s * k, 1.0)
+            });
+        }
+        let drive = if compliant { 3 } else { 1 };
+        let mut list = Vec::new();
+        if effects.time_delay_s > 0.0 {
+            list.push(Effect::TimeDelay(TimeDelay { input: 1, delay_s: effects.time_delay_s }));
+        }
+        if effects.actuator_lag_s > 0.0 {
+            list.push(Effect::ActuatorLag(ActuatorLag { input: 1, time_constant_s: effects.actuator_lag_s }));
+        }
+        if effects.backlash_rad > 0.0 {
+            for (k, share) in [share_l, share_r].into_iter().enumerate() {
+                list.push(Effect::Backlash(Backlash { coupling: k, backlash: 2.0 * share * effects.backlash_rad }));
+            }
+        }
+        for (&b, &friction) in [0, drive, 2].iter().zip(&effects.coulomb_friction_nm) {
+            if friction > 0.0 {
+                list.push(Effect::CoulombFriction(CoulombFriction {
+                    body: b,
+                    friction,
+                    smoothing_speed: effects.friction_smoothing_radps,
+                }));
+            }
+        }
+        let m = DriveModel {
+            line: Line { domain: Domain::Rotational, bodies, couplings },
+            inputs: vec![0, drive, 2],
+            effects: list,
+        };
+        m.validate()?;
+        Ok(m)
+    }
+}
+
 /// A rig: its reduced parameters, optionally its full chain, and the variant to study.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Rig {
@@ -457,7 +634,7 @@ pub struct Rig {
     /// A bearing test element on its support, exported beside the powertrain by the FMU.
     pub bearing: Option<crate::bearing::BearingModel>,
     /// Drive-path effects the reduced model leaves out (found by `rigtwin diagnose`).
-    pub effects: crate::effects::DriveEffects,
+    pub effects: DriveEffects,
 }
 
 impl Rig {

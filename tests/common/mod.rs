@@ -53,7 +53,7 @@ pub fn python() -> PathBuf {
 
 /// Value reference of the default FMU's variable `name`.
 pub fn vr(name: &str) -> u32 {
-    rigtwin_fmu::variables::Table::new(&rigtwin_fmu::FmuParams::default())
+    rigtwin_fmu::table(&rigtwin_fmu::FmuParams::default())
         .variables
         .into_iter()
         .find(|v| v.name == name)

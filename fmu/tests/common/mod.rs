@@ -1,8 +1,8 @@
 //! The controller FMU's instance as the tests drive it.
 
-use rigtwin_fmu::controller::ControllerSpec;
 use rigtwin_fmu::instance::{Instance, Interface, Logger, Status};
 use rigtwin_fmu::variables::Slot;
+use rigtwin_fmu::ControllerSpec;
 use rigtwin_fmu::FmuParams;
 
 pub struct Quiet;
@@ -10,7 +10,7 @@ impl Logger for Quiet {
     fn log(&self, _: Status, _: &str, _: &str) {}
 }
 
-pub fn instance(effects: plant::effects::DriveEffects) -> (Instance, [u32; 6], [u32; 3]) {
+pub fn instance(effects: plant::rig::DriveEffects) -> (Instance, [u32; 6], [u32; 3]) {
     let mut p = FmuParams { effects, ..FmuParams::default() };
     let mut spec = ControllerSpec::new(50, 4);
     spec.values[8] = 1.0; // time limit: every solve runs to the end, whatever the machine's load

@@ -4,7 +4,8 @@
 //! never exact, and a noise-free one would keep the selection going on round-off).
 
 use ident::Sweep;
-use plant::effects::{DriveEffects, Powertrain};
+use plant::effects::Powertrain;
+use plant::rig::DriveEffects;
 use plant::Variant;
 use rand::rngs::StdRng;
 use rand::SeedableRng;

@@ -6,7 +6,8 @@
 
 use std::collections::BTreeMap;
 
-use plant::effects::{DriveEffects, Powertrain};
+use plant::effects::Powertrain;
+use plant::rig::DriveEffects;
 use plant::rig::{RigParams, Variant};
 use serde::Serialize;
 

@@ -1,9 +1,19 @@
-//! The effects a drive model's elements carry: one type and one [`EffectModel`] implementation
-//! per effect — its name, the element it acts on, its parameters with their dimensions and
-//! bounds, how it enters the right-hand side ([`Dynamics`]) and its linearisation. [`Effect`]
-//! is the closed set a model file names (`effect = "backlash"`); adding an effect is one type
-//! with its implementation here, one variant and one line of [`each`] — and one candidate in
-//! the diagnosis.
+//! The effects a drive model's elements carry: one file per effect, holding its type and its
+//! [`EffectModel`] implementation — its name, the element it acts on, its parameters with their
+//! dimensions and bounds, how it enters the right-hand side ([`Dynamics`]) and its
+//! linearisation, and what the diagnosis needs to know of it ([`Moves`]). [`Effect`] is the
+//! closed set a model file names (`effect = "backlash"`); adding an effect is its file, one
+//! variant and one line of [`each`] and of `into_effect!` here.
+
+mod actuator_lag;
+mod backlash;
+mod coulomb_friction;
+mod time_delay;
+
+pub use actuator_lag::ActuatorLag;
+pub use backlash::Backlash;
+pub use coulomb_friction::CoulombFriction;
+pub use time_delay::TimeDelay;
 
 use serde::{Deserialize, Serialize};
 
@@ -136,170 +146,6 @@ pub trait EffectModel: Copy + Into<Effect> {
     /// Its part of the linearisation of the piece where every play is in contact (`contact`)
     /// or open: nothing for a linear effect.
     fn linearise(&self, _d: &mut Dynamics, _contact: bool) {}
-}
-
-/// Coulomb friction at a body: F = friction · q̇/√(q̇² + smoothing_speed²) against its motion
-/// (71 % of the friction at the smoothing speed, 97 % at 4×, 99.5 % at 10×).
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-pub struct CoulombFriction {
-    /// The body.
-    pub body: usize,
-    /// Friction force (torque), N (Nm).
-    pub friction: f64,
-    /// Smoothing speed v_s, m/s (rad/s).
-    pub smoothing_speed: f64,
-}
-
-impl EffectModel for CoulombFriction {
-    const NAME: &'static str = "coulomb_friction";
-    const PARAMETERS: &'static [EffectParameter] = &[
-        EffectParameter { name: "friction", key: "friction", dimension: Dimension::Force, what: "Coulomb friction" },
-        EffectParameter {
-            name: "friction_smoothing_speed",
-            key: "smoothing_speed",
-            dimension: Dimension::Speed,
-            what: "speed of the friction's smoothing F v/sqrt(v^2 + v_s^2)",
-        },
-    ];
-    const NONLINEAR: bool = true;
-
-    fn element(&self) -> Element {
-        Element::Body(self.body)
-    }
-    fn at_index(self, body: usize) -> Self {
-        CoulombFriction { body, ..self }
-    }
-    fn values(&self) -> Vec<f64> {
-        vec![self.friction, self.smoothing_speed]
-    }
-    fn set_values(&mut self, v: &[f64]) {
-        (self.friction, self.smoothing_speed) = (v[0], v[1]);
-    }
-    fn enter(&self, d: &mut Dynamics) {
-        d.friction[self.body] = (self.friction, self.smoothing_speed);
-    }
-    /// Left out: the linearisation is the motion clear of the friction's band.
-    fn linearise(&self, d: &mut Dynamics, _contact: bool) {
-        d.friction[self.body] = (0.0, 1.0);
-        d.friction_band[self.body] = 0.0;
-    }
-}
-
-/// Play in a coupling: no force while |twist| < backlash/2, the spring and damper act on the
-/// twist beyond it (total play `backlash`).
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-pub struct Backlash {
-    /// The coupling.
-    pub coupling: usize,
-    /// Total play, m (rad) of the coupling's twist.
-    pub backlash: f64,
-}
-
-impl EffectModel for Backlash {
-    const NAME: &'static str = "backlash";
-    const PARAMETERS: &'static [EffectParameter] =
-        &[EffectParameter { name: "backlash", key: "backlash", dimension: Dimension::Coordinate, what: "total play" }];
-    const NONLINEAR: bool = true;
-
-    fn element(&self) -> Element {
-        Element::Coupling(self.coupling)
-    }
-    fn at_index(self, coupling: usize) -> Self {
-        Backlash { coupling, ..self }
-    }
-    fn values(&self) -> Vec<f64> {
-        vec![self.backlash]
-    }
-    fn set_values(&mut self, v: &[f64]) {
-        self.backlash = v[0];
-    }
-    fn enter(&self, d: &mut Dynamics) {
-        d.couplings[self.coupling].half = 0.5 * self.backlash;
-    }
-    /// In contact: the coupling's spring and damper on the whole twist (the play's offset is
-    /// [`Dynamics::play_offset`]); open: no force.
-    fn linearise(&self, d: &mut Dynamics, contact: bool) {
-        let s = &mut d.couplings[self.coupling];
-        s.half = 0.0;
-        if !contact {
-            (s.c, s.d) = (0.0, 0.0);
-        }
-    }
-}
-
-/// The input reaches its body `delay_s` later than recorded.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-pub struct TimeDelay {
-    /// The input (position among the model's inputs).
-    pub input: usize,
-    /// Dead time, s.
-    pub delay_s: f64,
-}
-
-impl EffectModel for TimeDelay {
-    const NAME: &'static str = "time_delay";
-    const PARAMETERS: &'static [EffectParameter] =
-        &[EffectParameter { name: "delay", key: "delay", dimension: Dimension::Time, what: "dead time" }];
-
-    fn element(&self) -> Element {
-        Element::Input(self.input)
-    }
-    fn at_index(self, input: usize) -> Self {
-        TimeDelay { input, ..self }
-    }
-    fn values(&self) -> Vec<f64> {
-        vec![self.delay_s]
-    }
-    fn set_values(&mut self, v: &[f64]) {
-        self.delay_s = v[0];
-    }
-    /// The right-hand side sees the input after its dead time: the simulation shifts the held
-    /// sequence (whole samples and a fraction), the linearisation's input is the delayed one.
-    fn enter(&self, d: &mut Dynamics) {
-        d.inputs[self.input].1 = self.delay_s;
-    }
-}
-
-/// The force on the body follows the recorded input through τ ż = u − z.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-pub struct ActuatorLag {
-    /// The input.
-    pub input: usize,
-    /// Time constant τ, s.
-    pub time_constant_s: f64,
-}
-
-impl EffectModel for ActuatorLag {
-    const NAME: &'static str = "actuator_lag";
-    const PARAMETERS: &'static [EffectParameter] = &[EffectParameter {
-        name: "time_constant",
-        key: "time_constant",
-        dimension: Dimension::Time,
-        what: "first-order lag",
-    }];
-
-    fn element(&self) -> Element {
-        Element::Input(self.input)
-    }
-    fn at_index(self, input: usize) -> Self {
-        ActuatorLag { input, ..self }
-    }
-    fn values(&self) -> Vec<f64> {
-        vec![self.time_constant_s]
-    }
-    fn set_values(&mut self, v: &[f64]) {
-        self.time_constant_s = v[0];
-    }
-    fn state_names(&self, model: &DriveModel) -> Vec<String> {
-        vec![format!("{}_lagged", Element::Input(self.input).label(model))]
-    }
-    /// One state z after the angles and speeds; the body feels z instead of the input.
-    fn enter(&self, d: &mut Dynamics) {
-        let input = &mut d.inputs[self.input];
-        input.2 = self.time_constant_s;
-        input.3 = d.nstates;
-        d.nstates += 1;
-    }
 }
 
 /// An effect attached to an element of the line (indices 0-based): the closed set of
