@@ -5,7 +5,7 @@
 mod common;
 
 use common::shared;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
@@ -81,10 +81,8 @@ fn refused_with(code: i32, dir: &Path, args: &[&str], words: &[&str]) -> String 
 }
 
 /// A scratch folder with copies of the example bundle `name` (TOML and data files).
-fn scratch(case: &str, names: &[&str]) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("rigtwin-robust-{}-{case}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
+fn scratch(case: &str, names: &[&str]) -> common::Scratch {
+    let d = common::Scratch::new(&format!("rigtwin-robust-{}-{case}", std::process::id()));
     for n in names {
         std::fs::copy(shared(n), d.join(n)).unwrap();
     }

@@ -67,11 +67,47 @@ pub fn shared(name: &str) -> PathBuf {
 }
 
 /// A fresh scratch folder for test `case` of test file `file`.
-pub fn scratch(file: &str, case: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("rigtwin-{file}-{}-{case}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
+pub fn scratch(file: &str, case: &str) -> Scratch {
+    Scratch::new(&format!("rigtwin-{file}-{}-{case}", std::process::id()))
+}
+
+/// A scratch folder in the temporary directory, removed with what is in it when dropped (some
+/// tests write hundreds of megabytes there).
+pub struct Scratch(PathBuf);
+
+impl Scratch {
+    /// The empty folder `name` in the temporary directory.
+    pub fn new(name: &str) -> Scratch {
+        let d = std::env::temp_dir().join(name);
+        let _ = std::fs::remove_dir_all(&d);
+        std::fs::create_dir_all(&d).unwrap();
+        Scratch(d)
+    }
+}
+
+impl std::ops::Deref for Scratch {
+    type Target = Path;
+    fn deref(&self) -> &Path {
+        &self.0
+    }
+}
+
+impl AsRef<Path> for Scratch {
+    fn as_ref(&self) -> &Path {
+        &self.0
+    }
+}
+
+impl AsRef<std::ffi::OsStr> for Scratch {
+    fn as_ref(&self) -> &std::ffi::OsStr {
+        self.0.as_os_str()
+    }
+}
+
+impl Drop for Scratch {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.0);
+    }
 }
 
 /// Runs `scripts/<script>` (a survey script: `--rigtwin`, `--seeds`, `--out`) with this build's
