@@ -198,7 +198,7 @@ fn coulomb_friction_at_the_load() {
 /// train of impacts whose timing two integrators (20 vs rigtwin's RK4 sub-steps) agree on only
 /// near the true play, so the error over the play is a narrow notch (±0.3 % wide) on a rising
 /// envelope, not a basin. The diagnosis profiles the play on a 10 % grid and refines around the
-/// best point (`ident::diagnose::drive::PLAY_GRID`), which meets the notch. Measured (play,
+/// best point (the play's `plant::drive::Search`: 10 % steps), which meets the notch. Measured (play,
 /// seed → play found / truth, error): 2 mrad with seeds 2, 11, 12, 13, 14 → 0.997–1.000, error
 /// 0.22–0.29 → 0.03–0.06; but 0.8 mrad with seed 13 → 0.966, error only 0.165 → 0.140, and
 /// 5 mrad with seed 13 → `none` (seed 14 finds both). An output-error fit remains fragile on a

@@ -23,7 +23,8 @@ use crate::statespace::zoh;
 
 mod effect;
 pub use effect::{
-    ActuatorLag, Backlash, CoulombFriction, Effect, EffectModel, EffectParameter, Element, Moves, TimeDelay,
+    ActuatorLag, Backlash, CoulombFriction, Effect, EffectModel, EffectParameter, Element, Limit, Moves, Scale, Search,
+    Shows, SizeContext, TimeDelay,
 };
 
 /// Most RK4 steps per sample within a smooth piece (the fine sub-steps across pieces may be

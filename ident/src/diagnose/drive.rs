@@ -2,7 +2,9 @@
 //! recorded inputs, its residual over every measured output, and the vocabulary applied at
 //! every element where it can act — Coulomb friction at each body, backlash in each coupling, a
 //! dead time and an actuator lag at each input, the damping re-fitted, or nothing (`none`: the
-//! inertias and stiffnesses re-fitted). Each candidate re-fits the declared inertias and
+//! inertias and stiffnesses re-fitted). Each effect says where a record can show it and how its
+//! size is searched (`plant::drive::Search`), so an effect added to the vocabulary is searched
+//! for without a change here. Each candidate re-fits the declared inertias and
 //! stiffnesses beside its own parameters; the choice is by the information criterion, as for
 //! the torsional sweep.
 //!
@@ -12,7 +14,7 @@
 
 use std::collections::BTreeMap;
 
-use plant::drive::{ActuatorLag, Backlash, CoulombFriction, Dimension, DriveModel, TimeDelay};
+use plant::drive::{Dimension, DriveModel, Effect, Element, Limit, Scale, Shows, SizeContext};
 use plant::{Domain, Quantity};
 use serde::Serialize;
 
@@ -34,12 +36,6 @@ pub const SCREEN_ITERATIONS: usize = 8;
 /// Effects the screen passes on to the full re-fit (with the inertias and stiffnesses), beside
 /// `none` and `damping`.
 pub const SCREEN_KEEP: usize = 2;
-/// The profile of a play: from and to (times the declared model's RMS elastic twist of the
-/// coupling) and the number of points, 10 % apart. A coupling that rattles in its play has an
-/// error over the play with a narrow notch at the truth (±0.3 % wide for a shaft at 4 % of
-/// critical damping, measured), whose shoulder a 10 % grid meets and a 21 % grid misses
-/// (measured on `tests/diagnose_drive.rs`).
-pub const PLAY_GRID: (f64, f64, usize) = (0.01, 1000.0, 121);
 /// Refinements of a one-parameter profile around its best point ([`refine_profile`]).
 pub const PROFILE_LEVELS: usize = 3;
 /// Points on each side of the best point at each refinement.
@@ -47,8 +43,8 @@ pub const PROFILE_POINTS: usize = 4;
 
 /// Refines a one-parameter profile: around the best point (ln of the parameter, its cost), the
 /// cost at ±1…±[`PROFILE_POINTS`] steps of a quarter of the last grid's step, the best kept,
-/// [`PROFILE_LEVELS`] times (the final step 1/64 of the coarse one: with [`PLAY_GRID`]'s 10 %
-/// steps, 0.15 % of the play).
+/// [`PROFILE_LEVELS`] times (the final step 1/64 of the coarse one: with a play's 10 % steps,
+/// 0.15 % of the play).
 fn refine_profile(start: (Vec<f64>, f64), step: f64, cost_of: &dyn Fn(&Vec<f64>) -> f64) -> (Vec<f64>, f64) {
     let (mut best, mut step) = (start, step);
     for _ in 0..PROFILE_LEVELS {
@@ -69,20 +65,15 @@ fn refine_profile(start: (Vec<f64>, f64), step: f64, cost_of: &dyn Fn(&Vec<f64>)
 pub const MAX_REFIT_FACTOR: f64 = 100.0;
 
 /// What a candidate adds to the declared model.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Candidate {
     /// Nothing: the inertias and stiffnesses re-fitted.
     None,
     /// The couplings' damping and the bodies' drags re-fitted.
     Damping,
-    /// Coulomb friction at a body.
-    CoulombFriction(usize),
-    /// Backlash in a coupling.
-    Backlash(usize),
-    /// A dead time of an input.
-    TimeDelay(usize),
-    /// A first-order lag of an input.
-    ActuatorLag(usize),
+    /// An effect of the vocabulary ([`Effect::vocabulary`]) at its element, its size searched
+    /// as the effect says ([`plant::drive::Search`]).
+    Effect(Effect),
 }
 
 impl Candidate {
@@ -91,10 +82,7 @@ impl Candidate {
         match self {
             Candidate::None => "none",
             Candidate::Damping => "damping",
-            Candidate::CoulombFriction(_) => "coulomb_friction",
-            Candidate::Backlash(_) => "backlash",
-            Candidate::TimeDelay(_) => "time_delay",
-            Candidate::ActuatorLag(_) => "actuator_lag",
+            Candidate::Effect(e) => e.name(),
         }
     }
 }
@@ -174,11 +162,12 @@ struct Problem<'a> {
     weights: Vec<f64>,
     high_pass_hz: f64,
     initial_speed: f64,
-    /// Reference scales of the extras: drag and damping where declared zero, friction,
-    /// backlash.
+    /// Reference scales of the extras: drag and damping where declared zero; per body the
+    /// input force reflected to it and a friction's smoothing speed; per coupling its RMS
+    /// elastic twist ([`Scale`]).
     drag_ref: Vec<f64>,
     damping_ref: Vec<f64>,
-    friction_ref: Vec<f64>,
+    body_force: Vec<f64>,
     smoothing: Vec<f64>,
     twist_rms: Vec<f64>,
     /// Fastest rate of the declared model's linear part, 1/s.
@@ -217,33 +206,33 @@ impl Problem<'_> {
                     c.damping = self.damping_ref[i] * extra[n + i].exp();
                 }
             }
-            Candidate::CoulombFriction(b) => {
-                let friction = self.friction_ref[b] * extra[0].exp();
-                // no sharper than the mechanics' fastest rate: the friction's slope
-                // F_c/(v_s J) must not set the integration step
-                let smoothing_speed = self.smoothing[b].max(friction / (m.line.bodies[b].inertia * self.rate));
-                m.effects.push(CoulombFriction { body: b, friction, smoothing_speed }.into())
-            }
-            Candidate::Backlash(k) => {
-                let backlash = self.twist_rms[k] * extra[0].exp();
-                if backlash > 3000.0 * self.twist_rms[k] {
+            Candidate::Effect(e) => {
+                let search = e.search();
+                let i = e.at().index();
+                let scale = match search.scale {
+                    Scale::BodyForce => self.body_force[i],
+                    Scale::CouplingTwist => self.twist_rms[i],
+                    Scale::SampleTime => dt,
+                };
+                let size = scale * extra[0].exp();
+                let beyond = match search.limit {
+                    Limit::Unbounded => false,
+                    Limit::TimesScale(k) => size > k * scale,
+                    Limit::RecordShare(share) => size > share * record_s,
+                };
+                if beyond {
                     return None;
                 }
-                m.effects.push(Backlash { coupling: k, backlash }.into())
-            }
-            Candidate::TimeDelay(j) => {
-                let delay_s = dt * extra[0].exp();
-                if delay_s > 0.1 * record_s {
-                    return None;
-                }
-                m.effects.push(TimeDelay { input: j, delay_s }.into())
-            }
-            Candidate::ActuatorLag(j) => {
-                let time_constant_s = dt * extra[0].exp();
-                if time_constant_s > 0.1 * record_s {
-                    return None;
-                }
-                m.effects.push(ActuatorLag { input: j, time_constant_s }.into())
+                let body = match e.at() {
+                    Element::Body(b) => Some(b),
+                    _ => None,
+                };
+                let context = SizeContext {
+                    smoothing_speed: body.map_or(0.0, |b| self.smoothing[b]),
+                    inertia: body.map_or(1.0, |b| m.line.bodies[b].inertia),
+                    fastest_rate: self.rate,
+                };
+                m.effects.push(e.of_size(size, &context));
             }
         }
         Some(m)
@@ -285,11 +274,27 @@ impl Problem<'_> {
         match c {
             Candidate::None => vec![vec![]],
             Candidate::Damping => vec![vec![0.0; n + self.rec.model.line.couplings.len()]],
-            Candidate::CoulombFriction(_) => grid(0.01, 1.0, 8),
-            // the play's basin: a profile over five decades of the declared model's elastic
-            // twist (a play can be far wider than the twist the spring takes)
-            Candidate::Backlash(_) => grid(PLAY_GRID.0, PLAY_GRID.1, PLAY_GRID.2),
-            Candidate::TimeDelay(_) | Candidate::ActuatorLag(_) => grid(0.3, 100.0, 12),
+            Candidate::Effect(e) => {
+                let (lo, hi, k) = e.search().grid;
+                grid(lo, hi, k)
+            }
+        }
+    }
+
+    /// Whether the record can show effect `e` where it acts, judged on the declared model's
+    /// `motion` (every body's speed, then every coupling's force).
+    fn shows(&self, e: Effect, motion: &[Vec<f64>]) -> bool {
+        let n = self.rec.model.line.bodies.len();
+        match (e.search().shows, e.at()) {
+            (Shows::SpeedNearZero, Element::Body(b)) => {
+                let vs = self.smoothing[b];
+                vs > 0.0 && motion[b].iter().any(|v| v.abs() < 10.0 * vs)
+            }
+            (Shows::ForceChangesSign, Element::Coupling(c)) => {
+                let f = &motion[n + c];
+                self.twist_rms[c] > 0.0 && f.iter().any(|&v| v > 0.0) && f.iter().any(|&v| v < 0.0)
+            }
+            _ => true,
         }
     }
 
@@ -307,7 +312,7 @@ impl Problem<'_> {
         for (i, c) in m.line.couplings.iter().enumerate() {
             b.insert(format!("stiffness_coupling{}_{k_unit}", i + 1), c.stiffness);
         }
-        if c == Candidate::Damping {
+        if matches!(c, Candidate::Damping) {
             for body in &m.line.bodies {
                 b.insert(format!("drag_{}_{d_unit}", body.name.replace(' ', "_")), body.drag);
             }
@@ -315,7 +320,7 @@ impl Problem<'_> {
                 b.insert(format!("damping_coupling{}_{d_unit}", i + 1), c.damping);
             }
         }
-        if let Some(e) = m.effects.last().filter(|_| !matches!(c, Candidate::None | Candidate::Damping)) {
+        if let Some(e) = m.effects.last().filter(|_| matches!(c, Candidate::Effect(_))) {
             for (k, v) in e.parameters(m) {
                 b.insert(k, v);
             }
@@ -434,7 +439,7 @@ pub fn diagnose(rec: DriveRecord, progress: &(dyn Fn(&str) + Sync)) -> Result<Dr
         .collect();
     // friction scale: the input's RMS force reflected to the body
     let input_rms: f64 = rec.inputs.iter().zip(&m0.inputs).map(|(u, &b)| rms(u) / gear_to(m0, b)).fold(0.0, f64::max);
-    let friction_ref: Vec<f64> = (0..n).map(|b| input_rms * gear_to(m0, b)).collect();
+    let body_force: Vec<f64> = (0..n).map(|b| input_rms * gear_to(m0, b)).collect();
     let smoothing: Vec<f64> = (0..n).map(|b| FRICTION_SMOOTHING_FRACTION * rms(&declared_motion[b])).collect();
     let twist_rms: Vec<f64> = m0
         .line
@@ -453,7 +458,7 @@ pub fn diagnose(rec: DriveRecord, progress: &(dyn Fn(&str) + Sync)) -> Result<Dr
         initial_speed,
         drag_ref,
         damping_ref,
-        friction_ref,
+        body_force,
         smoothing,
         twist_rms,
         rate,
@@ -475,22 +480,13 @@ pub fn diagnose(rec: DriveRecord, progress: &(dyn Fn(&str) + Sync)) -> Result<Dr
 
     // the vocabulary at every element where it can act and the data can show it
     let mut cands = vec![Candidate::None, Candidate::Damping];
-    for (b, (speed, &vs)) in declared_motion.iter().zip(&problem.smoothing).enumerate() {
-        // friction shows when the body's speed changes sign or comes near zero
-        if vs > 0.0 && speed.iter().any(|v| v.abs() < 10.0 * vs) {
-            cands.push(Candidate::CoulombFriction(b));
+    for prototype in Effect::vocabulary() {
+        for i in 0..prototype.at().count(m0) {
+            let e = prototype.at_index(i);
+            if problem.shows(e, &declared_motion) {
+                cands.push(Candidate::Effect(e));
+            }
         }
-    }
-    for c in 0..nc {
-        // play shows where the coupling's force crosses zero
-        let f = &declared_motion[n + c];
-        if problem.twist_rms[c] > 0.0 && f.iter().any(|&v| v > 0.0) && f.iter().any(|&v| v < 0.0) {
-            cands.push(Candidate::Backlash(c));
-        }
-    }
-    for j in 0..m0.inputs.len() {
-        cands.push(Candidate::TimeDelay(j));
-        cands.push(Candidate::ActuatorLag(j));
     }
     drop(declared_motion);
 
@@ -500,10 +496,8 @@ pub fn diagnose(rec: DriveRecord, progress: &(dyn Fn(&str) + Sync)) -> Result<Dr
     // the others keep their screened fit (reported with its own parameter count).
     let nbase = problem.nbase();
     let label = |c: Candidate| match c {
-        Candidate::None | Candidate::Damping => c.name().to_string(),
-        Candidate::CoulombFriction(b) => format!("{} at {}", c.name(), m0.line.bodies[b].name),
-        Candidate::Backlash(k) => format!("{} in coupling {}", c.name(), k + 1),
-        Candidate::TimeDelay(j) | Candidate::ActuatorLag(j) => format!("{} of input {}", c.name(), j + 1),
+        Candidate::Effect(e) => format!("{} {}", c.name(), e.at().phrase(m0)),
+        _ => c.name().to_string(),
     };
     let screen_one = |i: usize| -> (usize, Vec<f64>, f64) {
         let c = cands[i];
@@ -526,9 +520,9 @@ pub fn diagnose(rec: DriveRecord, progress: &(dyn Fn(&str) + Sync)) -> Result<Dr
         // a play's error over its size is rough (each impact shifts with it): the coarse
         // profile's best point is refined on finer grids around it before the local fit
         let best = match (c, best) {
-            (Candidate::Backlash(_), Some(start)) => {
-                let step = (PLAY_GRID.1 / PLAY_GRID.0).ln() / (PLAY_GRID.2 - 1) as f64;
-                Some(refine_profile(start, step, &cost_of))
+            (Candidate::Effect(e), Some(start)) if e.search().rough => {
+                let (lo, hi, k) = e.search().grid;
+                Some(refine_profile(start, (hi / lo).ln() / (k - 1) as f64, &cost_of))
             }
             (_, best) => best,
         };
@@ -558,7 +552,7 @@ pub fn diagnose(rec: DriveRecord, progress: &(dyn Fn(&str) + Sync)) -> Result<Dr
         let f = |x: &[f64]| problem.residual(c, x);
         let x0 = &screened.iter().find(|s| s.0 == i).expect("screened").1;
         // the declared model's smooth cost to its minimum ([`lm::minimise_smooth`])
-        let (x, cost) = if c == Candidate::None && m0.effects.is_empty() {
+        let (x, cost) = if matches!(c, Candidate::None) && m0.effects.is_empty() {
             lm::minimise_smooth(&f, x0, super::torsional::DECLARED_REFIT_ITERATIONS, LM_REL_TOL)
         } else {
             lm::minimise_to(&f, x0, 20, LM_REL_TOL)
@@ -586,7 +580,7 @@ pub fn diagnose(rec: DriveRecord, progress: &(dyn Fn(&str) + Sync)) -> Result<Dr
         let c = cands[i];
         let Some(m) = problem.build(c, &x) else { continue };
         let rho = problem.simulate(&m).map_or(0.0, |s| lag1_autocorrelation(&problem.residual_of(&s)));
-        let at = m.effects.last().filter(|_| !matches!(c, Candidate::None | Candidate::Damping)).map(|e| e.element(&m));
+        let at = m.effects.last().filter(|_| matches!(c, Candidate::Effect(_))).map(|e| e.element(&m));
         scored.push((
             CandidateScore {
                 effect: c.name().to_string(),

@@ -2,7 +2,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::{EffectModel, EffectParameter, Element};
+use super::{EffectModel, EffectParameter, Element, Limit, Scale, Search, Shows, SizeContext};
 use crate::drive::{Dimension, DriveModel, Dynamics};
 
 /// The force on the body follows the recorded input through τ ż = u − z.
@@ -23,6 +23,15 @@ impl EffectModel for ActuatorLag {
         what: "first-order lag",
     }];
 
+    /// At every input, from 0.3 to 100 samples (12 starts), up to a tenth of the record.
+    const SEARCH: Search = Search {
+        shows: Shows::Always,
+        scale: Scale::SampleTime,
+        grid: (0.3, 100.0, 12),
+        rough: false,
+        limit: Limit::RecordShare(0.1),
+    };
+
     fn element(&self) -> Element {
         Element::Input(self.input)
     }
@@ -37,6 +46,9 @@ impl EffectModel for ActuatorLag {
     }
     fn state_names(&self, model: &DriveModel) -> Vec<String> {
         vec![format!("{}_lagged", Element::Input(self.input).label(model))]
+    }
+    fn of_size(self, time_constant_s: f64, _: &SizeContext) -> Self {
+        ActuatorLag { time_constant_s, ..self }
     }
     /// One state z after the angles and speeds; the body feels z instead of the input.
     fn enter(&self, d: &mut Dynamics) {

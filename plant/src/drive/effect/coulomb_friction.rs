@@ -2,7 +2,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::{EffectModel, EffectParameter, Element};
+use super::{EffectModel, EffectParameter, Element, Limit, Scale, Search, Shows, SizeContext};
 use crate::drive::{Dimension, Dynamics};
 
 /// Coulomb friction at a body: F = friction · q̇/√(q̇² + smoothing_speed²) against its motion
@@ -30,6 +30,15 @@ impl EffectModel for CoulombFriction {
     ];
     const NONLINEAR: bool = true;
 
+    /// Where a body's speed comes near zero, from 1 % to the input's whole force (8 starts).
+    const SEARCH: Search = Search {
+        shows: Shows::SpeedNearZero,
+        scale: Scale::BodyForce,
+        grid: (0.01, 1.0, 8),
+        rough: false,
+        limit: Limit::Unbounded,
+    };
+
     fn element(&self) -> Element {
         Element::Body(self.body)
     }
@@ -41,6 +50,12 @@ impl EffectModel for CoulombFriction {
     }
     fn set_values(&mut self, v: &[f64]) {
         (self.friction, self.smoothing_speed) = (v[0], v[1]);
+    }
+    /// Smoothed no sharper than the mechanics' fastest rate: the friction's slope F_c/(v_s J)
+    /// must not set the integration step.
+    fn of_size(self, friction: f64, c: &SizeContext) -> Self {
+        let smoothing_speed = c.smoothing_speed.max(friction / (c.inertia * c.fastest_rate));
+        CoulombFriction { friction, smoothing_speed, ..self }
     }
     fn enter(&self, d: &mut Dynamics) {
         d.friction[self.body] = (self.friction, self.smoothing_speed);

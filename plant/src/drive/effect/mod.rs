@@ -3,7 +3,8 @@
 //! dimensions and bounds, how it enters the right-hand side ([`Dynamics`]) and its
 //! linearisation, and what the diagnosis needs to know of it ([`Moves`]). [`Effect`] is the
 //! closed set a model file names (`effect = "backlash"`); adding an effect is its file, one
-//! variant and one line of [`each`] and of `into_effect!` here.
+//! variant, one line of [`each`], of `into_effect!` and of [`Effect::vocabulary`] here; the
+//! diagnosis of drive records then searches for it ([`Search`]).
 
 mod actuator_lag;
 mod backlash;
@@ -117,6 +118,72 @@ pub enum Moves {
     SeriesSpring,
 }
 
+/// How the diagnosis searches a record for an effect (`ident::diagnose::drive`): where the
+/// record can show it, what its size is measured against, the sizes the search starts from and
+/// the largest size that is still an answer.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Search {
+    /// Where in the declared model's motion the record can show it.
+    pub shows: Shows,
+    /// What its size (its first parameter) is searched as a multiple of.
+    pub scale: Scale,
+    /// The multiples the search starts from: from, to, and how many, evenly spaced in logarithm.
+    pub grid: (f64, f64, usize),
+    /// Its error over its size is rough (a play's: each impact shifts with it), so the best
+    /// start is refined on finer grids around it before the local fit.
+    pub rough: bool,
+    /// The largest size that is still an answer.
+    pub limit: Limit,
+}
+
+/// Where a record can show an effect, judged on the declared model's own motion under the
+/// recorded inputs.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Shows {
+    /// Anywhere.
+    Always,
+    /// Where the body's speed comes near zero (within ten times the smoothing speed the
+    /// diagnosis gives a friction there) or changes sign.
+    SpeedNearZero,
+    /// Where the coupling's force changes sign.
+    ForceChangesSign,
+}
+
+/// What an effect's size is searched as a multiple of.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Scale {
+    /// The largest RMS input force reflected to the body through the gear stages.
+    BodyForce,
+    /// The coupling's RMS elastic twist under the declared model.
+    CouplingTwist,
+    /// The record's sample time.
+    SampleTime,
+}
+
+/// The largest size of an effect that is still an answer.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Limit {
+    /// None.
+    Unbounded,
+    /// This many times its scale.
+    TimesScale(f64),
+    /// This share of the record's length.
+    RecordShare(f64),
+}
+
+/// What the record and the declared model leave open of an effect of a given size, at its
+/// element: a friction's smoothing speed.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SizeContext {
+    /// The smoothing speed the diagnosis gives a friction at the body (a share of its RMS
+    /// speed), m/s (rad/s).
+    pub smoothing_speed: f64,
+    /// The body's inertia (mass), kg·m² (kg).
+    pub inertia: f64,
+    /// The fastest rate of the declared model's linear part, 1/s.
+    pub fastest_rate: f64,
+}
+
 /// What one effect is and does.
 pub trait EffectModel: Copy + Into<Effect> {
     /// The vocabulary name (as in model files and reports).
@@ -127,6 +194,8 @@ pub trait EffectModel: Copy + Into<Effect> {
     const NONLINEAR: bool = false;
     /// What it may change of the declared mechanics (the diagnosis's plausibility).
     const MOVES: Moves = Moves::Nothing;
+    /// How the diagnosis searches a record for it.
+    const SEARCH: Search;
 
     /// Where it acts.
     fn element(&self) -> Element;
@@ -136,6 +205,9 @@ pub trait EffectModel: Copy + Into<Effect> {
     fn values(&self) -> Vec<f64>;
     /// Sets its parameter values (as many as [`EffectModel::PARAMETERS`]).
     fn set_values(&mut self, v: &[f64]);
+    /// The same effect with size `size` (its first parameter, SI); `context` gives what the
+    /// size leaves open.
+    fn of_size(self, size: f64, context: &SizeContext) -> Self;
     /// Names of the states it adds, after the angles and speeds.
     fn state_names(&self, _model: &DriveModel) -> Vec<String> {
         Vec::new()
@@ -219,6 +291,30 @@ impl Effect {
         each!(self, e => moves(e))
     }
 
+    /// How the diagnosis searches a record for it.
+    pub fn search(&self) -> Search {
+        fn search<E: EffectModel>(_: &E) -> Search {
+            E::SEARCH
+        }
+        each!(self, e => search(e))
+    }
+
+    /// The same effect with size `size` (its first parameter, SI).
+    pub fn of_size(self, size: f64, context: &SizeContext) -> Effect {
+        each!(self, e => e.of_size(size, context).into())
+    }
+
+    /// One of each effect of the vocabulary, at element 0 and of size 0: what the diagnosis
+    /// places at every element where the record can show it.
+    pub fn vocabulary() -> [Effect; 4] {
+        [
+            CoulombFriction { body: 0, friction: 0.0, smoothing_speed: 1.0 }.into(),
+            Backlash { coupling: 0, backlash: 0.0 }.into(),
+            TimeDelay { input: 0, delay_s: 0.0 }.into(),
+            ActuatorLag { input: 0, time_constant_s: 0.0 }.into(),
+        ]
+    }
+
     /// Where it acts.
     pub fn at(&self) -> Element {
         each!(self, e => e.element())
@@ -275,5 +371,48 @@ impl Effect {
     /// Its part of the linearisation.
     pub(super) fn linearise(&self, d: &mut Dynamics, contact: bool) {
         each!(self, e => e.linearise(d, contact))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The vocabulary holds every effect once: a new variant fails to compile here until it has
+    /// its position, and fails the test until [`Effect::vocabulary`] lists it.
+    #[test]
+    fn the_vocabulary_has_every_effect_once() {
+        let position = |e: &Effect| match e {
+            Effect::CoulombFriction(_) => 0,
+            Effect::Backlash(_) => 1,
+            Effect::TimeDelay(_) => 2,
+            Effect::ActuatorLag(_) => 3,
+        };
+        let mut seen: Vec<usize> = Effect::vocabulary().iter().map(position).collect();
+        seen.sort();
+        assert_eq!(seen, [0, 1, 2, 3]);
+    }
+
+    /// An effect of a size has that size as its first parameter, at the element it was placed
+    /// at, and the search's grid and scale are sane (starts below its limit, positive).
+    #[test]
+    fn an_effect_of_a_size_has_it() {
+        let context = SizeContext { smoothing_speed: 0.02, inertia: 0.5, fastest_rate: 400.0 };
+        for prototype in Effect::vocabulary() {
+            let e = prototype.at_index(2).of_size(0.37, &context);
+            assert_eq!(e.values()[0], 0.37, "{}", e.name());
+            assert_eq!(e.at().index(), 2, "{}", e.name());
+            let s = e.search();
+            assert!(s.grid.0 > 0.0 && s.grid.1 > s.grid.0 && s.grid.2 >= 2, "{}: {s:?}", e.name());
+            if let Limit::TimesScale(k) = s.limit {
+                assert!(k > s.grid.1, "{}: its starts reach beyond its limit", e.name());
+            }
+        }
+        // a friction's smoothing: the context's, or wider where its slope F/(v_s J) would be
+        // faster than the mechanics (0.37/(0.02·0.5) = 37 /s < 400 /s: the context's; 40 N
+        // would give 4000 /s: widened to 40/(0.5·400) = 0.2 m/s)
+        let f = |size: f64| Effect::vocabulary()[0].of_size(size, &context).values()[1];
+        assert_eq!(f(0.37), 0.02);
+        assert!((f(40.0) - 0.2).abs() < 1e-15);
     }
 }

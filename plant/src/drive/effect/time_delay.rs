@@ -2,7 +2,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::{EffectModel, EffectParameter, Element};
+use super::{EffectModel, EffectParameter, Element, Limit, Scale, Search, Shows, SizeContext};
 use crate::drive::{Dimension, Dynamics};
 
 /// The input reaches its body `delay_s` later than recorded.
@@ -19,6 +19,15 @@ impl EffectModel for TimeDelay {
     const PARAMETERS: &'static [EffectParameter] =
         &[EffectParameter { name: "delay", key: "delay", dimension: Dimension::Time, what: "dead time" }];
 
+    /// At every input, from 0.3 to 100 samples (12 starts), up to a tenth of the record.
+    const SEARCH: Search = Search {
+        shows: Shows::Always,
+        scale: Scale::SampleTime,
+        grid: (0.3, 100.0, 12),
+        rough: false,
+        limit: Limit::RecordShare(0.1),
+    };
+
     fn element(&self) -> Element {
         Element::Input(self.input)
     }
@@ -30,6 +39,9 @@ impl EffectModel for TimeDelay {
     }
     fn set_values(&mut self, v: &[f64]) {
         self.delay_s = v[0];
+    }
+    fn of_size(self, delay_s: f64, _: &SizeContext) -> Self {
+        TimeDelay { delay_s, ..self }
     }
     /// The right-hand side sees the input after its dead time: the simulation shifts the held
     /// sequence (whole samples and a fraction), the linearisation's input is the delayed one.
