@@ -725,95 +725,6 @@ pub fn plot(
     lines(target, &format!("rigtwin mpc: {} scenario, MPC vs PI speed control", crate::report::words(&kind)), &panels)
 }
 
-/// A drive model as the FMU integrates it (`rigtwin_fmu::drive::DriveDynamics`: exact ZOH
-/// pieces between the dead times' switching instants, RK4 with friction or play), its outputs
-/// in the order of the controller state space's names (speeds, coupling forces).
-pub struct DrivePlant {
-    dynamics: rigtwin_fmu::drive::DriveDynamics,
-    x: nalgebra::DVector<f64>,
-    delays: Vec<plant::effects::DelayLine>,
-    taus: Vec<f64>,
-    t: f64,
-    dt_s: f64,
-    /// Per output: a state index (speed) or a coupling (force).
-    outputs: Vec<Source>,
-    y: Vec<f64>,
-    /// Every coupling's force now.
-    forces: Vec<f64>,
-}
-
-impl DrivePlant {
-    /// The plant of `model` at rest, sampled every `dt_s`, reporting `output_names`.
-    pub fn new(model: &plant::DriveModel, dt_s: f64, output_names: &[String]) -> anyhow::Result<Self> {
-        let dynamics = rigtwin_fmu::drive::DriveDynamics::new(model).map_err(|e| anyhow::anyhow!("the plant: {e}"))?;
-        let n = model.line.bodies.len();
-        let states = model.state_names();
-        let forces = model.coupling_force_names();
-        let outputs = output_names
-            .iter()
-            .map(|name| {
-                if let Some(i) = states[n..2 * n].iter().position(|s| s == name) {
-                    Ok(Source::State(n + i))
-                } else if let Some(i) = forces.iter().position(|s| s == name) {
-                    Ok(Source::Torque(i))
-                } else {
-                    anyhow::bail!("the plant has no output `{name}`")
-                }
-            })
-            .collect::<anyhow::Result<Vec<_>>>()?;
-        let nu = model.inputs.len();
-        let x = dynamics.state_of(&dynamics.dynamics.initial_state(0.0, &vec![0.0; nu]));
-        let mut delays = vec![plant::effects::DelayLine::default(); nu];
-        for d in delays.iter_mut() {
-            d.record(f64::NEG_INFINITY, 0.0);
-        }
-        let taus = model.input_delays_s();
-        let mut p = DrivePlant {
-            forces: vec![0.0; dynamics.couplings()],
-            dynamics,
-            x,
-            delays,
-            taus,
-            t: 0.0,
-            dt_s,
-            y: vec![0.0; outputs.len()],
-            outputs,
-        };
-        p.read();
-        Ok(p)
-    }
-
-    fn read(&mut self) {
-        self.dynamics.coupling_forces(self.x.as_slice(), &mut self.forces);
-        for (y, s) in self.y.iter_mut().zip(&self.outputs) {
-            *y = match *s {
-                Source::State(i) => self.x[i],
-                Source::Torque(i) => self.forces[i],
-            };
-        }
-    }
-}
-
-impl Plant for DrivePlant {
-    fn outputs(&self) -> &[f64] {
-        &self.y
-    }
-    fn advance(&mut self, u: &[f64]) -> Result<(), String> {
-        for (j, line) in self.delays.iter_mut().enumerate() {
-            if self.taus[j] > 0.0 {
-                line.record(self.t, u[j]);
-            }
-        }
-        self.dynamics.step(&mut self.x, u, self.t, self.dt_s, &self.delays)?;
-        self.t += self.dt_s;
-        for (j, line) in self.delays.iter_mut().enumerate() {
-            line.forget_before(self.t, self.taus[j]);
-        }
-        self.read();
-        Ok(())
-    }
-}
-
 /// The command line's choices for the controller, applied alike to every model's settings.
 #[derive(Debug, Clone, Copy)]
 pub struct Tuning {
@@ -859,7 +770,7 @@ pub fn drive_report(
     let x0 = nalgebra::DVector::zeros(ss.nstates());
     let u0 = vec![0.0; ss.input_names.len()];
     controller.reset(&x0, &u0);
-    let mut plant = DrivePlant::new(truth, settings.dt_s, &ss.output_names)?;
+    let mut plant = mpc::DrivePlant::new(truth, settings.dt_s, &ss.output_names)?;
     let dt = settings.dt_s;
     let samples = (1.0 / dt).round() as usize;
     let k_step = (0.05 / dt).round() as usize;

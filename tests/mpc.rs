@@ -335,7 +335,7 @@ fn drive_controller_fmu_closes_the_loop_in_fmpy_and_libcosim() {
     let in_process = |delayed: bool| -> Vec<Vec<f64>> {
         let mut c = mpc::Controller::with_input_delays(&p.model, &p.input_delays_s, &settings).unwrap();
         c.reset(&nalgebra::DVector::zeros(p.model.nstates()), &[0.0]);
-        let mut plant = rigtwin::control::DrivePlant::new(model, settings.dt_s, &p.model.output_names).unwrap();
+        let mut plant = mpc::DrivePlant::new(model, settings.dt_s, &p.model.output_names).unwrap();
         let (mut rows, mut previous) = (Vec::new(), None::<Vec<f64>>);
         for k in 0..steps {
             let y = plant.outputs().to_vec();

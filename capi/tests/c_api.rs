@@ -194,7 +194,7 @@ fn drive_model_in_c(file: &str, case: &str, names: &str, reference: impl Fn(usiz
     settings.solver.time_limit_s = 1.0;
     let mut c = Controller::with_input_delays(&p.model, &p.input_delays_s, &settings).unwrap();
     c.reset(&nalgebra::DVector::zeros(p.model.nstates()), &vec![0.0; p.model.input_names.len()]);
-    let mut plant = rigtwin::control::DrivePlant::new(model, settings.dt_s, &p.model.output_names).unwrap();
+    let mut plant = mpc::DrivePlant::new(model, settings.dt_s, &p.model.output_names).unwrap();
     let picked = measured(&p, &settings);
     let record = close_loop(&mut c, &mut plant, &picked, 0.0, reference);
     replay_in_c(&dir, &path, &record, names);

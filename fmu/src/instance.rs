@@ -7,7 +7,6 @@ use std::borrow::Cow;
 use nalgebra::{DMatrix, DVector};
 
 use crate::controller::ControllerMachine;
-use crate::drive::DriveDynamics;
 use crate::model::{Model, DRIVE_INPUT};
 use crate::params::FmuParams;
 use crate::variables::{parameter_set, parameter_values, rig_parameter, variant_number, Causality, Kind, Slot, Table};
@@ -238,7 +237,7 @@ impl Snapshot {
 #[derive(Debug)]
 enum Machine {
     Rig(Box<Model>),
-    Drive(Box<DriveDynamics>),
+    Drive(Box<plant::Stepper>),
     Controller(Box<ControllerMachine>),
 }
 
@@ -413,7 +412,9 @@ impl Instance {
                     Machine::Controller(Box::new(m))
                 }),
                 (None, None) => Model::new(&p).map(|m| Machine::Rig(Box::new(m))),
-                (Some(d), None) => DriveDynamics::new(d).map(|m| Machine::Drive(Box::new(m))),
+                (Some(d), None) => {
+                    plant::Stepper::new(d).map(|m| Machine::Drive(Box::new(m))).map_err(|e| e.to_string())
+                }
             };
             self.model = Some(built.or_else(|e| error(format!("the parameters do not describe a model: {e}")))?);
         }
@@ -591,7 +592,9 @@ impl Instance {
         self.ensure_model()?;
         let stepped = match self.model.as_mut().expect("built above") {
             Machine::Rig(m) => m.step(&mut self.x, &self.u, self.time, h, &self.delays[DRIVE_INPUT]),
-            Machine::Drive(m) => m.step(&mut self.x, self.u.as_slice(), self.time, h, &self.delays),
+            Machine::Drive(m) => {
+                m.step(&mut self.x, self.u.as_slice(), self.time, h, &self.delays).map_err(|e| e.to_string())
+            }
             Machine::Controller(m) => m.advance(self.time, h, self.u.as_slice()),
         };
         if let Err(e) = stepped {

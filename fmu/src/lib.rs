@@ -8,8 +8,8 @@
 //! - [`variables`]: the one variable table — both modelDescription.xml files ([`description`]),
 //!   the value-reference map and the instantiation token come from it;
 //! - [`controller`]: rigtwin's MPC as a co-simulation FMU;
-//! - [`model`]: the paper rig's dynamics, [`drive`]: a drive model's, each with its
-//!   co-simulation step (the exact zero-order-hold step of the linear part in `zoh`);
+//! - [`model`]: the paper rig's dynamics with its co-simulation step (a drive model's is
+//!   `plant::Stepper`; both take the exact zero-order-hold steps of `plant::zoh_step`);
 //! - [`instance`]: the state machine every call goes through, version-independent;
 //! - [`fmi3`], [`fmi2`]: thin `extern "C"` glue, the exported C API. Every body runs under `catch_unwind`, so no panic
 //!   crosses into the importer; every signature is checked at compile time against the
@@ -21,7 +21,6 @@
 pub mod bindings;
 pub mod controller;
 pub mod description;
-pub mod drive;
 mod ffi;
 pub mod fmi2;
 pub mod fmi3;
@@ -29,7 +28,6 @@ pub mod instance;
 pub mod model;
 pub mod params;
 pub mod variables;
-mod zoh;
 
 pub use description::{describe, token, Version, MODEL_IDENTIFIER};
 pub use params::{ControllerSpec, FmuParams};
@@ -47,7 +45,7 @@ pub fn check(p: &FmuParams) -> Result<(), String> {
     }
     match &p.drive {
         None => model::Model::new(p).map(|_| ()),
-        Some(m) => drive::DriveDynamics::new(m).map(|_| ()),
+        Some(m) => plant::Stepper::new(m).map(|_| ()).map_err(|e| e.to_string()),
     }
 }
 

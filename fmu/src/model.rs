@@ -15,10 +15,10 @@ use nalgebra::{DMatrix, DVector};
 
 use crate::params::FmuParams;
 use crate::variables::{powertrain_states, Table};
-use crate::zoh::{longest_exact_piece, ZohCache, CACHE, MAX_PIECES};
 use plant::effects::{DelayLine, Powertrain};
 use plant::integrate::PieceMaps;
 use plant::integrate::{PiecewiseRk4, PiecewiseSmooth};
+use plant::zoh_step::{longest_exact_piece, ZohCache, CACHE, MAX_PIECES};
 
 /// Number of inputs: M_m2, M_drive, M_m3, bearing F_x, F_y.
 pub const NU: usize = 5;
@@ -74,7 +74,7 @@ impl Model {
     /// Builds the model; the error names the offending parameter.
     pub fn new(p: &FmuParams) -> Result<Self, String> {
         if p.drive.is_some() {
-            return Err("a drive model's parameter set is built by `drive::DriveDynamics`".into());
+            return Err("a drive model's parameter set is stepped by `plant::Stepper`".into());
         }
         let powertrain = Powertrain::new(&p.powertrain, p.variant, &p.effects).map_err(|e| e.to_string())?;
         let br = p.bearing.as_ref().map(|b| b.state_space()).transpose().map_err(|e| e.to_string())?;
@@ -134,7 +134,7 @@ impl Model {
         let similar = |m: &DMatrix<f64>| &t * m * &t_inv;
         let npt = map.len();
         let (a, b) = (similar(&a_x), &t * &b_x);
-        let max_piece_s = longest_exact_piece(&a, &b)?;
+        let max_piece_s = longest_exact_piece(&a, &b).map_err(|e| e.to_string())?;
         // the powertrain's RK4 step (the diagnosis's), shorter only where the bearing block is
         // faster than it resolves (h·|λ|max ≤ 0.5)
         let bearing_rate =
@@ -410,7 +410,7 @@ impl Model {
     }
 
     fn discretise(&mut self, h: f64) -> Result<usize, String> {
-        self.cache.index(&self.a, &self.b, h, self.max_piece_s)
+        self.cache.index(&self.a, &self.b, h, self.max_piece_s).map_err(|e| e.to_string())
     }
 }
 

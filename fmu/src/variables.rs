@@ -556,7 +556,7 @@ impl Table {
 
     /// The table of a drive model: its parameters (`plant::DriveModel::parameter_list`), its
     /// states (the couplings' twists and, where they do not fix every position, a body's
-    /// position — `crate::drive::coordinates` —, the speeds, lagged inputs; all outputs), the
+    /// position — `plant::stepper::coordinates` —, the speeds, lagged inputs; all outputs), the
     /// derivatives that are not states themselves, the positions that are not states (outputs),
     /// the couplings' forces (outputs) and the inputs; every name from the plant's one set of
     /// signal names. Nominals: 1 mrad of twist (10 µm of elongation), 1 for the rest.
@@ -586,18 +586,18 @@ impl Table {
         let labels = m.coupling_labels();
         // a line that cannot be stepped has no coordinates: its table keeps the plant's names
         // (the instance refuses it with the reason when it is built)
-        let coordinates = crate::drive::coordinates(m)
+        let coordinates = plant::stepper::coordinates(m)
             .map(|(c, _)| c)
-            .unwrap_or_else(|_| (0..n).map(crate::drive::Coordinate::Position).collect());
+            .unwrap_or_else(|_| (0..n).map(plant::Coordinate::Position).collect());
         let mut nominal = vec![1.0; nx];
         let mut derivative_state: Vec<Option<usize>> = (0..nx).map(|_| None).collect();
         for (k, c) in coordinates.iter().enumerate() {
             let (name, description) = match *c {
-                crate::drive::Coordinate::Twist(i) => {
+                plant::Coordinate::Twist(i) => {
                     nominal[k] = twist_nominal;
                     (format!("{twist}_{}", labels[i]), format!("{twist} of coupling {} ({})", i + 1, labels[i]))
                 }
-                crate::drive::Coordinate::Position(b) => {
+                plant::Coordinate::Position(b) => {
                     derivative_state[k] = Some(n + b);
                     (names[b].clone(), format!("{what} of {}", bodies[b]))
                 }
@@ -613,7 +613,7 @@ impl Table {
             push(name.clone(), Causality::Output, Slot::State(k), unit, description, Constraint::Finite);
         }
         for (k, c) in coordinates.iter().enumerate() {
-            if let crate::drive::Coordinate::Twist(i) = *c {
+            if let plant::Coordinate::Twist(i) = *c {
                 let name = format!("der({twist}_{})", labels[i]);
                 push(name, Causality::Local, Slot::Derivative(k), w, "state derivative".into(), Constraint::Finite);
             }
@@ -630,7 +630,7 @@ impl Table {
             );
         }
         for b in 0..n {
-            if !coordinates.contains(&crate::drive::Coordinate::Position(b)) {
+            if !coordinates.contains(&plant::Coordinate::Position(b)) {
                 push(
                     names[b].clone(),
                     Causality::Output,

@@ -22,6 +22,7 @@
 pub mod alloc_counter;
 pub mod closed_loop;
 pub mod controller;
+pub mod drive_plant;
 pub mod error;
 pub mod estimator;
 pub mod model;
@@ -33,6 +34,7 @@ pub mod settings;
 pub mod solver;
 
 pub use controller::{Controller, StepInfo};
+pub use drive_plant::DrivePlant;
 pub use error::{MpcError, Result};
 pub use prediction::{Design, Prediction};
 pub use realtime::{RealTime, Status};

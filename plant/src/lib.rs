@@ -39,6 +39,8 @@ pub mod rig;
 pub mod segment;
 pub mod shuffle;
 pub mod statespace;
+pub mod stepper;
+pub mod zoh_step;
 
 pub use bearing::{BearingModel, CoefficientTable, Coefficients, Support};
 pub use bending::{Beam, BeamSegment, Deflection};
@@ -56,3 +58,4 @@ pub use rig::{AdditionalSpring, Effective, Rig, RigChain, RigParams, Variant};
 pub use segment::{bodies_from_segments, step_length_correction_m, Segment};
 pub use shuffle::{classify, ModeKind};
 pub use statespace::{lstsq, zoh, DiscreteStateSpace, StateSpace};
+pub use stepper::{Coordinate, Stepper};

@@ -1,16 +1,18 @@
-//! The exact (ZOH) step of a linear model for the FMU: the discretisations per piece length,
-//! composed from sub-pieces, and the step as one pass over [Ad Bd]. Shared by the rig's
-//! (`model`) and the drive models' (`drive`) steps.
+//! The exact (ZOH) step of a linear model over a communication step: the discretisations per
+//! piece length, composed from sub-pieces, and the step as one pass over [Ad Bd]. Shared by the
+//! drive models' [`crate::stepper::Stepper`] and the rig FMU's step.
 
 use nalgebra::DMatrix;
 
+use crate::error::{PlantError, Result};
+
 /// Discretisations kept: a co-simulation master uses one or a few step sizes (a dead time
 /// adds two piece lengths per step size).
-pub(crate) const CACHE: usize = 8;
+pub const CACHE: usize = 8;
 
 /// Most pieces (exact ZOH pieces, or RK4 sub-steps with backlash) one communication step is
 /// split into; a longer step is refused rather than taking unbounded time.
-pub(crate) const MAX_PIECES: usize = 1_000_000;
+pub const MAX_PIECES: usize = 1_000_000;
 
 /// Fastest time scale a model may have, s (‖[A B]‖₁ ≤ its inverse): below it the parameters are
 /// not a machine (an inertia of 1e-300 kg m², say) and no step could be taken.
@@ -19,12 +21,12 @@ const FASTEST_TIME_SCALE_S: f64 = 1e-15;
 /// The exact (ZOH) discretisations of one linear model, per piece length: a co-simulation master
 /// uses one or a few step sizes, a dead time adds piece lengths. Shared by the rig's and the
 /// drive models' steps. A piece longer than the model's exponential is accurate for
-/// (`max_piece_s`: ‖[A B]‖·h within `plant::statespace::ZOH_MAX_NORM`) is the composition of
+/// (`max_piece_s`: ‖[A B]‖·h within `crate::statespace::ZOH_MAX_NORM`) is the composition of
 /// k equal sub-pieces, composed once here — (Ad, Bd)ₖ = (Ad^k, Σⱼ Ad^j Bd), by doubling — so a
 /// step is one pass x ← [Ad Bd][x; u] over a contiguous column-major block, as a C loop over
 /// the same matrices makes it.
 #[derive(Debug, Clone, Default)]
-pub(crate) struct ZohCache {
+pub struct ZohCache {
     entries: Vec<ZohEntry>,
     /// The entry used last: a master's steps hit it.
     last: usize,
@@ -98,7 +100,7 @@ fn step_fixed<const R: usize>(fused: &[f64], x: &[f64], u: &[f64]) -> [f64; R] {
 }
 
 /// z ← `next` when every value is finite; else the index of the first that is not, `z` unchanged.
-fn commit(z: &mut [f64], next: &[f64]) -> Result<(), usize> {
+fn commit(z: &mut [f64], next: &[f64]) -> std::result::Result<(), usize> {
     match next.iter().position(|v| !v.is_finite()) {
         Some(k) => Err(k),
         None => {
@@ -111,13 +113,7 @@ fn commit(z: &mut [f64], next: &[f64]) -> Result<(), usize> {
 impl ZohCache {
     /// The entry of piece length `h`, discretised if new (the oldest of [`CACHE`] dropped): the
     /// exponential of sub-pieces no longer than `max_piece_s`, composed.
-    pub(crate) fn index(
-        &mut self,
-        a: &DMatrix<f64>,
-        b: &DMatrix<f64>,
-        h: f64,
-        max_piece_s: f64,
-    ) -> Result<usize, String> {
+    pub fn index(&mut self, a: &DMatrix<f64>, b: &DMatrix<f64>, h: f64, max_piece_s: f64) -> Result<usize> {
         // piece lengths from a dead time carry rounding: equal within 1e-12 is the same
         let same = |e: &ZohEntry| (e.h - h).abs() <= 1e-12 * h;
         if self.entries.get(self.last).is_some_and(same) {
@@ -128,14 +124,14 @@ impl ZohCache {
             None => {
                 let k = (h / max_piece_s).ceil().max(1.0);
                 if k.is_nan() || k > MAX_PIECES as f64 {
-                    return Err(format!(
+                    return Err(PlantError::Invalid(format!(
                         "a piece of {h} s needs more than {MAX_PIECES} exact sub-pieces for this model"
-                    ));
+                    )));
                 }
-                let (ad, bd) = plant::zoh(a, b, h / k).map_err(|e| e.to_string())?;
+                let (ad, bd) = crate::statespace::zoh(a, b, h / k)?;
                 let (ad, bd) = composed(ad, bd, k as usize);
                 if ad.iter().chain(bd.iter()).any(|v| !v.is_finite()) {
-                    return Err(format!("the exact step of {h} s is not finite"));
+                    return Err(PlantError::Invalid(format!("the exact step of {h} s is not finite")));
                 }
                 if self.entries.len() == CACHE {
                     self.entries.remove(0);
@@ -151,14 +147,14 @@ impl ZohCache {
     }
 
     /// (Ad, Bd) of entry `i`.
-    pub(crate) fn get(&self, i: usize) -> (&DMatrix<f64>, &DMatrix<f64>) {
+    pub fn get(&self, i: usize) -> (&DMatrix<f64>, &DMatrix<f64>) {
         (&self.entries[i].ad, &self.entries[i].bd)
     }
 
     /// z ← Ad z + Bd u with entry `i` (`u` of the inputs' length); a non-finite result is
     /// refused (the index of the first such state), `z` unchanged. Allocation-free; up to 16
     /// states (the rig has 6 to 13) the sums stay in registers.
-    pub(crate) fn advance(&mut self, i: usize, z: &mut [f64], u: &[f64]) -> Result<(), usize> {
+    pub fn advance(&mut self, i: usize, z: &mut [f64], u: &[f64]) -> std::result::Result<(), usize> {
         let (fused, n) = (&self.entries[i].fused, z.len());
         macro_rules! fixed {
             ($($r:literal)*) => {
@@ -182,15 +178,15 @@ impl ZohCache {
     }
 }
 
-/// Longest exact piece of x' = A x + B u, s: ‖[A B]‖₁ · piece = `plant::statespace::ZOH_MAX_NORM`
+/// Longest exact piece of x' = A x + B u, s: ‖[A B]‖₁ · piece = `crate::statespace::ZOH_MAX_NORM`
 /// / 2^10; refuses time scales below `FASTEST_TIME_SCALE_S` (parameters that are no machine).
-pub(crate) fn longest_exact_piece(a: &DMatrix<f64>, b: &DMatrix<f64>) -> Result<f64, String> {
+pub fn longest_exact_piece(a: &DMatrix<f64>, b: &DMatrix<f64>) -> Result<f64> {
     let norm = a.column_iter().chain(b.column_iter()).map(|c| c.lp_norm(1)).fold(0.0, f64::max);
     if norm.is_nan() || norm * FASTEST_TIME_SCALE_S > 1.0 {
-        return Err(format!(
+        return Err(PlantError::Invalid(format!(
             "the parameters give time scales of {:.1e} s (an inertia, mass or stiffness far off)",
             1.0 / norm
-        ));
+        )));
     }
-    Ok(plant::statespace::ZOH_MAX_NORM / 1024.0 / norm.max(1e-300))
+    Ok(crate::statespace::ZOH_MAX_NORM / 1024.0 / norm.max(1e-300))
 }

@@ -1,7 +1,7 @@
-//! The FMU's dynamics of a drivetrain model (`plant::DriveModel`: a line of bodies, couplings
-//! and gear stages with its effects). The right-hand side, the outputs and the RK4 step are
-//! `plant::Dynamics`' — the ones the diagnosis simulated the record with — so the FMU replays the
-//! diagnosis's model, not a copy of it. The states are z = [P q; q̇; lagged inputs]: the
+//! A drivetrain model (`DriveModel`: a line of bodies, couplings and gear stages with its
+//! effects) stepped over communication steps, as its FMU and the closed loops of `mpc` run it.
+//! The right-hand side, the outputs and the RK4 step are [`Dynamics`]' — the ones the diagnosis
+//! simulated the record with — so the FMU replays the diagnosis's model, not a copy of it. The states are z = [P q; q̇; lagged inputs]: the
 //! positions enter as the couplings' twists (P's rows are the couplings' elongations, as many as
 //! are independent) and, where the twists do not fix every position, a body's own position (the
 //! line's rigid-body coordinate), so their magnitudes stay bounded under a torque that spins the
@@ -16,17 +16,18 @@
 
 use nalgebra::{DMatrix, DVector};
 
-use plant::drive::HeldInputs;
-use plant::effects::DelayLine;
-use plant::integrate::PiecewiseRk4;
-use plant::{DriveModel, Dynamics, Quantity};
-
-use crate::zoh::{longest_exact_piece, ZohCache, MAX_PIECES};
+use crate::drive::{HeldInputs, MAX_INPUTS};
+use crate::effects::DelayLine;
+use crate::error::{PlantError, Result};
+use crate::integrate::PiecewiseRk4;
+use crate::line::MAX_BODIES;
+use crate::zoh_step::{longest_exact_piece, ZohCache, MAX_PIECES};
+use crate::{DriveModel, Dynamics, Quantity};
 
 /// Most states a drive model has: positions and speeds of the largest line, one lag per input.
-pub const MAX_STATES: usize = 2 * plant::MAX_BODIES + plant::drive::MAX_INPUTS;
+pub const MAX_STATES: usize = 2 * MAX_BODIES + MAX_INPUTS;
 
-/// A position coordinate of the FMU's state vector.
+/// A position coordinate of the stepped state vector.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Coordinate {
     /// The twist (elongation) of coupling i: eᵢᵀq.
@@ -38,9 +39,9 @@ pub enum Coordinate {
 /// The position coordinates of `m` and the matrix P whose rows give them from the bodies'
 /// positions (z_pos = P q): the couplings' elongations in order, each that is independent of
 /// those before, then the bodies' own positions in order until P is invertible.
-pub fn coordinates(m: &DriveModel) -> Result<(Vec<Coordinate>, DMatrix<f64>), String> {
+pub fn coordinates(m: &DriveModel) -> Result<(Vec<Coordinate>, DMatrix<f64>)> {
     let n = m.line.bodies.len();
-    let springs = m.line.model().map_err(|e| e.to_string())?.springs;
+    let springs = m.line.model()?.springs;
     let candidates = springs
         .iter()
         .enumerate()
@@ -69,12 +70,12 @@ pub fn coordinates(m: &DriveModel) -> Result<(Vec<Coordinate>, DMatrix<f64>), St
 
 /// The dynamics of one drive model and the buffers of its step.
 #[derive(Debug)]
-pub struct DriveDynamics {
+pub struct Stepper {
     /// The plant's model.
     pub dynamics: Dynamics,
     /// The position coordinates of the state vector z.
     pub coordinates: Vec<Coordinate>,
-    /// x = to_x z (the plant's state from the FMU's).
+    /// x = to_x z (the plant's state from the stepped one).
     to_x: DMatrix<f64>,
     /// z = to_z x.
     to_z: DMatrix<f64>,
@@ -98,21 +99,24 @@ pub struct DriveDynamics {
     xs: DVector<f64>,
 }
 
-impl DriveDynamics {
+impl Stepper {
     /// The dynamics of `m`; the error names what is wrong.
-    pub fn new(m: &DriveModel) -> Result<DriveDynamics, String> {
-        let dynamics = Dynamics::new(m).map_err(|e| e.to_string())?;
+    pub fn new(m: &DriveModel) -> Result<Stepper> {
+        let dynamics = Dynamics::new(m)?;
         let (a, b) = dynamics.linear();
         if a.iter().chain(b.iter()).any(|v| !v.is_finite()) {
-            return Err("the parameters give a system matrix with non-finite entries".into());
+            return Err(PlantError::Invalid("the parameters give a system matrix with non-finite entries".into()));
         }
         let nx = dynamics.nstates();
         if nx > MAX_STATES {
-            return Err(format!("{nx} states: at most {MAX_STATES}"));
+            return Err(PlantError::Invalid(format!("{nx} states: at most {MAX_STATES}")));
         }
         let n = m.line.bodies.len();
         let (coordinates, p) = coordinates(m)?;
-        let p_inv = p.clone().try_inverse().ok_or("the couplings' elongations and the positions are dependent")?;
+        let p_inv = p
+            .clone()
+            .try_inverse()
+            .ok_or_else(|| PlantError::Invalid("the couplings' elongations and the positions are dependent".into()))?;
         let mut to_z = DMatrix::identity(nx, nx);
         let mut to_x = DMatrix::identity(nx, nx);
         to_z.view_mut((0, 0), (n, n)).copy_from(&p);
@@ -122,11 +126,11 @@ impl DriveDynamics {
         let max_piece_s = longest_exact_piece(&a, &b)?;
         let (coarse, fine) = dynamics.rk4_steps_s();
         if dynamics.is_nonlinear() && !(coarse > 0.0 && fine > 0.0 && coarse.is_finite() && fine.is_finite()) {
-            return Err("the model's rates are not finite".into());
+            return Err(PlantError::Invalid("the model's rates are not finite".into()));
         }
         let rk = dynamics.integrator();
         let nu = dynamics.ninputs();
-        Ok(DriveDynamics {
+        Ok(Stepper {
             coordinates,
             to_x,
             to_z,
@@ -157,7 +161,7 @@ impl DriveDynamics {
         self.couplings
     }
 
-    /// The FMU's state of the plant's state `x`.
+    /// The stepped state of the plant's state `x`.
     pub fn state_of(&self, x: &[f64]) -> DVector<f64> {
         &self.to_z * DVector::from_column_slice(x)
     }
@@ -273,18 +277,13 @@ impl DriveDynamics {
     /// [`MAX_PIECES`] pieces or sub-steps is refused, and so is a state that comes out
     /// non-finite; `x` is then left as it was. Allocates only when a new piece length is
     /// discretised.
-    pub fn step(
-        &mut self,
-        x: &mut DVector<f64>,
-        u: &[f64],
-        t: f64,
-        h: f64,
-        delays: &[DelayLine],
-    ) -> Result<(), String> {
+    pub fn step(&mut self, x: &mut DVector<f64>, u: &[f64], t: f64, h: f64, delays: &[DelayLine]) -> Result<()> {
         let nonlinear = self.dynamics.is_nonlinear();
         let sub_steps = if nonlinear { h / self.rk.fine_s } else { h / self.max_piece_s };
         if sub_steps.is_nan() || sub_steps > MAX_PIECES as f64 {
-            return Err(format!("a step of {h} s needs more than {MAX_PIECES} pieces for this model"));
+            return Err(PlantError::Invalid(format!(
+                "a step of {h} s needs more than {MAX_PIECES} pieces for this model"
+            )));
         }
         // the instants in (t, t+h) where a delayed input switches
         self.breaks.clear();
@@ -342,14 +341,14 @@ impl DriveDynamics {
                     }
                 };
                 if let Err(k) = self.cache.advance(i, state.as_mut_slice(), &self.u_piece) {
-                    result = Err(format!("state {k} became non-finite over the step from {t} s"));
+                    result = Err(PlantError::Invalid(format!("state {k} became non-finite over the step from {t} s")));
                     break;
                 }
             }
         }
         if result.is_ok() {
             if let Some(i) = state.iter().position(|v| !v.is_finite()) {
-                result = Err(format!("state {i} became {} over the step from {t} s", state[i]));
+                result = Err(PlantError::Invalid(format!("state {i} became {} over the step from {t} s", state[i])));
             } else {
                 if nonlinear {
                     x.gemv(1.0, &self.to_z, &state, 0.0);
