@@ -49,6 +49,21 @@ fn fmu_step(c: &mut Criterion) {
     });
     unsafe { fmi3FreeInstance(inst) };
 
+    // the model's step alone (no FMI call, no instance checks)
+    let mut m = Model::new(&p).unwrap();
+    let mut z = nalgebra::DVector::zeros(m.nx());
+    z[1] = 0.01;
+    let u = nalgebra::DVector::zeros(NU);
+    let delay = plant::effects::DelayLine::default();
+    let mut t = 0.0;
+    c.bench_function("Model::step (h = 1 ms, 6 states)", |b| {
+        b.iter(|| {
+            let r = m.step(black_box(&mut z), &u, t, 1e-3, &delay);
+            t += 1e-3;
+            black_box(r)
+        })
+    });
+
     // the C reference with the same matrices
     let dir = std::env::temp_dir().join(format!("rigtwin-bench-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();

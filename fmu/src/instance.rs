@@ -387,10 +387,11 @@ impl Instance {
 
     /// Drops each input's history before what its dead time still needs at the present time.
     fn forget_history(&mut self) {
-        for j in 0..self.delays.len() {
-            let tau = self.delay_s(j);
-            if tau > 0.0 {
-                self.delays[j].forget_before(self.time, tau);
+        for (j, p) in self.delay_param.iter().enumerate() {
+            if let Some(&i) = p.as_ref() {
+                if self.params[i] > 0.0 {
+                    self.delays[j].forget_before(self.time, self.params[i]);
+                }
             }
         }
     }
@@ -401,23 +402,28 @@ impl Instance {
 
     /// Builds the model from the parameters if a parameter changed since it was built. Callers
     /// then borrow `self.model` beside `self.x` and `self.u`, so nothing is copied.
+    #[inline]
     fn ensure_model(&mut self) -> Res<()> {
-        if self.model.is_none() {
-            let p = self.params()?;
-            let built = match (&p.drive, &p.controller) {
-                (_, Some(_)) => ControllerMachine::new(&p).map(|mut m| {
-                    if let Some(s) = self.carry.take() {
-                        m.restore(&s);
-                    }
-                    Machine::Controller(Box::new(m))
-                }),
-                (None, None) => Model::new(&p).map(|m| Machine::Rig(Box::new(m))),
-                (Some(d), None) => {
-                    plant::Stepper::new(d).map(|m| Machine::Drive(Box::new(m))).map_err(|e| e.to_string())
-                }
-            };
-            self.model = Some(built.or_else(|e| error(format!("the parameters do not describe a model: {e}")))?);
+        if self.model.is_some() {
+            return Ok(());
         }
+        self.build_model()
+    }
+
+    #[cold]
+    fn build_model(&mut self) -> Res<()> {
+        let p = self.params()?;
+        let built = match (&p.drive, &p.controller) {
+            (_, Some(_)) => ControllerMachine::new(&p).map(|mut m| {
+                if let Some(s) = self.carry.take() {
+                    m.restore(&s);
+                }
+                Machine::Controller(Box::new(m))
+            }),
+            (None, None) => Model::new(&p).map(|m| Machine::Rig(Box::new(m))),
+            (Some(d), None) => plant::Stepper::new(d).map(|m| Machine::Drive(Box::new(m))).map_err(|e| e.to_string()),
+        };
+        self.model = Some(built.or_else(|e| error(format!("the parameters do not describe a model: {e}")))?);
         Ok(())
     }
 

@@ -409,6 +409,7 @@ impl Model {
         Ok(self.cache.get(i))
     }
 
+    #[inline]
     fn discretise(&mut self, h: f64) -> Result<usize, String> {
         self.cache.index(&self.a, &self.b, h, self.max_piece_s).map_err(|e| e.to_string())
     }

@@ -70,17 +70,17 @@ const FIXED_COLUMNS: usize = 32;
 
 /// [Ad Bd][x; u] over `fused`'s columns of `R` rows (at most [`FIXED_COLUMNS`] columns), the sums
 /// in fixed-size arrays the compiler keeps in registers: two partial sums (even and odd
-/// columns), so that the additions form two chains of half the length.
+/// columns), so that the additions form two chains of half the length. The values are read
+/// from `x` and `u` in place.
+#[inline]
 fn step_fixed<const R: usize>(fused: &[f64], x: &[f64], u: &[f64]) -> [f64; R] {
-    let cols = x.len() + u.len();
-    let mut values = [0.0; FIXED_COLUMNS];
-    values[..x.len()].copy_from_slice(x);
-    values[x.len()..cols].copy_from_slice(u);
+    let (nx, cols) = (x.len(), x.len() + u.len());
+    let value = |k: usize| if k < nx { x[k] } else { u[k - nx] };
     let (mut even, mut odd) = ([0.0; R], [0.0; R]);
     let mut k = 0;
     while k + 1 < cols {
         let (c0, c1) = (&fused[k * R..(k + 1) * R], &fused[(k + 1) * R..(k + 2) * R]);
-        let (v0, v1) = (values[k], values[k + 1]);
+        let (v0, v1) = (value(k), value(k + 1));
         for r in 0..R {
             even[r] += c0[r] * v0;
             odd[r] += c1[r] * v1;
@@ -88,9 +88,9 @@ fn step_fixed<const R: usize>(fused: &[f64], x: &[f64], u: &[f64]) -> [f64; R] {
         k += 2;
     }
     if k < cols {
-        let c0 = &fused[k * R..(k + 1) * R];
+        let (c0, v0) = (&fused[k * R..(k + 1) * R], value(k));
         for r in 0..R {
-            even[r] += c0[r] * values[k];
+            even[r] += c0[r] * v0;
         }
     }
     for r in 0..R {
@@ -100,6 +100,7 @@ fn step_fixed<const R: usize>(fused: &[f64], x: &[f64], u: &[f64]) -> [f64; R] {
 }
 
 /// z ← `next` when every value is finite; else the index of the first that is not, `z` unchanged.
+#[inline]
 fn commit(z: &mut [f64], next: &[f64]) -> std::result::Result<(), usize> {
     match next.iter().position(|v| !v.is_finite()) {
         Some(k) => Err(k),
@@ -113,7 +114,18 @@ fn commit(z: &mut [f64], next: &[f64]) -> std::result::Result<(), usize> {
 impl ZohCache {
     /// The entry of piece length `h`, discretised if new (the oldest of [`CACHE`] dropped): the
     /// exponential of sub-pieces no longer than `max_piece_s`, composed.
+    #[inline]
     pub fn index(&mut self, a: &DMatrix<f64>, b: &DMatrix<f64>, h: f64, max_piece_s: f64) -> Result<usize> {
+        // a master's steps: the length of the step before
+        if self.entries.get(self.last).is_some_and(|e| e.h == h) {
+            return Ok(self.last);
+        }
+        self.find_or_discretise(a, b, h, max_piece_s)
+    }
+
+    /// [`ZohCache::index`] beyond the entry used last.
+    #[cold]
+    fn find_or_discretise(&mut self, a: &DMatrix<f64>, b: &DMatrix<f64>, h: f64, max_piece_s: f64) -> Result<usize> {
         // piece lengths from a dead time carry rounding: equal within 1e-12 is the same
         let same = |e: &ZohEntry| (e.h - h).abs() <= 1e-12 * h;
         if self.entries.get(self.last).is_some_and(same) {
