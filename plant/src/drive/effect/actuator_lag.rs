@@ -2,7 +2,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::{EffectModel, EffectParameter, Element, Limit, Scale, Search, Shows, SizeContext};
+use super::{EffectModel, EffectParameter, Element, Search, SizeContext, INPUT_TIME_SEARCH};
 use crate::drive::{Dimension, DriveModel, Dynamics};
 
 /// The force on the body follows the recorded input through τ ż = u − z.
@@ -23,14 +23,7 @@ impl EffectModel for ActuatorLag {
         what: "first-order lag",
     }];
 
-    /// At every input, from 0.3 to 100 samples (12 starts), up to a tenth of the record.
-    const SEARCH: Search = Search {
-        shows: Shows::Always,
-        scale: Scale::SampleTime,
-        grid: (0.3, 100.0, 12),
-        rough: false,
-        limit: Limit::RecordShare(0.1),
-    };
+    const SEARCH: Search = INPUT_TIME_SEARCH;
 
     fn element(&self) -> Element {
         Element::Input(self.input)

@@ -171,6 +171,16 @@ pub enum Limit {
     RecordShare(f64),
 }
 
+/// The search of an input's time (a dead time, a lag's time constant): at every input, from 0.3
+/// to 100 samples (12 starts), up to a tenth of the record.
+pub const INPUT_TIME_SEARCH: Search = Search {
+    shows: Shows::Always,
+    scale: Scale::SampleTime,
+    grid: (0.3, 100.0, 12),
+    rough: false,
+    limit: Limit::RecordShare(0.1),
+};
+
 /// What the record and the declared model leave open of an effect of a given size, at its
 /// element: a friction's smoothing speed.
 #[derive(Debug, Clone, Copy, PartialEq)]
