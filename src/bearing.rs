@@ -110,13 +110,11 @@ pub fn identify(
         }
     }
     // what the fitted structure misses, told from the direct terms' r²
-    let worst = [f.r2.hxx[0], f.r2.hxx[1], f.r2.hyy[0], f.r2.hyy[1]].into_iter().fold(f64::INFINITY, f64::min);
-    if worst < 0.99 {
+    let worst = f.r2.lowest_direct();
+    if worst < ident::bearing::MIN_DIRECT_R2 {
         if let Some(better) = alternatives
             .iter()
-            .filter(|a| {
-                [a.r2.hxx[0], a.r2.hxx[1], a.r2.hyy[0], a.r2.hyy[1]].into_iter().fold(f64::INFINITY, f64::min) >= 0.99
-            })
+            .filter(|a| a.r2.lowest_direct() >= ident::bearing::MIN_DIRECT_R2)
             .min_by_key(|a| (a.structure == Structure::KCM) as u8 * 2 + (a.coupling == Coupling::Full) as u8)
         {
             warnings.push(format!(

@@ -327,6 +327,7 @@ pub fn parametrise(
         );
     }
     let e = problem.estimate(&meas, settings)?;
+    let checks = ident::parametrise::EstimateChecks::default();
     let (extensions, explains) = problem.explain(&meas, &e);
     let explained_by = explains.then(|| extensions[0].extension);
     let mc_ci = e.monte_carlo.as_ref().and_then(|m| m.confidence.clone());
@@ -335,7 +336,7 @@ pub fn parametrise(
         (None, l) => (l.clone(), "linearised"),
     };
     if let Some(mc) = &e.monte_carlo {
-        if mc.failed_fraction > 0.05 {
+        if checks.ill_conditioned(mc) {
             warnings.push(format!(
                 "{:.0} % of frequency sets drawn within the uncertainty have no solution on the shuffle mode: \
                  the variants hardly separate j_drive and c_short (an ill-conditioned rig, section 4.1)",
@@ -348,14 +349,15 @@ pub fn parametrise(
         ("c_short", e.c_short, ci.as_ref().map(|c| c.c_short_ci95), "Nm/rad"),
     ] {
         match ci {
-            Some([lo, hi]) if (hi - lo) / 2.0 > 0.5 * value => warnings.push(format!(
-                "{name} is not identifiable from these frequencies: its 95 % interval [{lo:.4}, {hi:.4}] {unit} is wider than ±50 % of {value:.4}"
+            Some([lo, hi]) if checks.unidentifiable(value, [lo, hi]) => warnings.push(format!(
+                "{name} is not identifiable from these frequencies: its 95 % interval [{lo:.4}, {hi:.4}] {unit} is wider than ±{:.0} % of {value:.4}",
+                100.0 * checks.max_relative_half_width
             )),
             None => warnings.push(format!("{name} has no confidence interval: the measurements do not bound it")),
             _ => {}
         }
     }
-    if e.sigma_scale > 3f64.sqrt() {
+    if checks.unexplained(&e) {
         warnings.push(format!(
             "{} does not explain all variants within their uncertainties (χ²/dof = {:.1}): \
              the intervals are widened by √(χ²/dof) = {:.2}; a residual this size points to an effect the model lacks",

@@ -390,6 +390,17 @@ pub struct R2 {
     pub hyy: [f64; 2],
 }
 
+impl R2 {
+    /// The lowest r² of the direct impedances' parts (H_xx and H_yy, real and imaginary).
+    pub fn lowest_direct(&self) -> f64 {
+        [self.hxx[0], self.hxx[1], self.hyy[0], self.hyy[1]].into_iter().fold(f64::INFINITY, f64::min)
+    }
+}
+
+/// The lowest r² of the direct impedances at which a fitted structure reproduces them
+/// (`rigtwin bearing` names a structure that does where the fitted one does not).
+pub const MIN_DIRECT_R2: f64 = 0.99;
+
 /// An identified element.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct BearingFit {

@@ -65,6 +65,46 @@ impl Default for ParametriseSettings {
     }
 }
 
+/// When an estimate's figures are worth a warning beside it (`rigtwin identify`).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct EstimateChecks {
+    /// Share of the Monte Carlo draws without a solution on the shuffle mode beyond which the
+    /// variants hardly separate j_drive and c_short (an ill-conditioned rig, section 4.1).
+    /// Default 0.05.
+    pub max_failed_share: f64,
+    /// Half-width of a 95 % interval, as a share of the value, beyond which the parameter is
+    /// not identifiable from the frequencies. Default 0.5.
+    pub max_relative_half_width: f64,
+    /// Widening √(χ²/dof) of the intervals beyond which the model does not explain the
+    /// variants within their uncertainties: √3 by default, χ²/dof = 3, which a model that
+    /// fits exceeds by chance with 8 % probability at one degree of freedom, 5 % at two, 3 % at
+    /// three.
+    pub max_sigma_scale: f64,
+}
+
+impl Default for EstimateChecks {
+    fn default() -> Self {
+        EstimateChecks { max_failed_share: 0.05, max_relative_half_width: 0.5, max_sigma_scale: 3f64.sqrt() }
+    }
+}
+
+impl EstimateChecks {
+    /// Whether the Monte Carlo draws `mc` show an ill-conditioned rig.
+    pub fn ill_conditioned(&self, mc: &MonteCarlo) -> bool {
+        mc.failed_fraction > self.max_failed_share
+    }
+
+    /// Whether `value` with the 95 % interval `[lo, hi]` is not identifiable.
+    pub fn unidentifiable(&self, value: f64, [lo, hi]: [f64; 2]) -> bool {
+        (hi - lo) / 2.0 > self.max_relative_half_width * value
+    }
+
+    /// Whether the model leaves more of the measurements than their uncertainties explain.
+    pub fn unexplained(&self, e: &Estimate) -> bool {
+        e.sigma_scale > self.max_sigma_scale
+    }
+}
+
 /// Most Monte Carlo draws a parametrisation takes: 100 000 resolve a 95 % interval's ends to
 /// about 0.1 % of the interval; more only cost memory and time.
 pub const MAX_MONTE_CARLO_SAMPLES: usize = 100_000;
