@@ -387,11 +387,10 @@ impl Instance {
 
     /// Drops each input's history before what its dead time still needs at the present time.
     fn forget_history(&mut self) {
-        for (j, p) in self.delay_param.iter().enumerate() {
-            if let Some(&i) = p.as_ref() {
-                if self.params[i] > 0.0 {
-                    self.delays[j].forget_before(self.time, self.params[i]);
-                }
+        for j in 0..self.delays.len() {
+            let tau = self.delay_s(j);
+            if tau > 0.0 {
+                self.delays[j].forget_before(self.time, tau);
             }
         }
     }

@@ -24,7 +24,6 @@ pub struct DrivePlant {
     dynamics: Stepper,
     x: DVector<f64>,
     delays: Vec<DelayLine>,
-    taus: Vec<f64>,
     t: f64,
     dt_s: f64,
     /// Per output: a state index (speed) or a coupling (force).
@@ -64,13 +63,11 @@ impl DrivePlant {
         for d in delays.iter_mut() {
             d.record(f64::NEG_INFINITY, 0.0);
         }
-        let taus = model.input_delays_s();
         let mut p = DrivePlant {
             forces: vec![0.0; dynamics.couplings()],
             dynamics,
             x,
             delays,
-            taus,
             t: 0.0,
             dt_s,
             y: vec![0.0; outputs.len()],
@@ -97,14 +94,14 @@ impl Plant for DrivePlant {
     }
     fn advance(&mut self, u: &[f64]) -> std::result::Result<(), String> {
         for (j, line) in self.delays.iter_mut().enumerate() {
-            if self.taus[j] > 0.0 {
+            if self.dynamics.dynamics.delay_s(j) > 0.0 {
                 line.record(self.t, u[j]);
             }
         }
         self.dynamics.step(&mut self.x, u, self.t, self.dt_s, &self.delays).map_err(|e| e.to_string())?;
         self.t += self.dt_s;
         for (j, line) in self.delays.iter_mut().enumerate() {
-            line.forget_before(self.t, self.taus[j]);
+            line.forget_before(self.t, self.dynamics.dynamics.delay_s(j));
         }
         self.read();
         Ok(())

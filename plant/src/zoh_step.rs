@@ -123,14 +123,11 @@ impl ZohCache {
         self.find_or_discretise(a, b, h, max_piece_s)
     }
 
-    /// [`ZohCache::index`] beyond the entry used last.
-    #[cold]
+    /// [`ZohCache::index`] beyond the entry used last (every piece of a step split by a dead
+    /// time).
     fn find_or_discretise(&mut self, a: &DMatrix<f64>, b: &DMatrix<f64>, h: f64, max_piece_s: f64) -> Result<usize> {
         // piece lengths from a dead time carry rounding: equal within 1e-12 is the same
         let same = |e: &ZohEntry| (e.h - h).abs() <= 1e-12 * h;
-        if self.entries.get(self.last).is_some_and(same) {
-            return Ok(self.last);
-        }
         let i = match self.entries.iter().position(same) {
             Some(i) => i,
             None => {
