@@ -490,20 +490,41 @@ pub fn diagnose(rec: DriveRecord, progress: &(dyn Fn(&str) + Sync)) -> Result<Dr
     }
     drop(declared_motion);
 
-    // Two stages. Screen: every effect's own parameters fitted with the declared inertias and
-    // stiffnesses held (1–2 parameters, few simulations each). Then the re-fit of everything
-    // (base + own) for `none`, `damping` and the SCREEN_KEEP effects the screen ranks best;
-    // the others keep their screened fit (reported with its own parameter count).
+    // Three stages. The declared model re-fitted (`none`: its inertias and stiffnesses to the
+    // least-squares minimum). Screen: every effect's own parameters fitted with the inertias and
+    // stiffnesses held (1–2 parameters, few simulations each) — held at their re-fitted values
+    // where that re-fit is plausible (a declared model a few per cent off would otherwise hide
+    // every effect behind its own misfit), else at the declared ones. Then the re-fit of
+    // everything (base + own) for `damping` and the SCREEN_KEEP effects the screen ranks best;
+    // the others keep their screened fit.
     let nbase = problem.nbase();
     let label = |c: Candidate| match c {
         Candidate::Effect(e) => format!("{} {}", c.name(), e.at().phrase(m0)),
         _ => c.name().to_string(),
     };
+    let declared_refit = {
+        let f = |x: &[f64]| problem.residual(Candidate::None, x);
+        let zero = vec![0.0; nbase];
+        let (x, cost) = if m0.effects.is_empty() {
+            lm::minimise_smooth(&f, &zero, super::torsional::DECLARED_REFIT_ITERATIONS, LM_REL_TOL)
+        } else {
+            lm::minimise_to(&f, &zero, 20, LM_REL_TOL)
+        };
+        progress(&label(Candidate::None));
+        (x, cost)
+    };
+    let held_base: Vec<f64> = match problem.build(Candidate::None, &declared_refit.0) {
+        Some(refit) if declared_refit.1.is_finite() && moved_declared(m0, &refit).is_empty() => {
+            declared_refit.0.clone()
+        }
+        _ => vec![0.0; nbase],
+    };
     let screen_one = |i: usize| -> (usize, Vec<f64>, f64) {
         let c = cands[i];
         let problem = &problem;
+        let held_base = &held_base;
         let own = |s: &[f64]| {
-            let mut x = vec![0.0; nbase];
+            let mut x = held_base.clone();
             x.extend_from_slice(s);
             problem.residual(c, &x)
         };
@@ -531,17 +552,22 @@ pub fn diagnose(rec: DriveRecord, progress: &(dyn Fn(&str) + Sync)) -> Result<Dr
             Some((s0, cost)) => (s0, cost),
             None => (vec![], f64::INFINITY),
         };
-        let mut x = vec![0.0; nbase];
+        let mut x = held_base.clone();
         x.extend(s);
         (i, x, cost)
     };
-    let screened: Vec<(usize, Vec<f64>, f64)> = super::on_two_workers(cands.len(), &screen_one);
+    // `none` is screened as the re-fit above
+    let screen_or_refit = |i: usize| match cands[i] {
+        Candidate::None => (i, declared_refit.0.clone(), declared_refit.1),
+        _ => screen_one(i),
+    };
+    let screened: Vec<(usize, Vec<f64>, f64)> = super::on_two_workers(cands.len(), &screen_or_refit);
     let mut ranked: Vec<&(usize, Vec<f64>, f64)> =
         screened.iter().filter(|s| !matches!(cands[s.0], Candidate::None | Candidate::Damping)).collect();
     ranked.sort_by(|a, b| a.2.total_cmp(&b.2));
     let refit: Vec<usize> = screened
         .iter()
-        .filter(|s| matches!(cands[s.0], Candidate::None | Candidate::Damping))
+        .filter(|s| matches!(cands[s.0], Candidate::Damping))
         .chain(ranked.iter().take(SCREEN_KEEP).copied())
         .map(|s| s.0)
         .collect();
@@ -551,12 +577,7 @@ pub fn diagnose(rec: DriveRecord, progress: &(dyn Fn(&str) + Sync)) -> Result<Dr
         let problem = &problem;
         let f = |x: &[f64]| problem.residual(c, x);
         let x0 = &screened.iter().find(|s| s.0 == i).expect("screened").1;
-        // the declared model's smooth cost to its minimum ([`lm::minimise_smooth`])
-        let (x, cost) = if matches!(c, Candidate::None) && m0.effects.is_empty() {
-            lm::minimise_smooth(&f, x0, super::torsional::DECLARED_REFIT_ITERATIONS, LM_REL_TOL)
-        } else {
-            lm::minimise_to(&f, x0, 20, LM_REL_TOL)
-        };
+        let (x, cost) = lm::minimise_to(&f, x0, 20, LM_REL_TOL);
         progress(&label(c));
         (i, x, cost)
     };
@@ -565,8 +586,11 @@ pub fn diagnose(rec: DriveRecord, progress: &(dyn Fn(&str) + Sync)) -> Result<Dr
         super::on_two_workers(refit.len(), &fit_one).into_iter().map(|(i, x, c)| (i, x.clone(), c, x.len())).collect();
     for s in &screened {
         if !refit.contains(&s.0) {
-            // held base: only the effect's own parameters were fitted
-            fits.push((s.0, s.1.clone(), s.2, s.1.len() - nbase));
+            // held base: only the effect's own parameters were fitted here, beside the declared
+            // model's re-fit where the base is held at it
+            let base_fitted = matches!(cands[s.0], Candidate::None) || held_base.iter().any(|&v| v != 0.0);
+            let own_fitted = if base_fitted { s.1.len() } else { s.1.len() - nbase };
+            fits.push((s.0, s.1.clone(), s.2, own_fitted));
         }
     }
 

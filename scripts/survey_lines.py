@@ -1,0 +1,459 @@
+"""A survey of `rigtwin diagnose` on `drive_test` records of random drive lines, made by a
+simulator that shares no code with rigtwin: lines of 2-8 bodies with 0-2 gear stages, coupled
+by spring-dampers, driven by one or two torques, integrated by scipy's adaptive LSODA; the
+effects modelled their own way (play as a dead zone whose damper acts only in contact, Coulomb
+friction with a Stribeck rise to a static friction 1.3 times the sliding one, a dead time read
+off the held torque, a first-order lag), single and in pairs, at random places; the measurement
+as a rig's (survey.py's encoder noise, drift and quantisation; noise on torques); the declared
+model a few per cent off the truth, as a drawing's values are. Excitations: a sweep, a
+multisine, steps, a PRBS and a closed loop (a PI speed controller on the first body's measured
+speed), about a set point near or far from zero.
+
+    python scripts/survey_lines.py --rigtwin target/release/rigtwin --seeds 0-34 --out /tmp/lines
+
+writes one `drive_test` bundle per seed, diagnoses it, and prints the verdict matrix, the
+parameter errors and run times as the markdown of docs/validation.md. Seeds 0-999 are the
+survey's tuning part; seeds from 1000 on are held out (run once after a change, never tuned on).
+"""
+
+import argparse
+import json
+import os
+import subprocess
+import sys
+import time
+from concurrent.futures import ProcessPoolExecutor
+
+import numpy as np
+from scipy.integrate import solve_ivp
+
+from survey import measured, parse_seeds
+
+DT = 1e-3
+DURATION_S = 10.0
+# what each seed's record holds, in turn: nothing, each effect alone, and pairs
+PLAN = ["none", "time_delay", "actuator_lag", "backlash", "coulomb_friction", "pair", "pair"]
+KINDS = ["time_delay", "actuator_lag", "backlash", "coulomb_friction"]
+# the parameter each effect is scored on (rigtwin's report key)
+SCORED = {"time_delay": "delay_s", "actuator_lag": "time_constant_s", "backlash": "backlash_rad",
+          "coulomb_friction": "friction_Nm"}
+EXCITATIONS = ["sweep", "multisine", "steps", "prbs", "closed_loop"]
+# the lowest and highest natural frequency a line may have, Hz: within what a 1 kHz record with
+# a 1-30 Hz excitation band shows
+MODES_HZ = (3.0, 150.0)
+# the quiet start of every record, s
+LEAD_IN_S = 0.2
+
+
+def line_of(rng):
+    """A random line: inertias, couplings (stiffness, damping, ratio), drags; its modes within
+    MODES_HZ (drawn again until they are)."""
+    while True:
+        n = int(rng.integers(2, 9))
+        inertia = np.exp(rng.uniform(np.log(2e-4), np.log(5e-2), n))
+        ratio = np.ones(n - 1)
+        stages = min(int(rng.integers(0, 3)), n - 1)
+        for i in rng.choice(n - 1, stages, replace=False):
+            ratio[i] = float(rng.choice([2.0, 3.0, 4.0, 5.0]))
+        stiffness, damping = np.zeros(n - 1), np.zeros(n - 1)
+        for i in range(n - 1):
+            # the coupling's own two-mass mode 8-80 Hz, damped at 1-5 % of critical
+            j_red = inertia[i] * ratio[i] ** 2 * inertia[i + 1] / (inertia[i] * ratio[i] ** 2 + inertia[i + 1])
+            f = np.exp(rng.uniform(np.log(8.0), np.log(80.0)))
+            stiffness[i] = (2 * np.pi * f) ** 2 * j_red
+            damping[i] = 2 * rng.uniform(0.01, 0.05) * np.sqrt(stiffness[i] * j_red)
+        drag = np.zeros(n)
+        tau = rng.uniform(0.5, 3.0)
+        drag[0] = inertia[0] / tau
+        drag[-1] = inertia[-1] / tau
+        line = dict(inertia=inertia, ratio=ratio, stiffness=stiffness, damping=damping, drag=drag)
+        hz = modes_hz(line)
+        if n == 1 or (hz.min() >= MODES_HZ[0] and hz.max() <= MODES_HZ[1]):
+            return line
+
+
+def elongations(line):
+    """E: twist_i = E[i] . q (q_i / r_i - q_(i+1))."""
+    n = len(line["inertia"])
+    e = np.zeros((n - 1, n))
+    for i in range(n - 1):
+        e[i, i] = 1.0 / line["ratio"][i]
+        e[i, i + 1] = -1.0
+    return e
+
+
+def modes_hz(line):
+    """The undamped natural frequencies other than the rigid-body mode, Hz."""
+    e = elongations(line)
+    k = e.T @ np.diag(line["stiffness"]) @ e
+    m = np.diag(line["inertia"])
+    w2 = np.sort(np.real(np.linalg.eigvals(np.linalg.solve(m, k))))
+    return np.sqrt(np.maximum(w2[1:], 0.0)) / (2 * np.pi)
+
+
+def torque_scale(line, j):
+    """How much a torque at body 0 is amplified by the gear stages before body j."""
+    return float(np.prod(line["ratio"][:j]))
+
+
+def truth_of(seed):
+    """The record's truth: the line, the effects (kind, place, size), the declared model, the
+    excitation and set point (all from the seed)."""
+    rng = np.random.default_rng(seed)
+    line = line_of(rng)
+    n = len(line["inertia"])
+    inputs = [0] + ([n - 1] if n > 1 and rng.random() < 0.4 else [])
+    # torque amplitude: the first body's speed about 5 rad/s at 1 Hz (the whole line reflected
+    # to it)
+    j_total = sum(line["inertia"][j] / torque_scale(line, j) ** 2 for j in range(n))
+    amplitude = float(5.0 * 2 * np.pi * j_total)
+    plan = PLAN[seed % len(PLAN)]
+    kinds = [plan] if plan != "pair" else list(rng.choice(KINDS, 2, replace=False))
+    effects = []
+    for kind in ([] if plan == "none" else kinds):
+        e = dict(effect=kind)
+        if kind == "time_delay":
+            e["input"] = int(rng.integers(len(inputs)))
+            e["size"] = float(np.exp(rng.uniform(np.log(0.001), np.log(0.015))))
+        elif kind == "actuator_lag":
+            e["input"] = int(rng.integers(len(inputs)))
+            e["size"] = float(np.exp(rng.uniform(np.log(0.002), np.log(0.02))))
+        elif kind == "backlash":
+            if n < 2:
+                continue
+            i = int(rng.integers(n - 1))
+            e["coupling"] = i
+            # total play 0.2-5 times the coupling's elastic twist under the excitation's torque
+            twist = amplitude * torque_scale(line, i + 1) / line["stiffness"][i]
+            e["size"] = float(twist * np.exp(rng.uniform(np.log(0.2), np.log(5.0))))
+        elif kind == "coulomb_friction":
+            j = int(rng.integers(n))
+            e["body"] = j
+            # 2-30 % of the excitation's torque as it reaches the body
+            e["size"] = float(amplitude * torque_scale(line, j) * np.exp(rng.uniform(np.log(0.02), np.log(0.3))))
+        effects.append(e)
+    near_zero = any(e["effect"] in ("backlash", "coulomb_friction") for e in effects)
+    set_point = float(rng.choice([0.0, 0.0, 0.1]) if near_zero else rng.choice([0.0, 0.5, 2.0])) * amplitude
+    outputs = [("speed", 0)] + ([("speed", n - 1)] if n > 1 else [])
+    if n > 2 and rng.random() < 0.5:
+        outputs.append(("speed", int(rng.integers(1, n - 1))))
+    if n > 1 and rng.random() < 0.5:
+        outputs.append(("coupling_torque", int(rng.integers(n - 1))))
+    # the declared model: the truth's inertias and stiffnesses each a few per cent off
+    declared = dict(inertia=line["inertia"] * np.exp(rng.normal(0, 0.03, n)),
+                    stiffness=line["stiffness"] * np.exp(rng.normal(0, 0.03, n - 1)))
+    return dict(seed=seed, plan=plan, line=line, inputs=inputs, effects=effects, amplitude=amplitude,
+                set_point_nm=set_point, outputs=outputs, declared=declared,
+                excitation=str(rng.choice(EXCITATIONS)), noise_seed=int(rng.integers(1 << 31)))
+
+
+def open_loop(kind, rng, n):
+    """An excitation of unit amplitude, held over each sample, after a quiet lead-in (the line
+    at its set point's steady state, where a record of a rig starts)."""
+    u = excitation_of(kind, rng, n)
+    u[: int(LEAD_IN_S / DT)] = 0.0
+    return u
+
+
+def excitation_of(kind, rng, n):
+    tt = np.arange(n) * DT
+    if kind == "sweep":
+        return np.sin(2 * np.pi * (1.0 * tt + 0.5 * 29.0 / DURATION_S * tt ** 2))
+    if kind == "multisine":
+        f = np.linspace(1.0, 30.0, 30)
+        u = sum(np.sin(2 * np.pi * fi * tt + p) for fi, p in zip(f, rng.uniform(0, 2 * np.pi, f.size)))
+        return u / np.max(np.abs(u))
+    if kind == "steps":
+        return np.repeat(rng.uniform(-1.0, 1.0, int(DURATION_S / 0.5)), int(0.5 / DT))[:n]
+    # PRBS (and the closed loop's reference): a new ±1 level every 20 ms with probability 1/2
+    flips = rng.random(int(DURATION_S / 0.02)) < 0.5
+    return np.repeat(np.cumprod(np.where(flips, -1.0, 1.0)), int(0.02 / DT))[:n]
+
+
+class Line:
+    """The truth's right-hand side: states q (n), w (n), one lagged torque per input."""
+
+    def __init__(self, t):
+        self.t = t
+        ln = t["line"]
+        self.n = len(ln["inertia"])
+        self.e = elongations(ln)
+        self.half = np.zeros(self.n - 1)
+        self.friction = np.zeros(self.n)
+        self.delay = np.zeros(len(t["inputs"]))
+        self.lag = np.zeros(len(t["inputs"]))
+        for e in t["effects"]:
+            if e["effect"] == "backlash":
+                self.half[e["coupling"]] = e["size"] / 2
+            elif e["effect"] == "coulomb_friction":
+                self.friction[e["body"]] = e["size"]
+            elif e["effect"] == "time_delay":
+                self.delay[e["input"]] = e["size"]
+            else:
+                self.lag[e["input"]] = e["size"]
+        self.u = None  # commanded torques, samples x inputs, filled as the record runs
+
+    def held(self, time, k):
+        i = int(np.floor((time - self.delay[k]) / DT + 1e-9))
+        return self.u[min(max(i, 0), self.u.shape[0] - 1), k]
+
+    def coupling_torques(self, q, w):
+        ln = self.t["line"]
+        s, sd = self.e @ q, self.e @ w
+        beyond = np.where(s > self.half, s - self.half, np.where(s < -self.half, s + self.half, 0.0))
+        contact = np.abs(s) > self.half
+        return np.where(contact, ln["stiffness"] * beyond + ln["damping"] * sd, 0.0)
+
+    def rhs(self, time, x):
+        n, ln = self.n, self.t["line"]
+        q, w, z = x[:n], x[n:2 * n], x[2 * n:]
+        force = -ln["drag"] * w
+        # Stribeck: 1.3 T_c near rest falling to T_c above 0.05 rad/s, the sign smoothed over 5 mrad/s
+        force -= np.tanh(w / 0.005) * self.friction * (1.0 + 0.3 * np.exp(-(w / 0.05) ** 2))
+        if n > 1:
+            force -= self.e.T @ self.coupling_torques(q, w)
+        dz = np.zeros(len(z))
+        for k, body in enumerate(self.t["inputs"]):
+            held = self.held(time, k)
+            if self.lag[k] > 0:
+                dz[k] = (held - z[k]) / self.lag[k]
+                force[body] += z[k]
+            else:
+                force[body] += held
+        return np.concatenate([w, force / ln["inertia"], dz])
+
+    def start(self, torques):
+        """Rest or steady rotation under constant `torques` (one per input), friction aside."""
+        n, ln = self.n, self.t["line"]
+        scale = np.array([1.0 / torque_scale(ln, j) for j in range(n)])  # speed of j per speed of 0
+        t_in = np.zeros(n)
+        for k, body in enumerate(self.t["inputs"]):
+            t_in[body] += torques[k]
+        w0 = (t_in @ scale) / (ln["drag"] @ scale ** 2)
+        w = w0 * scale
+        # force balance body by body: the coupling torques, then the twists
+        q = np.zeros(n)
+        carried = 0.0
+        for j in range(n - 1):
+            carried = ln["ratio"][j] * (carried + t_in[j] - ln["drag"][j] * w[j])
+            s = carried / ln["stiffness"][j] + np.sign(carried) * self.half[j]
+            q[j + 1] = q[j] / ln["ratio"][j] - s
+        return np.concatenate([q, w, torques])
+
+
+def simulate(t, rng):
+    """The inputs' commanded torques (samples x inputs) and the outputs' true values."""
+    steps = int(DURATION_S / DT)
+    line = Line(t)
+    a, sp = t["amplitude"], t["set_point_nm"]
+    ninputs = len(t["inputs"])
+    u = np.zeros((steps, ninputs))
+    # the second input (a load machine) holds the set point against the first and is excited
+    # at half the amplitude
+    gear = torque_scale(t["line"], line.n - 1)
+    second = [-sp * gear] if ninputs > 1 else []
+    options = dict(method="LSODA", max_step=DT / 2, rtol=1e-7, atol=1e-10)
+    x = line.start(np.array([sp] + second))
+    if t["excitation"] != "closed_loop":
+        u[:, 0] = sp + a * open_loop(t["excitation"], rng, steps)
+        if ninputs > 1:
+            u[:, 1] = second[0] + 0.5 * a * gear * open_loop("multisine", rng, steps)
+        line.u = u
+        sol = solve_ivp(line.rhs, (0.0, steps * DT), x, t_eval=np.arange(steps) * DT, **options)
+        if not sol.success:
+            raise RuntimeError(f"seed {t['seed']}: {sol.message}")
+        states = sol.y.T
+    else:
+        # a PI speed loop on the first body's measured speed (bandwidth 5 Hz on the line's
+        # inertia reflected to it), its reference a PRBS of ±2 rad/s about the set point's speed
+        j_total = a / (5.0 * 2 * np.pi)
+        kp, ki = j_total * 2 * np.pi * 5.0, j_total * (2 * np.pi * 5.0) * (2 * np.pi * 1.0)
+        reference = x[line.n] + 2.0 * open_loop("prbs", rng, steps)
+        noise = measured(np.zeros(steps), rng)
+        load = (second[0] + 0.5 * a * gear * open_loop("multisine", rng, steps)) if ninputs > 1 else None
+        states = np.zeros((steps, x.size))
+        integral = 0.0
+        line.u = u
+        for k in range(steps):
+            states[k] = x
+            error = reference[k] - (x[line.n] + noise[k])
+            integral += error * DT
+            u[k, 0] = np.clip(sp + kp * error + ki * integral, sp - 3 * a, sp + 3 * a)
+            if load is not None:
+                u[k, 1] = load[k]
+            sol = solve_ivp(line.rhs, (k * DT, (k + 1) * DT), x, **options)
+            if not sol.success:
+                raise RuntimeError(f"seed {t['seed']}: {sol.message}")
+            x = sol.y[:, -1]
+    n = line.n
+    outputs = []
+    for quantity, at in t["outputs"]:
+        if quantity == "speed":
+            outputs.append(states[:, n + at])
+        else:
+            torques = np.array([line.coupling_torques(s[:n], s[n:2 * n]) for s in states])
+            outputs.append(torques[:, at])
+    return u, outputs
+
+
+def write_bundle(folder, t):
+    rng = np.random.default_rng(t["noise_seed"])
+    u, outputs = simulate(t, rng)
+    steps = u.shape[0]
+    name = f"line_{t['seed']:04d}"
+    columns = {"time_s": np.arange(steps) * DT}
+    # a torque sensor's noise: 0.2 % of the excitation's amplitude
+    noise = 0.002 * t["amplitude"]
+    for k in range(u.shape[1]):
+        columns[f"torque_in{k + 1}_Nm"] = u[:, k] + rng.normal(0, noise, steps)
+    for (quantity, at), y in zip(t["outputs"], outputs):
+        if quantity == "speed":
+            columns[f"speed_b{at + 1}_radps"] = measured(y, rng)
+        else:
+            columns[f"torque_c{at + 1}_Nm"] = y + rng.normal(0, noise, steps)
+    np.savetxt(os.path.join(folder, name + ".csv"), np.column_stack(list(columns.values())), delimiter=",",
+               header=",".join(columns), comments="", fmt="%.9g")
+    ln, dec = t["line"], t["declared"]
+    n = len(ln["inertia"])
+    lines = ['kind = "drive_test"', f'data = "{name}.csv"', 'domain = "rotational"', "", "[model]", "bodies = ["]
+    for j in range(n):
+        lines.append(f'  {{ name = "b{j + 1}", inertia = {dec["inertia"][j]:.6g}, drag = {ln["drag"][j]:.6g} }},')
+    lines += ["]", "couplings = ["]
+    for i in range(n - 1):
+        lines.append(f'  {{ stiffness = {dec["stiffness"][i]:.6g}, damping = {ln["damping"][i]:.6g}, '
+                     f'ratio = {ln["ratio"][i]:g} }},')
+    lines.append("]")
+    for k, body in enumerate(t["inputs"]):
+        lines += ["", "[[inputs]]", f'column = "torque_in{k + 1}_Nm"', f'body = "b{body + 1}"']
+    for quantity, at in t["outputs"]:
+        if quantity == "speed":
+            lines += ["", "[[outputs]]", f'column = "speed_b{at + 1}_radps"', f'body = "b{at + 1}"',
+                      'quantity = "speed"']
+        else:
+            lines += ["", "[[outputs]]", f'column = "torque_c{at + 1}_Nm"', f"coupling = {at + 1}",
+                      'quantity = "coupling_torque"']
+    bundle = os.path.join(folder, name + ".toml")
+    with open(bundle, "w") as f:
+        f.write("\n".join(lines) + "\n")
+    return bundle
+
+
+def place(e):
+    """Where an effect of the truth acts, in rigtwin's words ("body b2", "coupling 1", "input 2")."""
+    if "body" in e:
+        return f"body b{e['body'] + 1}"
+    if "coupling" in e:
+        return f"coupling {e['coupling'] + 1}"
+    return f"input {e['input'] + 1}"
+
+
+def found_effects(report):
+    """The report's effects as (name, place): the drive engine's one `effect`, or `effects`."""
+    if "effects" in report:
+        return sorted((e["effect"], e.get("at")) for e in report["effects"])
+    if report.get("effect") in (None, "none", "damping"):
+        return []
+    return [(report["effect"], report.get("at"))]
+
+
+def score(t, report):
+    """'right', 'not explained' (an honest miss) or 'wrong'; where right with one effect, its
+    size's relative error and whether its 95 % interval holds the truth."""
+    verdict = report.get("verdict")
+    if verdict == "not_explained":
+        return "not explained", None, None
+    truth = sorted((e["effect"], place(e)) for e in t["effects"])
+    if not truth:
+        return ("right" if verdict == "declared_model_fits" else "wrong"), None, None
+    if verdict != "explained" or found_effects(report) != truth:
+        return "wrong", None, None
+    if len(t["effects"]) != 1:
+        return "right", None, None
+    e = t["effects"][0]
+    key = SCORED[e["effect"]]
+    params = report.get("parameters") or report["effects"][0]["parameters"]
+    value = params.get(key)
+    if value is None:
+        return "wrong", None, None
+    interval = (report.get("intervals") or {}).get(key)
+    covered = None if interval is None or None in interval else bool(interval[0] <= e["size"] <= interval[1])
+    return "right", abs(value - e["size"]) / e["size"], covered
+
+
+def describe(t):
+    return "+".join(f"{e['effect']}@{place(e)}" for e in t["effects"]) or "none"
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--rigtwin", required=True)
+    ap.add_argument("--seeds", default="0-34")
+    ap.add_argument("--out", required=True)
+    ap.add_argument("--jobs", type=int, default=os.cpu_count() or 1, help="processes simulating the records")
+    ap.add_argument("--summary", help="write the counts (right, not explained, wrong, records) as JSON here")
+    ap.add_argument("--reuse", action="store_true", help="diagnose the records already in --out (written by an "
+                    "earlier run with the same seeds) instead of simulating them again")
+    args = ap.parse_args()
+    os.makedirs(args.out, exist_ok=True)
+    seeds = parse_seeds(args.seeds)
+    truths = [truth_of(seed) for seed in seeds]
+    if args.reuse:
+        bundles = [os.path.join(args.out, f"line_{seed:04d}.toml") for seed in seeds]
+    else:
+        with ProcessPoolExecutor(max_workers=args.jobs) as pool:
+            bundles = list(pool.map(write_bundle, [args.out] * len(truths), truths))
+    rows = []
+    for seed, t, bundle in zip(seeds, truths, bundles):
+        out = os.path.join(args.out, f"line_{seed:04d}.json")
+        start = time.time()
+        p = subprocess.run([args.rigtwin, "diagnose", bundle, "--json", out], capture_output=True, text=True)
+        elapsed = time.time() - start
+        if p.returncode not in (0, 3) or not os.path.exists(out):
+            rows.append((t, "error", None, elapsed, None))
+            print(f"seed {seed}: rigtwin failed ({p.returncode}): {p.stderr.strip()[:300]}", file=sys.stderr)
+            continue
+        report = json.load(open(out))
+        outcome, err, covered = score(t, report)
+        rows.append((t, outcome, err, elapsed, covered))
+        found = "+".join(f"{e}@{a}" for e, a in found_effects(report)) or "none"
+        print(f"seed {seed:4d} {len(t['line']['inertia'])} bodies {int(sum(t['line']['ratio'] > 1))} gears "
+              f"{describe(t):45s} {t['excitation']:11s} -> {report.get('verdict'):20s} {found:40s} {outcome}"
+              + (f" ({100 * err:.0f} %{', interval misses' if covered is False else ''})" if err is not None else "")
+              + f" {elapsed:.1f} s", file=sys.stderr)
+    print(table(rows))
+    if args.summary:
+        with open(args.summary, "w") as f:
+            json.dump({"records": len(rows),
+                       "right": sum(1 for r in rows if r[1] == "right"),
+                       "not_explained": sum(1 for r in rows if r[1] == "not explained"),
+                       "wrong": sum(1 for r in rows if r[1] in ("wrong", "error")),
+                       "intervals": sum(1 for r in rows if r[4] is not None),
+                       "intervals_covering": sum(1 for r in rows if r[4])}, f)
+
+
+def table(rows):
+    lines = ["| truth | records | right | not explained | wrong | parameter error of the right: median / max "
+             "| 95 % interval holds the truth | run time, median |",
+             "| --- | --- | --- | --- | --- | --- | --- | --- |"]
+    groups = [("none", lambda t: not t["effects"])]
+    groups += [(k, lambda t, k=k: [e["effect"] for e in t["effects"]] == [k]) for k in KINDS]
+    groups.append(("pairs", lambda t: len(t["effects"]) == 2))
+    for name, member in groups:
+        r = [row for row in rows if member(row[0])]
+        if not r:
+            continue
+        count = lambda o: sum(1 for row in r if row[1] == o)
+        errs = [row[2] for row in r if row[2] is not None]
+        err = f"{100 * np.median(errs):.1f} % / {100 * max(errs):.0f} %" if errs else "–"
+        cover = [row[4] for row in r if row[4] is not None]
+        cov = f"{sum(cover)} of {len(cover)}" if cover else "–"
+        lines.append(f"| {name} | {len(r)} | {count('right')} | {count('not explained')} | "
+                     f"{count('wrong') + count('error')} | {err} | {cov} | {np.median([row[3] for row in r]):.1f} s |")
+    lines.append(f"| all | {len(rows)} | {sum(1 for r in rows if r[1] == 'right')} | "
+                 f"{sum(1 for r in rows if r[1] == 'not explained')} | "
+                 f"{sum(1 for r in rows if r[1] in ('wrong', 'error'))} | | | |")
+    return "\n".join(lines)
+
+
+if __name__ == "__main__":
+    main()
