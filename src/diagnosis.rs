@@ -706,6 +706,7 @@ fn drive(file: &Path, progress: &(dyn Fn(&str) + Sync)) -> anyhow::Result<Diagno
     if !d.moved_declared.is_empty() {
         notes.push(format!("the answer's re-fit moved the declared mechanics: {}", d.moved_declared.join("; ")));
     }
+    notes.extend(d.search_notes.iter().cloned());
     for e in &d.model.effects {
         if let plant::Effect::CoulombFriction(plant::CoulombFriction { smoothing_speed, .. }) = e {
             notes.push(format!(
@@ -723,6 +724,14 @@ fn drive(file: &Path, progress: &(dyn Fn(&str) + Sync)) -> anyhow::Result<Diagno
     let stride = t.time_s.len().div_ceil(PLOT_POINTS).max(1);
     let pts = |y: &[f64]| t.time_s.iter().zip(y).step_by(stride).map(|(&a, &b)| (a, b)).collect::<Vec<_>>();
     let label = match &d.at {
+        _ if d.effects.len() > 1 => format!(
+            "with {}",
+            d.effects
+                .iter()
+                .map(|e| format!("{} at {}", e.effect, e.at.as_deref().unwrap_or("?")))
+                .collect::<Vec<_>>()
+                .join(" and ")
+        ),
         Some(a) => format!("with {} at {a}", d.effect),
         None => format!("with {}", d.effect),
     };
@@ -818,7 +827,7 @@ fn drive(file: &Path, progress: &(dyn Fn(&str) + Sync)) -> anyhow::Result<Diagno
             intervals: d.intervals.clone(),
             held_out: Some(d.held_out.clone()),
             equivalents: Vec::new(),
-            effects: vec![],
+            effects: d.effects.clone(),
             path: vec![],
             search: vec![],
             error_before: d.error_before,

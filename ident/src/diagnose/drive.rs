@@ -18,6 +18,7 @@ use plant::drive::{Dimension, DriveModel, Effect, Element, Limit, Scale, Shows, 
 use plant::{Domain, Quantity};
 use serde::Serialize;
 
+use super::torsional::{FoundEffect, WHITE_RESIDUAL_LAG1};
 use super::verdict::{declared_moved, DeclaredSettings, Refitted};
 use super::{
     bic, effective_count, lag1_autocorrelation, lm, rms, CandidateScore, HeldOut, FRICTION_SMOOTHING_FRACTION,
@@ -61,6 +62,42 @@ fn refine_profile(start: (Vec<f64>, f64), step: f64, cost_of: &dyn Fn(&Vec<f64>)
     best
 }
 
+/// The screen of a candidate's last effect's size with everything else held: the best of the
+/// `starts` (its grid), refined where the effect's profile is rough (a play's: each impact
+/// shifts with it), then [`SCREEN_ITERATIONS`] of LM. (size parameters, cost); an empty size
+/// for a candidate without one.
+fn screen_size(
+    c: Candidate,
+    starts: Vec<Vec<f64>>,
+    cost_of: &dyn Fn(&Vec<f64>) -> f64,
+    own: &(dyn Fn(&[f64]) -> Option<Vec<f64>> + Sync),
+) -> (Vec<f64>, f64) {
+    let best = starts
+        .into_iter()
+        .map(|s| {
+            let cost = cost_of(&s);
+            (s, cost)
+        })
+        .filter(|g| g.1.is_finite())
+        .min_by(|p, q| p.1.total_cmp(&q.1));
+    let best = match (c.effects().last(), best) {
+        (Some(e), Some(start)) if e.search().rough => {
+            let (lo, hi, k) = e.search().grid;
+            Some(refine_profile(start, (hi / lo).ln() / (k - 1) as f64, cost_of))
+        }
+        (_, best) => best,
+    };
+    match best {
+        Some((s0, _)) if !s0.is_empty() => lm::minimise_to(own, &s0, SCREEN_ITERATIONS, LM_REL_TOL),
+        Some((s0, cost)) => (s0, cost),
+        None => (vec![], f64::INFINITY),
+    }
+}
+
+/// A candidate's score, its model, the lag-1 autocorrelation of its residual, the candidate
+/// and its parameters.
+type Scored = (CandidateScore, DriveModel, f64, Candidate, Vec<f64>);
+
 /// A declared inertia or stiffness may be re-fitted within this factor of its declared value.
 pub const MAX_REFIT_FACTOR: f64 = 100.0;
 
@@ -74,6 +111,9 @@ pub enum Candidate {
     /// An effect of the vocabulary ([`Effect::vocabulary`]) at its element, its size searched
     /// as the effect says ([`plant::drive::Search`]).
     Effect(Effect),
+    /// Two effects of different kinds at once (the forward selection's second step: the best
+    /// single effect, and another added to it).
+    Pair(Effect, Effect),
 }
 
 impl Candidate {
@@ -82,7 +122,16 @@ impl Candidate {
         match self {
             Candidate::None => "none",
             Candidate::Damping => "damping",
-            Candidate::Effect(e) => e.name(),
+            Candidate::Effect(e) | Candidate::Pair(e, _) => e.name(),
+        }
+    }
+
+    /// Its effects, in the order their sizes follow the base parameters.
+    fn effects(self) -> Vec<Effect> {
+        match self {
+            Candidate::None | Candidate::Damping => vec![],
+            Candidate::Effect(e) => vec![e],
+            Candidate::Pair(a, b) => vec![a, b],
         }
     }
 }
@@ -118,10 +167,14 @@ pub struct DriveTraces {
 /// The diagnosis of a drive record.
 #[derive(Debug, Clone, Serialize)]
 pub struct DriveDiagnosis {
-    /// The chosen effect (vocabulary name).
+    /// The chosen effect (vocabulary name; the first of two).
     pub effect: String,
     /// Where it acts ("body load", "coupling 2", "input 1"), if at an element.
     pub at: Option<String>,
+    /// Every effect found (none for `none` and `damping`), each with its own parameters.
+    pub effects: Vec<FoundEffect>,
+    /// Where the search was narrower than the vocabulary, in words.
+    pub search_notes: Vec<String>,
     /// Its parameters and the re-fitted declared ones, SI, keys with units.
     pub parameters: BTreeMap<String, f64>,
     /// 95 % intervals of `parameters` over the held-out folds ([`super::jackknife_interval`]
@@ -194,8 +247,6 @@ impl Problem<'_> {
             c.stiffness *= s.exp();
         }
         let extra = &x[self.nbase()..];
-        let dt = self.rec.dt_s;
-        let record_s = dt * self.rec.inputs[0].len() as f64;
         match c {
             Candidate::None => {}
             Candidate::Damping => {
@@ -206,36 +257,47 @@ impl Problem<'_> {
                     c.damping = self.damping_ref[i] * extra[n + i].exp();
                 }
             }
-            Candidate::Effect(e) => {
-                let search = e.search();
-                let i = e.at().index();
-                let scale = match search.scale {
-                    Scale::BodyForce => self.body_force[i],
-                    Scale::CouplingTwist => self.twist_rms[i],
-                    Scale::SampleTime => dt,
-                };
-                let size = scale * extra[0].exp();
-                let beyond = match search.limit {
-                    Limit::Unbounded => false,
-                    Limit::TimesScale(k) => size > k * scale,
-                    Limit::RecordShare(share) => size > share * record_s,
-                };
-                if beyond {
-                    return None;
+            Candidate::Effect(_) | Candidate::Pair(..) => {
+                for (e, &log_size) in c.effects().into_iter().zip(extra) {
+                    let sized = self.sized(e, log_size, &m)?;
+                    m.effects.push(sized);
                 }
-                let body = match e.at() {
-                    Element::Body(b) => Some(b),
-                    _ => None,
-                };
-                let context = SizeContext {
-                    smoothing_speed: body.map_or(0.0, |b| self.smoothing[b]),
-                    inertia: body.map_or(1.0, |b| m.line.bodies[b].inertia),
-                    fastest_rate: self.rate,
-                };
-                m.effects.push(e.of_size(size, &context));
             }
         }
         Some(m)
+    }
+
+    /// Effect `e` of size scale·exp(`log_size`) in model `m` (its friction's smoothing from the
+    /// body's inertia there); `None` beyond the size the effect allows.
+    fn sized(&self, e: Effect, log_size: f64, m: &DriveModel) -> Option<Effect> {
+        let search = e.search();
+        let i = e.at().index();
+        let dt = self.rec.dt_s;
+        let record_s = dt * self.rec.inputs[0].len() as f64;
+        let scale = match search.scale {
+            Scale::BodyForce => self.body_force[i],
+            Scale::CouplingTwist => self.twist_rms[i],
+            Scale::SampleTime => dt,
+        };
+        let size = scale * log_size.exp();
+        let beyond = match search.limit {
+            Limit::Unbounded => false,
+            Limit::TimesScale(k) => size > k * scale,
+            Limit::RecordShare(share) => size > share * record_s,
+        };
+        if beyond {
+            return None;
+        }
+        let body = match e.at() {
+            Element::Body(b) => Some(b),
+            _ => None,
+        };
+        let context = SizeContext {
+            smoothing_speed: body.map_or(0.0, |b| self.smoothing[b]),
+            inertia: body.map_or(1.0, |b| m.line.bodies[b].inertia),
+            fastest_rate: self.rate,
+        };
+        Some(e.of_size(size, &context))
     }
 
     /// The model's outputs, high-passed as the measurement is.
@@ -274,7 +336,7 @@ impl Problem<'_> {
         match c {
             Candidate::None => vec![vec![]],
             Candidate::Damping => vec![vec![0.0; n + self.rec.model.line.couplings.len()]],
-            Candidate::Effect(e) => {
+            Candidate::Effect(e) | Candidate::Pair(_, e) => {
                 let (lo, hi, k) = e.search().grid;
                 grid(lo, hi, k)
             }
@@ -320,7 +382,8 @@ impl Problem<'_> {
                 b.insert(format!("damping_coupling{}_{d_unit}", i + 1), c.damping);
             }
         }
-        if let Some(e) = m.effects.last().filter(|_| matches!(c, Candidate::Effect(_))) {
+        let own = c.effects().len();
+        for e in &m.effects[m.effects.len() - own..] {
             for (k, v) in e.parameters(m) {
                 b.insert(k, v);
             }
@@ -499,8 +562,8 @@ pub fn diagnose(rec: DriveRecord, progress: &(dyn Fn(&str) + Sync)) -> Result<Dr
     // the others keep their screened fit.
     let nbase = problem.nbase();
     let label = |c: Candidate| match c {
-        Candidate::Effect(e) => format!("{} {}", c.name(), e.at().phrase(m0)),
-        _ => c.name().to_string(),
+        Candidate::None | Candidate::Damping => c.name().to_string(),
+        _ => c.effects().iter().map(|e| format!("{} {}", e.name(), e.at().phrase(m0))).collect::<Vec<_>>().join(" + "),
     };
     let declared_refit = {
         let f = |x: &[f64]| problem.residual(Candidate::None, x);
@@ -529,29 +592,7 @@ pub fn diagnose(rec: DriveRecord, progress: &(dyn Fn(&str) + Sync)) -> Result<Dr
             problem.residual(c, &x)
         };
         let cost_of = |s: &Vec<f64>| own(s).map_or(f64::INFINITY, |r| r.iter().map(|v| v * v).sum::<f64>());
-        let best = problem
-            .starts(c)
-            .into_iter()
-            .map(|s| {
-                let cost = cost_of(&s);
-                (s, cost)
-            })
-            .filter(|g| g.1.is_finite())
-            .min_by(|p, q| p.1.total_cmp(&q.1));
-        // a play's error over its size is rough (each impact shifts with it): the coarse
-        // profile's best point is refined on finer grids around it before the local fit
-        let best = match (c, best) {
-            (Candidate::Effect(e), Some(start)) if e.search().rough => {
-                let (lo, hi, k) = e.search().grid;
-                Some(refine_profile(start, (hi / lo).ln() / (k - 1) as f64, &cost_of))
-            }
-            (_, best) => best,
-        };
-        let (s, cost) = match best {
-            Some((s0, _)) if !s0.is_empty() => lm::minimise_to(&own, &s0, SCREEN_ITERATIONS, LM_REL_TOL),
-            Some((s0, cost)) => (s0, cost),
-            None => (vec![], f64::INFINITY),
-        };
+        let (s, cost) = screen_size(c, problem.starts(c), &cost_of, &own);
         let mut x = held_base.clone();
         x.extend(s);
         (i, x, cost)
@@ -594,34 +635,31 @@ pub fn diagnose(rec: DriveRecord, progress: &(dyn Fn(&str) + Sync)) -> Result<Dr
         }
     }
 
-    let norm2 = 1.0; // residuals are already normalised
-                     // (score, model, lag-1 autocorrelation of its residual, candidate, parameters)
-    let mut scored: Vec<(CandidateScore, DriveModel, f64, Candidate, Vec<f64>)> = Vec::new();
-    for (i, x, cost, fitted) in fits {
+    // (score, model, lag-1 autocorrelation of its residual, candidate, parameters); residuals
+    // are already normalised
+    let score_fit = |c: Candidate, x: Vec<f64>, cost: f64, fitted: usize| -> Option<Scored> {
         if !cost.is_finite() {
-            continue;
+            return None;
         }
-        let c = cands[i];
-        let Some(m) = problem.build(c, &x) else { continue };
+        let m = problem.build(c, &x)?;
         let rho = problem.simulate(&m).map_or(0.0, |s| lag1_autocorrelation(&problem.residual_of(&s)));
-        let at = m.effects.last().filter(|_| matches!(c, Candidate::Effect(_))).map(|e| e.element(&m));
-        scored.push((
-            CandidateScore {
-                effect: c.name().to_string(),
-                at,
-                parameters: problem.report(c, &m),
-                error_after: cost.sqrt(),
-                score: bic(cost * norm2, nres, n_eff, fitted),
-                fitted_parameters: fitted,
-                implausible: false,
-                implausible_because: Vec::new(),
-            },
-            m,
-            rho,
-            c,
-            x,
-        ));
-    }
+        let own = c.effects();
+        let effect = own.iter().map(|e| e.name()).collect::<Vec<_>>().join(" + ");
+        let at = (!own.is_empty()).then(|| own.iter().map(|e| e.element(&m)).collect::<Vec<_>>().join(" + "));
+        let score = CandidateScore {
+            effect: if own.is_empty() { c.name().to_string() } else { effect },
+            at,
+            parameters: problem.report(c, &m),
+            error_after: cost.sqrt(),
+            score: bic(cost, nres, n_eff, fitted),
+            fitted_parameters: fitted,
+            implausible: false,
+            implausible_because: Vec::new(),
+        };
+        Some((score, m, rho, c, x))
+    };
+    let mut scored: Vec<Scored> =
+        fits.into_iter().filter_map(|(i, x, cost, fitted)| score_fit(cands[i], x, cost, fitted)).collect();
     let none = scored
         .iter()
         .position(|s| s.0.effect == "none")
@@ -633,6 +671,67 @@ pub fn diagnose(rec: DriveRecord, progress: &(dyn Fn(&str) + Sync)) -> Result<Dr
         // judged: see `moved_declared`)
         if s.0.score < scored[best].0.score && s.0.error_after < 0.9 * scored[none].0.error_after {
             best = i;
+        }
+    }
+    let mut search_notes = Vec::new();
+    let structured = scored[best].2.abs() >= WHITE_RESIDUAL_LAG1;
+    if let (Candidate::Effect(first), true) = (scored[best].3, structured) {
+        if first.is_nonlinear() {
+            search_notes.push(format!(
+                "no second effect was searched for beside {} (with it in the model every simulation takes its fine steps: minutes per record)",
+                label(scored[best].3)
+            ));
+        }
+    }
+    let second_step = match scored[best].3 {
+        Candidate::Effect(first) if structured && !first.is_nonlinear() => Some(first),
+        _ => None,
+    };
+    if let Some(first) = second_step {
+        // forward selection, second step, where the single effect leaves a residual structured
+        // enough that another could beat it clearly (the torsional engine's rule) and is not a
+        // friction or a play: every effect of another kind, at every element where it can act,
+        // added to the best single one (its own size screened with the rest held, the
+        // SCREEN_KEEP best re-fitted with everything); a pair must beat the single effect as
+        // that beat the declared model
+        let x1 = scored[best].4.clone();
+        let seconds: Vec<Effect> = cands
+            .iter()
+            .filter_map(|c| match *c {
+                Candidate::Effect(e) if e.name() != first.name() => Some(e),
+                _ => None,
+            })
+            .collect();
+        let screen_second = |k: usize| -> (usize, Vec<f64>, f64) {
+            let c = Candidate::Pair(first, seconds[k]);
+            let x1 = &x1;
+            let own = |s: &[f64]| problem.residual(c, &[x1.as_slice(), s].concat());
+            let cost_of = |s: &Vec<f64>| own(s).map_or(f64::INFINITY, |r| r.iter().map(|v| v * v).sum::<f64>());
+            let (s, cost) = screen_size(c, problem.starts(c), &cost_of, &own);
+            (k, [x1.as_slice(), &s].concat(), cost)
+        };
+        let mut screened2 = super::on_two_workers(seconds.len(), &screen_second);
+        screened2.sort_by(|a, b| a.2.total_cmp(&b.2));
+        screened2.truncate(SCREEN_KEEP);
+        let fit_pair = |k: usize| -> (usize, Vec<f64>, f64) {
+            let (j, x0, _) = &screened2[k];
+            let c = Candidate::Pair(first, seconds[*j]);
+            let (x, cost) = lm::minimise_to(&|x: &[f64]| problem.residual(c, x), x0, 20, LM_REL_TOL);
+            progress(&label(c));
+            (*j, x, cost)
+        };
+        let single = best;
+        for (j, x, cost) in super::on_two_workers(screened2.len(), &fit_pair) {
+            let fitted = x.len();
+            if let Some(entry) = score_fit(Candidate::Pair(first, seconds[j]), x, cost, fitted) {
+                scored.push(entry);
+                let i = scored.len() - 1;
+                if scored[i].0.score < scored[best].0.score
+                    && scored[i].0.error_after < 0.9 * scored[single].0.error_after
+                {
+                    best = i;
+                }
+            }
         }
     }
     let (chosen, model, rho, chosen_candidate, chosen_x) = scored[best].clone();
@@ -681,11 +780,34 @@ pub fn diagnose(rec: DriveRecord, progress: &(dyn Fn(&str) + Sync)) -> Result<Dr
         before,
         after,
     };
+    // each effect found, with what it explains: the error without it (the other of a pair
+    // alone, as the first step fitted it; the re-fitted declared model for a single effect)
+    let own = chosen_candidate.effects();
+    let error_alone = |e: Effect| scored.iter().find(|s| s.3 == Candidate::Effect(e)).map(|s| s.0.error_after);
+    let effects: Vec<FoundEffect> = model.effects[model.effects.len() - own.len()..]
+        .iter()
+        .zip(&own)
+        .map(|(sized, placed)| {
+            let parameters: BTreeMap<String, f64> = sized.parameters(&model).into_iter().collect();
+            let intervals = parameters.keys().filter_map(|k| intervals.get(k).map(|v| (k.clone(), *v))).collect();
+            let other = own.iter().find(|o| *o != placed).copied();
+            let error_without = other.and_then(error_alone).unwrap_or(scored[none].0.error_after);
+            FoundEffect {
+                effect: sized.name().into(),
+                at: Some(sized.element(&model)),
+                parameters,
+                intervals,
+                error_without,
+            }
+        })
+        .collect();
     let mut candidates: Vec<CandidateScore> = scored.into_iter().map(|s| s.0).collect();
     candidates.sort_by(|a, b| a.score.total_cmp(&b.score));
     Ok(DriveDiagnosis {
-        effect: chosen.effect,
-        at: chosen.at,
+        effect: chosen_candidate.name().to_string(),
+        at: effects.first().and_then(|e| e.at.clone()),
+        effects,
+        search_notes,
         parameters: chosen.parameters,
         intervals,
         held_out: check.held_out,
