@@ -224,6 +224,18 @@ def score(t, report):
     return "right", abs(value - truth) / truth, covered
 
 
+def diagnose(rigtwin, bundle, out):
+    """`rigtwin diagnose` of `bundle`, its JSON written to `out`: (the report, or None where
+    rigtwin failed; seconds; what failed)."""
+    start = time.time()
+    p = subprocess.run([rigtwin, "diagnose", bundle, "--json", out], capture_output=True, text=True)
+    elapsed = time.time() - start
+    if p.returncode not in (0, 3) or not os.path.exists(out):
+        return None, elapsed, f"rigtwin failed ({p.returncode}): {p.stderr.strip()[:300]}"
+    with open(out) as f:
+        return json.load(f), elapsed, None
+
+
 def parse_seeds(text):
     seeds = []
     for part in text.split(","):
@@ -232,14 +244,31 @@ def parse_seeds(text):
     return seeds
 
 
-def main():
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+def arguments(doc):
+    """The survey scripts' command line."""
+    ap = argparse.ArgumentParser(description=doc.splitlines()[0])
     ap.add_argument("--rigtwin", required=True)
     ap.add_argument("--seeds", default="0-34")
     ap.add_argument("--out", required=True)
     ap.add_argument("--jobs", type=int, default=os.cpu_count() or 1, help="processes simulating the records")
     ap.add_argument("--summary", help="write the counts (right, not explained, wrong, records) as JSON here")
-    args = ap.parse_args()
+    return ap
+
+
+def write_summary(path, rows):
+    """The counts of `rows` (truth, outcome, parameter error, seconds, interval holds) as JSON."""
+    with open(path, "w") as f:
+        json.dump({"records": len(rows),
+                   "right": sum(1 for r in rows if r[1] == "right"),
+                   "not_explained": sum(1 for r in rows if r[1] == "not explained"),
+                   "wrong": sum(1 for r in rows if r[1] in ("wrong", "error")),
+                   "right_beyond_20_percent": sum(1 for r in rows if r[2] is not None and r[2] > 0.2),
+                   "intervals": sum(1 for r in rows if r[4] is not None),
+                   "intervals_covering": sum(1 for r in rows if r[4])}, f)
+
+
+def main():
+    args = arguments(__doc__).parse_args()
     os.makedirs(args.out, exist_ok=True)
     seeds = parse_seeds(args.seeds)
     truths = [truth_of(seed) for seed in seeds]
@@ -249,15 +278,11 @@ def main():
         bundles = list(pool.map(write_bundle, [args.out] * len(truths), truths))
     rows = []
     for seed, t, bundle in zip(seeds, truths, bundles):
-        out = os.path.join(args.out, f"seed_{seed:04d}.json")
-        start = time.time()
-        p = subprocess.run([args.rigtwin, "diagnose", bundle, "--json", out], capture_output=True, text=True)
-        elapsed = time.time() - start
-        if p.returncode not in (0, 3) or not os.path.exists(out):
+        report, elapsed, failure = diagnose(args.rigtwin, bundle, os.path.join(args.out, f"seed_{seed:04d}.json"))
+        if report is None:
             rows.append((t, "error", None, elapsed, None))
-            print(f"seed {seed}: rigtwin failed ({p.returncode}): {p.stderr.strip()[:200]}", file=sys.stderr)
+            print(f"seed {seed}: {failure}", file=sys.stderr)
             continue
-        report = json.load(open(out))
         outcome, err, covered = score(t, report)
         rows.append((t, outcome, err, elapsed, covered))
         found = "+".join(e["effect"] + (f"@{e['at']}" if e.get("at") else "") for e in report.get("effects", []))
@@ -267,14 +292,7 @@ def main():
               + f" {elapsed:.1f} s", file=sys.stderr)
     print(table(rows))
     if args.summary:
-        with open(args.summary, "w") as f:
-            json.dump({"records": len(rows),
-                       "right": sum(1 for r in rows if r[1] == "right"),
-                       "not_explained": sum(1 for r in rows if r[1] == "not explained"),
-                       "wrong": sum(1 for r in rows if r[1] in ("wrong", "error")),
-                       "right_beyond_20_percent": sum(1 for r in rows if r[2] is not None and r[2] > 0.2),
-                       "intervals": sum(1 for r in rows if r[4] is not None),
-                       "intervals_covering": sum(1 for r in rows if r[4])}, f)
+        write_summary(args.summary, rows)
 
 
 def table(rows):

@@ -16,18 +16,14 @@ parameter errors and run times as the markdown of docs/validation.md. Seeds 0-99
 survey's tuning part; seeds from 1000 on are held out (run once after a change, never tuned on).
 """
 
-import argparse
-import json
 import os
-import subprocess
 import sys
-import time
 from concurrent.futures import ProcessPoolExecutor
 
 import numpy as np
 from scipy.integrate import solve_ivp
 
-from survey import measured, parse_seeds
+from survey import arguments, diagnose, measured, parse_seeds, write_summary
 
 DT = 1e-3
 DURATION_S = 10.0
@@ -385,12 +381,7 @@ def describe(t):
 
 
 def main():
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--rigtwin", required=True)
-    ap.add_argument("--seeds", default="0-34")
-    ap.add_argument("--out", required=True)
-    ap.add_argument("--jobs", type=int, default=os.cpu_count() or 1, help="processes simulating the records")
-    ap.add_argument("--summary", help="write the counts (right, not explained, wrong, records) as JSON here")
+    ap = arguments(__doc__)
     ap.add_argument("--reuse", action="store_true", help="diagnose the records already in --out (written by an "
                     "earlier run with the same seeds) instead of simulating them again")
     args = ap.parse_args()
@@ -404,15 +395,11 @@ def main():
             bundles = list(pool.map(write_bundle, [args.out] * len(truths), truths))
     rows = []
     for seed, t, bundle in zip(seeds, truths, bundles):
-        out = os.path.join(args.out, f"line_{seed:04d}.json")
-        start = time.time()
-        p = subprocess.run([args.rigtwin, "diagnose", bundle, "--json", out], capture_output=True, text=True)
-        elapsed = time.time() - start
-        if p.returncode not in (0, 3) or not os.path.exists(out):
+        report, elapsed, failure = diagnose(args.rigtwin, bundle, os.path.join(args.out, f"line_{seed:04d}.json"))
+        if report is None:
             rows.append((t, "error", None, elapsed, None))
-            print(f"seed {seed}: rigtwin failed ({p.returncode}): {p.stderr.strip()[:300]}", file=sys.stderr)
+            print(f"seed {seed}: {failure}", file=sys.stderr)
             continue
-        report = json.load(open(out))
         outcome, err, covered = score(t, report)
         rows.append((t, outcome, err, elapsed, covered))
         found = "+".join(f"{e}@{a}" for e, a in found_effects(report)) or "none"
@@ -422,13 +409,7 @@ def main():
               + f" {elapsed:.1f} s", file=sys.stderr)
     print(table(rows))
     if args.summary:
-        with open(args.summary, "w") as f:
-            json.dump({"records": len(rows),
-                       "right": sum(1 for r in rows if r[1] == "right"),
-                       "not_explained": sum(1 for r in rows if r[1] == "not explained"),
-                       "wrong": sum(1 for r in rows if r[1] in ("wrong", "error")),
-                       "intervals": sum(1 for r in rows if r[4] is not None),
-                       "intervals_covering": sum(1 for r in rows if r[4])}, f)
+        write_summary(args.summary, rows)
 
 
 def table(rows):
