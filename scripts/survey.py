@@ -236,6 +236,32 @@ def diagnose(rigtwin, bundle, out):
         return json.load(f), elapsed, None
 
 
+def diagnose_all(rigtwin, seeds, truths, bundles, score, describe):
+    """Diagnoses each bundle (its JSON beside it), scores the report against its truth with
+    `score`, and tells each on standard error (`describe(truth, report)`: what it held and what
+    rigtwin said). The rows (truth, outcome, parameter error, seconds, interval holds)."""
+    rows = []
+    for seed, t, bundle in zip(seeds, truths, bundles):
+        report, elapsed, failure = diagnose(rigtwin, bundle, os.path.splitext(bundle)[0] + ".json")
+        if report is None:
+            rows.append((t, "error", None, elapsed, None))
+            print(f"seed {seed}: {failure}", file=sys.stderr)
+            continue
+        outcome, err, covered = score(t, report)
+        rows.append((t, outcome, err, elapsed, covered))
+        print(f"seed {seed:4d} {describe(t, report)} {outcome}"
+              + (f" ({100 * err:.0f} %{', interval misses' if covered is False else ''})" if err is not None else "")
+              + f" {elapsed:.1f} s", file=sys.stderr)
+    return rows
+
+
+def describe(t, report):
+    """A record's truth and rigtwin's answer, for the log."""
+    found = "+".join(e["effect"] + (f"@{e['at']}" if e.get("at") else "") for e in report.get("effects", []))
+    return (f"{t['effect']:17s} {t['excitation']:9s} {t['set_point_nm']:4.0f} Nm -> "
+            f"{report.get('verdict'):20s} {found or 'none':30s}")
+
+
 def parse_seeds(text):
     seeds = []
     for part in text.split(","):
@@ -276,40 +302,29 @@ def main():
     # single-threaded); the diagnoses then run one at a time (each uses two threads)
     with ProcessPoolExecutor(max_workers=args.jobs) as pool:
         bundles = list(pool.map(write_bundle, [args.out] * len(truths), truths))
-    rows = []
-    for seed, t, bundle in zip(seeds, truths, bundles):
-        report, elapsed, failure = diagnose(args.rigtwin, bundle, os.path.join(args.out, f"seed_{seed:04d}.json"))
-        if report is None:
-            rows.append((t, "error", None, elapsed, None))
-            print(f"seed {seed}: {failure}", file=sys.stderr)
-            continue
-        outcome, err, covered = score(t, report)
-        rows.append((t, outcome, err, elapsed, covered))
-        found = "+".join(e["effect"] + (f"@{e['at']}" if e.get("at") else "") for e in report.get("effects", []))
-        print(f"seed {seed:4d} {t['effect']:17s} {t['excitation']:9s} {t['set_point_nm']:4.0f} Nm -> "
-              f"{report.get('verdict'):20s} {found or 'none':30s} {outcome}"
-              + (f" ({100 * err:.0f} %{', interval misses' if covered is False else ''})" if err is not None else "")
-              + f" {elapsed:.1f} s", file=sys.stderr)
-    print(table(rows))
+    rows = diagnose_all(args.rigtwin, seeds, truths, bundles, score, describe)
+    print(table(rows, [(e, lambda t, e=e: t["effect"] == e) for e in EFFECTS]))
     if args.summary:
         write_summary(args.summary, rows)
 
 
-def table(rows):
+def table(rows, groups):
+    """The verdict matrix of `rows` as markdown: a line per (name, membership test of a truth)
+    of `groups` that has records, then all."""
     lines = ["| truth | records | right | not explained | wrong | parameter error of the right: median / max (beyond 20 %) "
              "| 95 % interval holds the truth | run time, median |",
              "| --- | --- | --- | --- | --- | --- | --- | --- |"]
     cover = lambda r: (f"{sum(1 for row in r if row[4])} of {sum(1 for row in r if row[4] is not None)}"
                        if any(row[4] is not None for row in r) else "–")
-    for effect in EFFECTS:
-        r = [row for row in rows if row[0]["effect"] == effect]
+    for name, member in groups:
+        r = [row for row in rows if member(row[0])]
         if not r:
             continue
         count = lambda o: sum(1 for row in r if row[1] == o)
         errs = [row[2] for row in r if row[2] is not None]
         beyond = sum(1 for e in errs if e > 0.2)
         err = f"{100 * np.median(errs):.1f} % / {100 * max(errs):.0f} % ({beyond})" if errs else "–"
-        lines.append(f"| {effect} | {len(r)} | {count('right')} | {count('not explained')} | "
+        lines.append(f"| {name} | {len(r)} | {count('right')} | {count('not explained')} | "
                      f"{count('wrong') + count('error')} | {err} | {cover(r)} | {np.median([row[3] for row in r]):.1f} s |")
     total = len(rows)
     lines.append(f"| all | {total} | {sum(1 for r in rows if r[1] == 'right')} | "

@@ -17,13 +17,12 @@ survey's tuning part; seeds from 1000 on are held out (run once after a change, 
 """
 
 import os
-import sys
 from concurrent.futures import ProcessPoolExecutor
 
 import numpy as np
 from scipy.integrate import solve_ivp
 
-from survey import arguments, diagnose, measured, parse_seeds, write_summary
+from survey import arguments, diagnose_all, measured, parse_seeds, table, write_summary
 
 DT = 1e-3
 DURATION_S = 10.0
@@ -376,8 +375,12 @@ def score(t, report):
     return "right", abs(value - e["size"]) / e["size"], covered
 
 
-def describe(t):
-    return "+".join(f"{e['effect']}@{place(e)}" for e in t["effects"]) or "none"
+def describe(t, report):
+    """A record's line and truth and rigtwin's answer, for the log."""
+    truth = "+".join(f"{e['effect']}@{place(e)}" for e in t["effects"]) or "none"
+    found = "+".join(f"{e}@{a}" for e, a in found_effects(report)) or "none"
+    return (f"{len(t['line']['inertia'])} bodies {int(sum(t['line']['ratio'] > 1))} gears {truth:45s} "
+            f"{t['excitation']:11s} -> {report.get('verdict'):20s} {found:40s}")
 
 
 def main():
@@ -393,47 +396,13 @@ def main():
     else:
         with ProcessPoolExecutor(max_workers=args.jobs) as pool:
             bundles = list(pool.map(write_bundle, [args.out] * len(truths), truths))
-    rows = []
-    for seed, t, bundle in zip(seeds, truths, bundles):
-        report, elapsed, failure = diagnose(args.rigtwin, bundle, os.path.join(args.out, f"line_{seed:04d}.json"))
-        if report is None:
-            rows.append((t, "error", None, elapsed, None))
-            print(f"seed {seed}: {failure}", file=sys.stderr)
-            continue
-        outcome, err, covered = score(t, report)
-        rows.append((t, outcome, err, elapsed, covered))
-        found = "+".join(f"{e}@{a}" for e, a in found_effects(report)) or "none"
-        print(f"seed {seed:4d} {len(t['line']['inertia'])} bodies {int(sum(t['line']['ratio'] > 1))} gears "
-              f"{describe(t):45s} {t['excitation']:11s} -> {report.get('verdict'):20s} {found:40s} {outcome}"
-              + (f" ({100 * err:.0f} %{', interval misses' if covered is False else ''})" if err is not None else "")
-              + f" {elapsed:.1f} s", file=sys.stderr)
-    print(table(rows))
-    if args.summary:
-        write_summary(args.summary, rows)
-
-
-def table(rows):
-    lines = ["| truth | records | right | not explained | wrong | parameter error of the right: median / max "
-             "| 95 % interval holds the truth | run time, median |",
-             "| --- | --- | --- | --- | --- | --- | --- | --- |"]
+    rows = diagnose_all(args.rigtwin, seeds, truths, bundles, score, describe)
     groups = [("none", lambda t: not t["effects"])]
     groups += [(k, lambda t, k=k: [e["effect"] for e in t["effects"]] == [k]) for k in KINDS]
     groups.append(("pairs", lambda t: len(t["effects"]) == 2))
-    for name, member in groups:
-        r = [row for row in rows if member(row[0])]
-        if not r:
-            continue
-        count = lambda o: sum(1 for row in r if row[1] == o)
-        errs = [row[2] for row in r if row[2] is not None]
-        err = f"{100 * np.median(errs):.1f} % / {100 * max(errs):.0f} %" if errs else "–"
-        cover = [row[4] for row in r if row[4] is not None]
-        cov = f"{sum(cover)} of {len(cover)}" if cover else "–"
-        lines.append(f"| {name} | {len(r)} | {count('right')} | {count('not explained')} | "
-                     f"{count('wrong') + count('error')} | {err} | {cov} | {np.median([row[3] for row in r]):.1f} s |")
-    lines.append(f"| all | {len(rows)} | {sum(1 for r in rows if r[1] == 'right')} | "
-                 f"{sum(1 for r in rows if r[1] == 'not explained')} | "
-                 f"{sum(1 for r in rows if r[1] in ('wrong', 'error'))} | | | |")
-    return "\n".join(lines)
+    print(table(rows, groups))
+    if args.summary:
+        write_summary(args.summary, rows)
 
 
 if __name__ == "__main__":

@@ -1081,6 +1081,22 @@ mod tests {
         }
     }
 
+    /// Two bodies driven at the first, joined by `coupling`.
+    fn two_bodies(inertia: [f64; 2], drag: [f64; 2], coupling: Coupling, effects: Vec<Effect>) -> DriveModel {
+        DriveModel {
+            line: Line {
+                domain: Domain::Rotational,
+                bodies: vec![
+                    LineBody { name: "a".into(), inertia: inertia[0], drag: drag[0] },
+                    LineBody { name: "b".into(), inertia: inertia[1], drag: drag[1] },
+                ],
+                couplings: vec![coupling],
+            },
+            inputs: vec![0],
+            effects,
+        }
+    }
+
     fn gear_line() -> Line {
         Line {
             domain: Domain::Rotational,
@@ -1238,18 +1254,8 @@ mod tests {
     #[test]
     fn backlash_holds_the_load_until_contact() {
         let (m1, m2, f, b, dt) = (1.0, 1.0, 2.0, 0.01, 1e-4);
-        let model = DriveModel {
-            line: Line {
-                domain: Domain::Rotational,
-                bodies: vec![
-                    LineBody { name: "a".into(), inertia: m1, drag: 0.0 },
-                    LineBody { name: "b".into(), inertia: m2, drag: 0.0 },
-                ],
-                couplings: vec![Coupling::new(1e4, 0.0, 1.0)],
-            },
-            inputs: vec![0],
-            effects: vec![Effect::Backlash(Backlash { coupling: 0, backlash: b })],
-        };
+        let backlash = Effect::Backlash(Backlash { coupling: 0, backlash: b });
+        let model = two_bodies([m1, m2], [0.0; 2], Coupling::new(1e4, 0.0, 1.0), vec![backlash]);
         // at rest without load at the first sample (a record starts where its first input has
         // held the line: `Dynamics::initial_state`), the force stepped on after it
         let mut u = vec![f; 2000];
@@ -1274,18 +1280,7 @@ mod tests {
     #[test]
     fn a_record_under_load_starts_wound_up() {
         let (j1, j2, r, k, f) = (0.002, 0.05, 3.0, 800.0, 1.5);
-        let model = DriveModel {
-            line: Line {
-                domain: Domain::Rotational,
-                bodies: vec![
-                    LineBody { name: "motor".into(), inertia: j1, drag: 0.0 },
-                    LineBody { name: "load".into(), inertia: j2, drag: 0.0 },
-                ],
-                couplings: vec![Coupling::new(k, 0.3, r)],
-            },
-            inputs: vec![0],
-            effects: vec![],
-        };
+        let model = two_bodies([j1, j2], [0.0; 2], Coupling::new(k, 0.3, r), vec![]);
         let y = model.simulate(&[vec![f; 1000]], 1e-3, 2.0, &[(Quantity::CouplingForce, 0)]).unwrap();
         let torque = j2 * f / (j1 + j2 / (r * r)) / r;
         assert_eq!(y[0].len(), 1000);
@@ -1302,18 +1297,8 @@ mod tests {
     #[test]
     fn a_rattling_play_stepped_exactly_matches_a_fine_rk4() {
         let (j1, j2, c, d, b, dt) = (0.01, 0.05, 1000.0, 2.0, 0.02, 1e-3);
-        let model = DriveModel {
-            line: Line {
-                domain: Domain::Rotational,
-                bodies: vec![
-                    LineBody { name: "a".into(), inertia: j1, drag: 0.01 },
-                    LineBody { name: "b".into(), inertia: j2, drag: 0.02 },
-                ],
-                couplings: vec![Coupling::new(c, d, 1.0)],
-            },
-            inputs: vec![0],
-            effects: vec![Effect::Backlash(Backlash { coupling: 0, backlash: b })],
-        };
+        let backlash = Effect::Backlash(Backlash { coupling: 0, backlash: b });
+        let model = two_bodies([j1, j2], [0.01, 0.02], Coupling::new(c, d, 1.0), vec![backlash]);
         assert!(Dynamics::new(&model).unwrap().single_play_maps(&[dt]).is_some(), "the exact path is taken");
         let u: Vec<f64> = (0..2000)
             .map(|k| {

@@ -62,38 +62,6 @@ fn refine_profile(start: (Vec<f64>, f64), step: f64, cost_of: &dyn Fn(&Vec<f64>)
     best
 }
 
-/// The screen of a candidate's last effect's size with everything else held: the best of the
-/// `starts` (its grid), refined where the effect's profile is rough (a play's: each impact
-/// shifts with it), then [`SCREEN_ITERATIONS`] of LM. (size parameters, cost); an empty size
-/// for a candidate without one.
-fn screen_size(
-    c: Candidate,
-    starts: Vec<Vec<f64>>,
-    cost_of: &dyn Fn(&Vec<f64>) -> f64,
-    own: &(dyn Fn(&[f64]) -> Option<Vec<f64>> + Sync),
-) -> (Vec<f64>, f64) {
-    let best = starts
-        .into_iter()
-        .map(|s| {
-            let cost = cost_of(&s);
-            (s, cost)
-        })
-        .filter(|g| g.1.is_finite())
-        .min_by(|p, q| p.1.total_cmp(&q.1));
-    let best = match (c.effects().last(), best) {
-        (Some(e), Some(start)) if e.search().rough => {
-            let (lo, hi, k) = e.search().grid;
-            Some(refine_profile(start, (hi / lo).ln() / (k - 1) as f64, cost_of))
-        }
-        (_, best) => best,
-    };
-    match best {
-        Some((s0, _)) if !s0.is_empty() => lm::minimise_to(own, &s0, SCREEN_ITERATIONS, LM_REL_TOL),
-        Some((s0, cost)) => (s0, cost),
-        None => (vec![], f64::INFINITY),
-    }
-}
-
 /// A candidate's score, its model, the lag-1 autocorrelation of its residual, the candidate
 /// and its parameters.
 type Scored = (CandidateScore, DriveModel, f64, Candidate, Vec<f64>);
@@ -298,6 +266,37 @@ impl Problem<'_> {
             fastest_rate: self.rate,
         };
         Some(e.of_size(size, &context))
+    }
+
+    /// The screen of candidate `c`'s last effect's size with the parameters before it `held`:
+    /// the best of its grid ([`Problem::starts`]), refined where the effect's profile is rough
+    /// (a play's: each impact shifts with it), then [`SCREEN_ITERATIONS`] of LM. The whole
+    /// parameter vector and its cost (`held` and its cost for a candidate without a size).
+    fn screen(&self, c: Candidate, held: &[f64]) -> (Vec<f64>, f64) {
+        let own = |s: &[f64]| self.residual(c, &[held, s].concat());
+        let cost_of = |s: &Vec<f64>| own(s).map_or(f64::INFINITY, |r| r.iter().map(|v| v * v).sum::<f64>());
+        let best = self
+            .starts(c)
+            .into_iter()
+            .map(|s| {
+                let cost = cost_of(&s);
+                (s, cost)
+            })
+            .filter(|g| g.1.is_finite())
+            .min_by(|p, q| p.1.total_cmp(&q.1));
+        let best = match (c.effects().last(), best) {
+            (Some(e), Some(start)) if e.search().rough => {
+                let (lo, hi, k) = e.search().grid;
+                Some(refine_profile(start, (hi / lo).ln() / (k - 1) as f64, &cost_of))
+            }
+            (_, best) => best,
+        };
+        let (s, cost) = match best {
+            Some((s0, _)) if !s0.is_empty() => lm::minimise_to(&own, &s0, SCREEN_ITERATIONS, LM_REL_TOL),
+            Some((s0, cost)) => (s0, cost),
+            None => (vec![], f64::INFINITY),
+        };
+        ([held, &s].concat(), cost)
     }
 
     /// The model's outputs, high-passed as the measurement is.
@@ -576,31 +575,17 @@ pub fn diagnose(rec: DriveRecord, progress: &(dyn Fn(&str) + Sync)) -> Result<Dr
         progress(&label(Candidate::None));
         (x, cost)
     };
-    let held_base: Vec<f64> = match problem.build(Candidate::None, &declared_refit.0) {
-        Some(refit) if declared_refit.1.is_finite() && moved_declared(m0, &refit).is_empty() => {
-            declared_refit.0.clone()
-        }
-        _ => vec![0.0; nbase],
-    };
-    let screen_one = |i: usize| -> (usize, Vec<f64>, f64) {
-        let c = cands[i];
-        let problem = &problem;
-        let held_base = &held_base;
-        let own = |s: &[f64]| {
-            let mut x = held_base.clone();
-            x.extend_from_slice(s);
-            problem.residual(c, &x)
-        };
-        let cost_of = |s: &Vec<f64>| own(s).map_or(f64::INFINITY, |r| r.iter().map(|v| v * v).sum::<f64>());
-        let (s, cost) = screen_size(c, problem.starts(c), &cost_of, &own);
-        let mut x = held_base.clone();
-        x.extend(s);
-        (i, x, cost)
-    };
+    let base_refitted = problem
+        .build(Candidate::None, &declared_refit.0)
+        .is_some_and(|refit| declared_refit.1.is_finite() && moved_declared(m0, &refit).is_empty());
+    let held_base = if base_refitted { declared_refit.0.clone() } else { vec![0.0; nbase] };
     // `none` is screened as the re-fit above
     let screen_or_refit = |i: usize| match cands[i] {
         Candidate::None => (i, declared_refit.0.clone(), declared_refit.1),
-        _ => screen_one(i),
+        c => {
+            let (x, cost) = problem.screen(c, &held_base);
+            (i, x, cost)
+        }
     };
     let screened: Vec<(usize, Vec<f64>, f64)> = super::on_two_workers(cands.len(), &screen_or_refit);
     let mut ranked: Vec<&(usize, Vec<f64>, f64)> =
@@ -612,14 +597,15 @@ pub fn diagnose(rec: DriveRecord, progress: &(dyn Fn(&str) + Sync)) -> Result<Dr
         .chain(ranked.iter().take(SCREEN_KEEP).copied())
         .map(|s| s.0)
         .collect();
+    // the re-fit of everything of candidate `c` from `x0`
+    let fit_all = |c: Candidate, x0: &[f64]| {
+        let fitted = lm::minimise_to(&|x: &[f64]| problem.residual(c, x), x0, 20, LM_REL_TOL);
+        progress(&label(c));
+        fitted
+    };
     let fit_one = |k: usize| -> (usize, Vec<f64>, f64) {
         let i = refit[k];
-        let c = cands[i];
-        let problem = &problem;
-        let f = |x: &[f64]| problem.residual(c, x);
-        let x0 = &screened.iter().find(|s| s.0 == i).expect("screened").1;
-        let (x, cost) = lm::minimise_to(&f, x0, 20, LM_REL_TOL);
-        progress(&label(c));
+        let (x, cost) = fit_all(cands[i], &screened.iter().find(|s| s.0 == i).expect("screened").1);
         (i, x, cost)
     };
     // (candidate, parameters, cost, parameters fitted)
@@ -629,7 +615,7 @@ pub fn diagnose(rec: DriveRecord, progress: &(dyn Fn(&str) + Sync)) -> Result<Dr
         if !refit.contains(&s.0) {
             // held base: only the effect's own parameters were fitted here, beside the declared
             // model's re-fit where the base is held at it
-            let base_fitted = matches!(cands[s.0], Candidate::None) || held_base.iter().any(|&v| v != 0.0);
+            let base_fitted = matches!(cands[s.0], Candidate::None) || base_refitted;
             let own_fitted = if base_fitted { s.1.len() } else { s.1.len() - nbase };
             fits.push((s.0, s.1.clone(), s.2, own_fitted));
         }
@@ -675,16 +661,15 @@ pub fn diagnose(rec: DriveRecord, progress: &(dyn Fn(&str) + Sync)) -> Result<Dr
     }
     let mut search_notes = Vec::new();
     let structured = scored[best].2.abs() >= WHITE_RESIDUAL_LAG1;
-    if let (Candidate::Effect(first), true) = (scored[best].3, structured) {
-        if first.is_nonlinear() {
+    let second_step = match scored[best].3 {
+        Candidate::Effect(first) if structured && first.is_nonlinear() => {
             search_notes.push(format!(
                 "no second effect was searched for beside {} (with it in the model every simulation takes its fine steps: minutes per record)",
                 label(scored[best].3)
             ));
+            None
         }
-    }
-    let second_step = match scored[best].3 {
-        Candidate::Effect(first) if structured && !first.is_nonlinear() => Some(first),
+        Candidate::Effect(first) if structured => Some(first),
         _ => None,
     };
     if let Some(first) = second_step {
@@ -703,21 +688,15 @@ pub fn diagnose(rec: DriveRecord, progress: &(dyn Fn(&str) + Sync)) -> Result<Dr
             })
             .collect();
         let screen_second = |k: usize| -> (usize, Vec<f64>, f64) {
-            let c = Candidate::Pair(first, seconds[k]);
-            let x1 = &x1;
-            let own = |s: &[f64]| problem.residual(c, &[x1.as_slice(), s].concat());
-            let cost_of = |s: &Vec<f64>| own(s).map_or(f64::INFINITY, |r| r.iter().map(|v| v * v).sum::<f64>());
-            let (s, cost) = screen_size(c, problem.starts(c), &cost_of, &own);
-            (k, [x1.as_slice(), &s].concat(), cost)
+            let (x, cost) = problem.screen(Candidate::Pair(first, seconds[k]), &x1);
+            (k, x, cost)
         };
         let mut screened2 = super::on_two_workers(seconds.len(), &screen_second);
         screened2.sort_by(|a, b| a.2.total_cmp(&b.2));
         screened2.truncate(SCREEN_KEEP);
         let fit_pair = |k: usize| -> (usize, Vec<f64>, f64) {
             let (j, x0, _) = &screened2[k];
-            let c = Candidate::Pair(first, seconds[*j]);
-            let (x, cost) = lm::minimise_to(&|x: &[f64]| problem.residual(c, x), x0, 20, LM_REL_TOL);
-            progress(&label(c));
+            let (x, cost) = fit_all(Candidate::Pair(first, seconds[*j]), x0);
             (*j, x, cost)
         };
         let single = best;
