@@ -814,7 +814,7 @@ fn drive(file: &Path, progress: &(dyn Fn(&str) + Sync)) -> anyhow::Result<Diagno
         d.structured_residual,
         std::iter::once(&d.parameters),
         &scales,
-        d.distorted.iter().chain(&d.unsupported),
+        d.distorted.iter().chain(&d.unsupported).chain(&d.unplaced),
         &ident::diagnose::verdict::BoundSettings::default(),
     );
     Ok(Diagnosis {

@@ -115,7 +115,8 @@ impl Drop for Scratch {
 /// writes to the file given with `result_flag`; its log is printed, and a failed run fails the
 /// test with it.
 pub fn survey_script(script: &str, seeds: &str, result_flag: &str) -> serde_json::Value {
-    let dir = scratch(script.trim_end_matches(".py"), "records");
+    // one folder per call: two tests of one script run at once
+    let dir = scratch(script.trim_end_matches(".py"), &format!("records-{}", seeds.replace([',', '-'], "_")));
     let result = dir.join("result.json");
     let out = Command::new(python())
         .arg(Path::new(env!("CARGO_MANIFEST_DIR")).join("scripts").join(script))

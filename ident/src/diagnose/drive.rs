@@ -19,7 +19,7 @@ use plant::{Domain, Quantity};
 use serde::Serialize;
 
 use super::torsional::{FoundEffect, WHITE_RESIDUAL_LAG1};
-use super::verdict::{declared_moved, DeclaredSettings, Refitted};
+use super::verdict::{declared_moved, DeclaredSettings, PlaceSettings, Refitted};
 use super::{
     bic, effective_count, lag1_autocorrelation, lm, rms, CandidateScore, HeldOut, FRICTION_SMOOTHING_FRACTION,
     LM_REL_TOL,
@@ -64,7 +64,7 @@ fn refine_profile(start: (Vec<f64>, f64), step: f64, cost_of: &dyn Fn(&Vec<f64>)
 
 /// A candidate's score, its model, the lag-1 autocorrelation of its residual, the candidate
 /// and its parameters.
-type Scored = (CandidateScore, DriveModel, f64, Candidate, Vec<f64>);
+type Scored = (CandidateScore, DriveModel, f64, Candidate, Vec<f64>, bool);
 
 /// A declared inertia or stiffness may be re-fitted within this factor of its declared value.
 pub const MAX_REFIT_FACTOR: f64 = 100.0;
@@ -153,6 +153,9 @@ pub struct DriveDiagnosis {
     /// Why the answer is no finding although it fits the record: its effect does not predict
     /// the held-out folds better than the re-fitted declared model (`None`: it does).
     pub unsupported: Option<String>,
+    /// Why the answer's place is no finding: the same effect elsewhere explains the record
+    /// about as well ([`super::verdict::place_undetermined`]; `None`: the record tells where).
+    pub unplaced: Option<String>,
     /// Normalised error of the declared model (1 = no better than predicting nothing).
     pub error_before: f64,
     /// Normalised error of the extended model.
@@ -603,27 +606,41 @@ pub fn diagnose(rec: DriveRecord, progress: &(dyn Fn(&str) + Sync)) -> Result<Dr
         progress(&label(c));
         fitted
     };
+    // the re-fit starts from the better of the screen and, where the screen held the declared
+    // inertias and stiffnesses, the same size beside the declared model's re-fit (a play's or
+    // a friction's cost is too rough for the re-fit to walk from one to the other)
     let fit_one = |k: usize| -> (usize, Vec<f64>, f64) {
         let i = refit[k];
-        let (x, cost) = fit_all(cands[i], &screened.iter().find(|s| s.0 == i).expect("screened").1);
+        let (_, x_screen, cost_screen) = screened.iter().find(|s| s.0 == i).expect("screened");
+        let mut start = x_screen.clone();
+        if !base_refitted && matches!(cands[i], Candidate::Effect(_)) {
+            let beside: Vec<f64> = [&declared_refit.0[..], &x_screen[nbase..]].concat();
+            let cost = problem.residual(cands[i], &beside).map_or(f64::INFINITY, |r| r.iter().map(|v| v * v).sum());
+            if cost < *cost_screen {
+                start = beside;
+            }
+        }
+        let (x, cost) = fit_all(cands[i], &start);
         (i, x, cost)
     };
-    // (candidate, parameters, cost, parameters fitted)
-    let mut fits: Vec<(usize, Vec<f64>, f64, usize)> =
-        super::on_two_workers(refit.len(), &fit_one).into_iter().map(|(i, x, c)| (i, x.clone(), c, x.len())).collect();
+    // (candidate, parameters, cost, whether the inertias and stiffnesses were fitted or held at
+    // their re-fit — else at the declared values)
+    let mut fits: Vec<(usize, Vec<f64>, f64, bool)> =
+        super::on_two_workers(refit.len(), &fit_one).into_iter().map(|(i, x, c)| (i, x, c, true)).collect();
     for s in &screened {
         if !refit.contains(&s.0) {
-            // held base: only the effect's own parameters were fitted here, beside the declared
-            // model's re-fit where the base is held at it
             let base_fitted = matches!(cands[s.0], Candidate::None) || base_refitted;
-            let own_fitted = if base_fitted { s.1.len() } else { s.1.len() - nbase };
-            fits.push((s.0, s.1.clone(), s.2, own_fitted));
+            fits.push((s.0, s.1.clone(), s.2, base_fitted));
         }
     }
 
-    // (score, model, lag-1 autocorrelation of its residual, candidate, parameters); residuals
-    // are already normalised
-    let score_fit = |c: Candidate, x: Vec<f64>, cost: f64, fitted: usize| -> Option<Scored> {
+    // (score, model, lag-1 autocorrelation of its residual, candidate, parameters, base fitted);
+    // residuals are already normalised. Every candidate is scored as the re-fit of everything
+    // (k = all its parameters): one only screened is scored at its screen's cost, which its
+    // re-fit could only lower, so its score is an upper bound of that re-fit's — candidates
+    // compare like with like, and none wins by the parameters it did not fit
+    let score_fit = |c: Candidate, x: Vec<f64>, cost: f64, base_fitted: bool| -> Option<Scored> {
+        let fitted = x.len();
         if !cost.is_finite() {
             return None;
         }
@@ -642,21 +659,51 @@ pub fn diagnose(rec: DriveRecord, progress: &(dyn Fn(&str) + Sync)) -> Result<Dr
             implausible: false,
             implausible_because: Vec::new(),
         };
-        Some((score, m, rho, c, x))
+        Some((score, m, rho, c, x, base_fitted))
     };
     let mut scored: Vec<Scored> =
-        fits.into_iter().filter_map(|(i, x, cost, fitted)| score_fit(cands[i], x, cost, fitted)).collect();
+        fits.into_iter().filter_map(|(i, x, cost, base)| score_fit(cands[i], x, cost, base)).collect();
     let none = scored
         .iter()
         .position(|s| s.0.effect == "none")
         .ok_or_else(|| IdentError::Data("re-fitting the declared model failed".into()))?;
-    let mut best = none;
-    for (i, s) in scored.iter().enumerate() {
-        // an effect must beat the re-fitted declared model clearly: 10 % less error and a
-        // lower score (how far its re-fit moved the declared mechanics is reported, not yet
-        // judged: see `moved_declared`)
-        if s.0.score < scored[best].0.score && s.0.error_after < 0.9 * scored[none].0.error_after {
-            best = i;
+    // an effect must beat the re-fitted declared model clearly: 10 % less error and a lower
+    // score (how far its re-fit moved the declared mechanics is reported, not yet judged: see
+    // `moved_declared`)
+    let choose = |scored: &[Scored]| {
+        let mut best = none;
+        for (i, s) in scored.iter().enumerate() {
+            if s.0.score < scored[best].0.score && s.0.error_after < 0.9 * scored[none].0.error_after {
+                best = i;
+            }
+        }
+        best
+    };
+    let mut best = choose(&scored);
+    // an answer only screened (the inertias and stiffnesses held at the declared values) is
+    // re-fitted with everything before anything is compared with it
+    for _ in 0..SCREEN_KEEP {
+        if scored[best].5 {
+            break;
+        }
+        let c = scored[best].3;
+        let (x, cost) = fit_all(c, &scored[best].4);
+        match score_fit(c, x, cost, true) {
+            Some(again) if again.0.score <= scored[best].0.score => scored[best] = again,
+            _ => break,
+        }
+        best = choose(&scored);
+    }
+    // leave-out: the declared model re-fitted again from the answer's inertias and stiffnesses
+    // (its first re-fit may have stopped short of what the answer's found, and an effect that
+    // adds nothing beside them is then no finding)
+    if best != none && scored[best].5 {
+        let (x, cost) = fit_all(Candidate::None, &scored[best].4[..nbase]);
+        if cost < scored[none].0.error_after.powi(2) {
+            if let Some(again) = score_fit(Candidate::None, x, cost, true) {
+                scored[none] = again;
+                best = choose(&scored);
+            }
         }
     }
     let mut search_notes = Vec::new();
@@ -701,8 +748,7 @@ pub fn diagnose(rec: DriveRecord, progress: &(dyn Fn(&str) + Sync)) -> Result<Dr
         };
         let single = best;
         for (j, x, cost) in super::on_two_workers(screened2.len(), &fit_pair) {
-            let fitted = x.len();
-            if let Some(entry) = score_fit(Candidate::Pair(first, seconds[j]), x, cost, fitted) {
+            if let Some(entry) = score_fit(Candidate::Pair(first, seconds[j]), x, cost, true) {
                 scored.push(entry);
                 let i = scored.len() - 1;
                 if scored[i].0.score < scored[best].0.score
@@ -712,8 +758,23 @@ pub fn diagnose(rec: DriveRecord, progress: &(dyn Fn(&str) + Sync)) -> Result<Dr
                 }
             }
         }
+        // leave-out: the single effect re-fitted again from the pair's parameters without the
+        // second effect; the pair stays only where it still beats that
+        if best != single {
+            let x = &scored[best].4;
+            let (xs, cost) = fit_all(Candidate::Effect(first), &x[..x.len() - 1]);
+            if cost < scored[single].0.error_after.powi(2) {
+                if let Some(again) = score_fit(Candidate::Effect(first), xs, cost, true) {
+                    scored[single] = again;
+                    let (pair, alone) = (&scored[best].0, &scored[single].0);
+                    if !(pair.score < alone.score && pair.error_after < 0.9 * alone.error_after) {
+                        best = single;
+                    }
+                }
+            }
+        }
     }
-    let (chosen, model, rho, chosen_candidate, chosen_x) = scored[best].clone();
+    let (chosen, model, rho, chosen_candidate, chosen_x, base_fitted) = scored[best].clone();
     let none_moved = moved_declared(m0, &scored[none].1);
     let moved_declared = moved_declared(m0, &model);
 
@@ -724,7 +785,7 @@ pub fn diagnose(rec: DriveRecord, progress: &(dyn Fn(&str) + Sync)) -> Result<Dr
     // not see.
     let after = problem.simulate(&model);
     let answer_residual = after.as_ref().map(|y| problem.residual_of(y));
-    let free_from = if chosen.fitted_parameters < chosen_x.len() { nbase } else { 0 };
+    let free_from = if base_fitted { 0 } else { nbase };
     let answer = |s: &[f64]| problem.residual(chosen_candidate, &[&chosen_x[..free_from], s].concat());
     let declared = |x: &[f64]| problem.residual(Candidate::None, x);
     let has_effects = chosen.effect != "none";
@@ -782,6 +843,7 @@ pub fn diagnose(rec: DriveRecord, progress: &(dyn Fn(&str) + Sync)) -> Result<Dr
         .collect();
     let mut candidates: Vec<CandidateScore> = scored.into_iter().map(|s| s.0).collect();
     candidates.sort_by(|a, b| a.score.total_cmp(&b.score));
+    let unplaced = super::verdict::place_undetermined(&chosen, &candidates, &PlaceSettings::default());
     Ok(DriveDiagnosis {
         effect: chosen_candidate.name().to_string(),
         at: effects.first().and_then(|e| e.at.clone()),
@@ -791,6 +853,7 @@ pub fn diagnose(rec: DriveRecord, progress: &(dyn Fn(&str) + Sync)) -> Result<Dr
         intervals,
         held_out: check.held_out,
         unsupported: check.unsupported,
+        unplaced,
         error_before,
         error_after: chosen.error_after,
         candidates,

@@ -388,16 +388,19 @@ pub(crate) fn check_held_out(
 }
 
 /// 95 % intervals of the parameters `estimate` from their values `leave_outs` in the fits
-/// without each fold ([`jackknife_interval`]; NaN where a fold fit lacks one).
+/// without each fold ([`jackknife_interval`]). A parameter without one is left out: a fold fit
+/// lacks it, or no fold moved it (one not fitted, such as a friction's smoothing speed, or every
+/// fold's step refused) — an interval of zero width would claim a precision nothing measured.
 pub(crate) fn fold_intervals(
     estimate: &BTreeMap<String, f64>,
     leave_outs: &[BTreeMap<String, f64>],
 ) -> BTreeMap<String, [f64; 2]> {
     estimate
         .iter()
-        .map(|(k, &v)| {
+        .filter_map(|(k, &v)| {
             let values: Vec<f64> = leave_outs.iter().map(|p| p.get(k).copied().unwrap_or(f64::NAN)).collect();
-            (k.clone(), jackknife_interval(v, &values))
+            let [lo, hi] = jackknife_interval(v, &values);
+            (lo.is_finite() && hi.is_finite() && lo < hi).then(|| (k.clone(), [lo, hi]))
         })
         .collect()
 }
@@ -405,6 +408,12 @@ pub(crate) fn fold_intervals(
 /// Why an answer with effects is no finding on data its fit did not see: its held-out error
 /// is not below the declared model's (`None`: it is).
 fn unsupported(h: &HeldOut) -> Option<String> {
+    if !h.error_held_out.is_finite() {
+        return Some(
+            "its fit cannot be repeated without each fold (a parameter at the edge of what the model allows): no finding"
+                .into(),
+        );
+    }
     let predicts_better = h.error_held_out < h.declared_error_held_out;
     (!predicts_better).then(|| {
         format!(

@@ -11,6 +11,8 @@ use std::collections::BTreeMap;
 
 use serde::Serialize;
 
+use super::CandidateScore;
+
 /// The diagnosis's verdict.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "snake_case")]
@@ -163,6 +165,48 @@ pub fn declared_moved(refitted: &[Refitted], s: &DeclaredSettings) -> Vec<String
     out
 }
 
+/// How strongly the record must prefer an effect's place over every other place of the same
+/// effect, with its default.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PlaceSettings {
+    /// Least difference of information criterion (≈ 2 ln of the Bayes factor, Kass & Raftery
+    /// 1995) between the answer and the best candidate of the same effects at other places
+    /// (default 6: "strong" evidence, posterior odds of 20 to 1 — the place is named with the
+    /// 95 % confidence the intervals have). Below it the record shows the effect but not where.
+    pub min_evidence: f64,
+}
+
+impl Default for PlaceSettings {
+    fn default() -> Self {
+        PlaceSettings { min_evidence: 6.0 }
+    }
+}
+
+/// Why `answer`'s place is no finding: a candidate among `rivals` with the same effects at
+/// other places scores within [`PlaceSettings::min_evidence`] of it (the closest named, as a
+/// sentence for the report; `None`: the record tells the place). Candidates without a place
+/// (`none`, `damping`) have no rivals.
+pub fn place_undetermined(answer: &CandidateScore, rivals: &[CandidateScore], s: &PlaceSettings) -> Option<String> {
+    let at = answer.at.as_ref()?;
+    let closest = rivals
+        .iter()
+        .filter(|r| r.effect == answer.effect && r.at.as_ref().is_some_and(|a| a != at))
+        .min_by(|a, b| a.score.total_cmp(&b.score))?;
+    let evidence = closest.score - answer.score;
+    (evidence < s.min_evidence).then(|| {
+        format!(
+            "the record does not tell where: {} at {} (error {:.4}) and at {} (error {:.4}) explain it alike \
+             (information criterion {evidence:.1} apart, less than the {} that names a place)",
+            answer.effect,
+            at,
+            answer.error_after,
+            closest.at.as_deref().unwrap_or("?"),
+            closest.error_after,
+            s.min_evidence
+        )
+    })
+}
+
 /// The verdict of a diagnosis that chose `effect` ("none" for the declared model), left a
 /// structured residual or not, with `violations` from [`out_of_bounds`].
 pub fn verdict(effect: &str, structured_residual: bool, violations: &[String]) -> Verdict {
@@ -253,5 +297,30 @@ mod tests {
         assert_eq!(out_of_bounds(&p, &scales(), &BoundSettings::default()).len(), 1);
         let p = BTreeMap::from([("delay_s".to_string(), f64::NAN)]);
         assert_eq!(out_of_bounds(&p, &scales(), &BoundSettings::default()).len(), 1, "NaN is never a finding");
+    }
+
+    #[test]
+    fn a_place_is_named_only_with_strong_evidence_over_every_other() {
+        let c = |effect: &str, at: Option<&str>, score| CandidateScore {
+            effect: effect.into(),
+            at: at.map(Into::into),
+            parameters: BTreeMap::new(),
+            error_after: 0.1,
+            score,
+            fitted_parameters: 1,
+            implausible: false,
+            implausible_because: Vec::new(),
+        };
+        let s = PlaceSettings::default();
+        let answer = c("backlash", Some("coupling 5"), -256.3);
+        // the same effect elsewhere 2.5 apart: "positive" evidence only, no place
+        let rivals = [answer.clone(), c("backlash", Some("coupling 4"), -253.8), c("none", None, -300.0)];
+        let why = place_undetermined(&answer, &rivals, &s).expect("two places alike");
+        assert!(why.contains("coupling 4"), "{why}");
+        // 6 or more apart, and other effects at any score, leave the place named
+        let rivals = [c("backlash", Some("coupling 4"), -250.3), c("coulomb_friction", Some("body b5"), -257.0)];
+        assert_eq!(place_undetermined(&answer, &rivals, &s), None);
+        // an answer without a place has no rivals
+        assert_eq!(place_undetermined(&c("damping", None, -1.0), &rivals, &s), None);
     }
 }
