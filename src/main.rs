@@ -175,9 +175,10 @@ enum Command {
         #[arg(long, value_name = "FILE", requires = "controller")]
         plant: Option<PathBuf>,
     },
-    /// Model-predictive control of the rig (section 1.2): the closed loop with the MPC and
-    /// with PI speed control after a drive-torque step or during a sweep; step time,
-    /// allocations, first input against the exact optimum, shuffle overshoot and settling.
+    /// Model-predictive control of the rig (section 1.2) or of any drive model (`--params`):
+    /// the closed loop with the MPC and with PI speed control after a drive-torque step or
+    /// during a sweep; step time, allocations, first input against the exact optimum, shuffle
+    /// overshoot and settling.
     Mpc {
         /// Prediction horizon, steps of 1 ms (10-100 in the real-time regime).
         #[arg(long, default_value_t = 50, allow_negative_numbers = true, value_parser = |s: &str| count_in(s, 1, mpc::MAX_HORIZON))]
@@ -217,8 +218,9 @@ enum Command {
         #[arg(long, value_name = "FILE.json")]
         export_qp: Option<PathBuf>,
     },
-    /// Close the loop with measured data: the declared model's residual, the effect it lacks,
-    /// the extended model, the error before and after (torsional_sweep or bearing_shake).
+    /// Close the loop with measured data: the declared model's residual, the effects it lacks,
+    /// the extended model, the error before and after, and a verdict (torsional_sweep,
+    /// drive_test or bearing_shake; exit 3 where the record is not explained).
     Diagnose {
         /// The measurement bundle.
         #[arg(value_name = "BUNDLE.toml")]
