@@ -368,6 +368,7 @@ fn torsional(file: &Path, progress: &(dyn Fn(&str) + Sync)) -> anyhow::Result<Di
         max_force: b.sweep.torque_nm.iter().fold(0.0, |a: f64, v| a.max(v.abs())),
         rms_speed: rms(&b.sweep.speed_m2_radps).max(rms(&b.sweep.speed_m3_radps)),
         duration_s: b.sweep.torque_nm.len() as f64 * dt,
+        sample_time_s: dt,
     };
     let judged = std::iter::once(&d.parameters).chain(d.effects.iter().map(|e| &e.parameters));
     let (verdict, verdict_reasons) = ident::diagnose::verdict::judge(
@@ -516,6 +517,7 @@ fn bearing(file: &Path, _progress: &(dyn Fn(&str) + Sync)) -> anyhow::Result<Dia
         max_force: f64::INFINITY,
         rms_speed: f64::INFINITY,
         duration_s: test.force_x_n.len() as f64 * test.dt_s,
+        sample_time_s: 0.0,
     };
     let (verdict, verdict_reasons) = ident::diagnose::verdict::judge(
         &d.effect,
@@ -803,6 +805,7 @@ fn drive(file: &Path, progress: &(dyn Fn(&str) + Sync)) -> anyhow::Result<Diagno
         max_force: gearing * b.input_data.iter().flatten().fold(0.0, |a: f64, v| a.max(v.abs())),
         rms_speed: speeds.map(|(_, y)| rms(y)).fold(f64::NAN, f64::max),
         duration_s: b.input_data[0].len() as f64 * b.dt_s,
+        sample_time_s: b.dt_s,
     };
     let scales = ident::diagnose::verdict::RecordScales {
         // no speed measured: the smoothing speed is not judged

@@ -24,7 +24,7 @@ use crate::statespace::zoh;
 mod effect;
 pub use effect::{
     ActuatorLag, Backlash, CoulombFriction, Effect, EffectModel, EffectParameter, Element, Limit, Moves, Scale, Search,
-    Shows, SizeContext, TimeDelay,
+    Shows, SizeContext, TimeDelay, INPUT_TIME_FLOOR_SAMPLES,
 };
 
 /// Most RK4 steps per sample within a smooth piece (the fine sub-steps across pieces may be

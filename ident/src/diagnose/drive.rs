@@ -251,6 +251,9 @@ impl Problem<'_> {
             Scale::SampleTime => dt,
         };
         let size = scale * log_size.exp();
+        if size < search.floor * scale {
+            return None;
+        }
         let beyond = match search.limit {
             Limit::Unbounded => false,
             Limit::TimesScale(k) => size > k * scale,
@@ -709,28 +712,30 @@ pub fn diagnose(rec: DriveRecord, progress: &(dyn Fn(&str) + Sync)) -> Result<Dr
     let mut search_notes = Vec::new();
     let structured = scored[best].2.abs() >= WHITE_RESIDUAL_LAG1;
     let second_step = match scored[best].3 {
-        Candidate::Effect(first) if structured && first.is_nonlinear() => {
-            search_notes.push(format!(
-                "no second effect was searched for beside {} (with it in the model every simulation takes its fine steps: minutes per record)",
-                label(scored[best].3)
-            ));
-            None
-        }
         Candidate::Effect(first) if structured => Some(first),
         _ => None,
     };
     if let Some(first) = second_step {
         // forward selection, second step, where the single effect leaves a residual structured
-        // enough that another could beat it clearly (the torsional engine's rule) and is not a
-        // friction or a play: every effect of another kind, at every element where it can act,
-        // added to the best single one (its own size screened with the rest held, the
-        // SCREEN_KEEP best re-fitted with everything); a pair must beat the single effect as
-        // that beat the declared model
+        // enough that another could beat it clearly (the torsional engine's rule): every effect
+        // of another kind, at every element where it can act, added to the best single one (its
+        // own size screened with the rest held, the SCREEN_KEEP best re-fitted); a pair must
+        // beat the single effect as that beat the declared model. Beside a friction or a play
+        // every simulation takes their fine steps: there only a linear effect (a dead time, a
+        // lag) is added, and the pair re-fits the two effects' sizes with the inertias and
+        // stiffnesses held at the single effect's re-fit (minutes per record otherwise)
+        let nonlinear_first = first.is_nonlinear();
+        if nonlinear_first {
+            search_notes.push(format!(
+                "beside {} only a dead time or a lag was searched for as a second effect, the sizes re-fitted with the mechanics held (a second friction or play: minutes per record)",
+                label(scored[best].3)
+            ));
+        }
         let x1 = scored[best].4.clone();
         let seconds: Vec<Effect> = cands
             .iter()
             .filter_map(|c| match *c {
-                Candidate::Effect(e) if e.name() != first.name() => Some(e),
+                Candidate::Effect(e) if e.name() != first.name() && !(nonlinear_first && e.is_nonlinear()) => Some(e),
                 _ => None,
             })
             .collect();
@@ -741,14 +746,26 @@ pub fn diagnose(rec: DriveRecord, progress: &(dyn Fn(&str) + Sync)) -> Result<Dr
         let mut screened2 = super::on_two_workers(seconds.len(), &screen_second);
         screened2.sort_by(|a, b| a.2.total_cmp(&b.2));
         screened2.truncate(SCREEN_KEEP);
+        // the re-fit of candidate `c` from `x0`: everything, or (beside a nonlinear first
+        // effect) the effects' sizes with the inertias and stiffnesses held
+        let refit_pair = |c: Candidate, x0: &[f64]| {
+            if nonlinear_first {
+                let own = |s: &[f64]| problem.residual(c, &[&x0[..nbase], s].concat());
+                let (s, cost) = lm::minimise_to(&own, &x0[nbase..], 20, LM_REL_TOL);
+                progress(&label(c));
+                ([&x0[..nbase], &s[..]].concat(), cost)
+            } else {
+                fit_all(c, x0)
+            }
+        };
         let fit_pair = |k: usize| -> (usize, Vec<f64>, f64) {
             let (j, x0, _) = &screened2[k];
-            let (x, cost) = fit_all(Candidate::Pair(first, seconds[*j]), x0);
+            let (x, cost) = refit_pair(Candidate::Pair(first, seconds[*j]), x0);
             (*j, x, cost)
         };
         let single = best;
         for (j, x, cost) in super::on_two_workers(screened2.len(), &fit_pair) {
-            if let Some(entry) = score_fit(Candidate::Pair(first, seconds[j]), x, cost, true) {
+            if let Some(entry) = score_fit(Candidate::Pair(first, seconds[j]), x, cost, !nonlinear_first) {
                 scored.push(entry);
                 let i = scored.len() - 1;
                 if scored[i].0.score < scored[best].0.score
@@ -762,9 +779,9 @@ pub fn diagnose(rec: DriveRecord, progress: &(dyn Fn(&str) + Sync)) -> Result<Dr
         // second effect; the pair stays only where it still beats that
         if best != single {
             let x = &scored[best].4;
-            let (xs, cost) = fit_all(Candidate::Effect(first), &x[..x.len() - 1]);
+            let (xs, cost) = refit_pair(Candidate::Effect(first), &x[..x.len() - 1]);
             if cost < scored[single].0.error_after.powi(2) {
-                if let Some(again) = score_fit(Candidate::Effect(first), xs, cost, true) {
+                if let Some(again) = score_fit(Candidate::Effect(first), xs, cost, scored[single].5) {
                     scored[single] = again;
                     let (pair, alone) = (&scored[best].0, &scored[single].0);
                     if !(pair.score < alone.score && pair.error_after < 0.9 * alone.error_after) {

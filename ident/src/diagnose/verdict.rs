@@ -35,6 +35,8 @@ pub struct RecordScales {
     pub rms_speed: f64,
     /// Length of the record, s.
     pub duration_s: f64,
+    /// Sample time, s (0: not judged).
+    pub sample_time_s: f64,
 }
 
 /// Settings of the bounds, with their defaults.
@@ -85,6 +87,14 @@ pub fn out_of_bounds(parameters: &BTreeMap<String, f64>, scales: &RecordScales, 
         };
         if !v.is_finite() || v >= bound {
             out.push(format!("{key} = {v:.4e} is at or beyond its bound {bound:.4e} ({what})"));
+        }
+        // a time at the floor of its search (within 1 %) is shorter than the record can show
+        let floor = plant::drive::INPUT_TIME_FLOOR_SAMPLES * scales.sample_time_s;
+        if (key == "delay_s" || key == "time_constant_s") && v.is_finite() && v <= 1.01 * floor {
+            out.push(format!(
+                "{key} = {v:.4e} is at or below the shortest the record can show, {floor:.4e} ({} of a sample)",
+                plant::drive::INPUT_TIME_FLOOR_SAMPLES
+            ));
         }
     }
     out
@@ -253,7 +263,7 @@ mod tests {
     use super::*;
 
     fn scales() -> RecordScales {
-        RecordScales { max_force: 2.0, rms_speed: 20.0, duration_s: 10.0 }
+        RecordScales { max_force: 2.0, rms_speed: 20.0, duration_s: 10.0, sample_time_s: 1e-3 }
     }
 
     #[test]
@@ -297,6 +307,11 @@ mod tests {
         assert_eq!(out_of_bounds(&p, &scales(), &BoundSettings::default()).len(), 1);
         let p = BTreeMap::from([("delay_s".to_string(), f64::NAN)]);
         assert_eq!(out_of_bounds(&p, &scales(), &BoundSettings::default()).len(), 1, "NaN is never a finding");
+        // nor a lag at the floor of its search, 0.3 of the 1 ms sample; one sample is a finding
+        let p = BTreeMap::from([("time_constant_s".to_string(), 3.0e-4)]);
+        assert_eq!(out_of_bounds(&p, &scales(), &BoundSettings::default()).len(), 1);
+        let p = BTreeMap::from([("time_constant_s".to_string(), 1.0e-3)]);
+        assert!(out_of_bounds(&p, &scales(), &BoundSettings::default()).is_empty());
     }
 
     #[test]

@@ -33,6 +33,7 @@ impl EffectModel for Backlash {
         grid: (0.01, 1000.0, 121),
         rough: true,
         limit: Limit::TimesScale(3000.0),
+        floor: 0.0,
     };
 
     fn element(&self) -> Element {

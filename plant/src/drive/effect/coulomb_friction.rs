@@ -37,6 +37,7 @@ impl EffectModel for CoulombFriction {
         grid: (0.01, 1.0, 8),
         rough: false,
         limit: Limit::Unbounded,
+        floor: 0.0,
     };
 
     fn element(&self) -> Element {

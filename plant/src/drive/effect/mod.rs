@@ -134,6 +134,9 @@ pub struct Search {
     pub rough: bool,
     /// The largest size that is still an answer.
     pub limit: Limit,
+    /// The smallest size the record can show, a multiple of the scale (0: none): a fit does
+    /// not go below it.
+    pub floor: f64,
 }
 
 /// Where a record can show an effect, judged on the declared model's own motion under the
@@ -172,14 +175,24 @@ pub enum Limit {
 }
 
 /// The search of an input's time (a dead time, a lag's time constant): at every input, from 0.3
-/// to 100 samples (12 starts), up to a tenth of the record.
+/// to 100 samples (12 starts), up to a tenth of the record, and no shorter than
+/// [`INPUT_TIME_FLOOR_SAMPLES`].
 pub const INPUT_TIME_SEARCH: Search = Search {
     shows: Shows::Always,
     scale: Scale::SampleTime,
     grid: (0.3, 100.0, 12),
     rough: false,
     limit: Limit::RecordShare(0.1),
+    floor: INPUT_TIME_FLOOR_SAMPLES,
 };
+
+/// The shortest dead time or lag a sampled record can show, in samples: an input is known only
+/// as held over each sample, so a shift of a fraction of one is within the sample-and-hold's own
+/// timing. A fit where the record has no such effect runs towards zero, and beside a friction or
+/// a play every simulation's step follows a lag's time constant (`cargo run --release -p ident
+/// --example drive_sim_cost`: 6.5 times the cost at 0.3 ms, hundreds of times at the 1e-5 s
+/// such fits reached), so the fit stops here.
+pub const INPUT_TIME_FLOOR_SAMPLES: f64 = 0.3;
 
 /// What the record and the declared model leave open of an effect of a given size, at its
 /// element: a friction's smoothing speed.
