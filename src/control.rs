@@ -322,19 +322,6 @@ fn blocks_in_words(blocks: &[usize]) -> String {
     format!("[{}] steps", parts.join(", "))
 }
 
-/// Why a closed-loop run's figures do not describe the MPC, if they do not: the QP missed its
-/// time limit in more than [`mpc::closed_loop::MAX_FALLBACK_SHARE`] of the `steps`, so the loop
-/// ran on the fallback plan.
-pub fn fallback_verdict(fallbacks: usize, steps: usize) -> Option<String> {
-    let share = fallbacks as f64 / steps.max(1) as f64;
-    (steps == 0 || share > mpc::closed_loop::MAX_FALLBACK_SHARE).then(|| {
-        format!(
-            "the QP missed its time limit in {fallbacks} of {steps} steps ({:.0} %): the loop ran on the fallback plan, so these figures do not describe the MPC; shorten --horizon, use more --blocks or raise --time-limit-us",
-            share * 100.0
-        )
-    })
-}
-
 impl MpcReport {
     /// JSON with the verdict keys every `rigtwin mpc` document carries.
     pub fn to_json(&self) -> serde_json::Value {
@@ -350,9 +337,10 @@ impl MpcReport {
         v
     }
 
-    /// Why the figures do not describe the MPC, if they do not (see [`fallback_verdict`]).
+    /// Why the figures do not describe the MPC, if they do not
+    /// ([`mpc::closed_loop::fallback_verdict`]).
     pub fn invalid(&self) -> Option<String> {
-        fallback_verdict(self.fallbacks, self.steps)
+        mpc::closed_loop::fallback_verdict(self.fallbacks, self.steps)
     }
 
     /// Text for the terminal.

@@ -14,6 +14,19 @@ use crate::error::Result;
 /// was mostly driven by stale plans, and its figures are the fallback's, not the controller's.
 pub const MAX_FALLBACK_SHARE: f64 = 0.1;
 
+/// Why a closed-loop run's figures do not describe the MPC, if they do not: the QP missed its
+/// time limit in more than [`MAX_FALLBACK_SHARE`] of the `steps` (or there were none), so the
+/// loop ran on the fallback plan.
+pub fn fallback_verdict(fallbacks: usize, steps: usize) -> Option<String> {
+    let share = fallbacks as f64 / steps.max(1) as f64;
+    (steps == 0 || share > MAX_FALLBACK_SHARE).then(|| {
+        format!(
+            "the QP missed its time limit in {fallbacks} of {steps} steps ({:.0} %): the loop ran on the fallback plan, so these figures do not describe the MPC; shorten --horizon, use more --blocks or raise --time-limit-us",
+            share * 100.0
+        )
+    })
+}
+
 /// Anything that takes the inputs for one sample period and gives its outputs.
 pub trait Plant {
     /// Current outputs (all of them, in the plant's output order).
@@ -499,4 +512,19 @@ pub fn median_p99(values: &[f64]) -> (f64, f64) {
     }
     let at = |q: f64| v[((v.len() - 1) as f64 * q).round() as usize];
     (at(0.5), at(0.99))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_run_mostly_on_the_fallback_plan_is_no_mpc_figure() {
+        // the share is "more than" MAX_FALLBACK_SHARE (10 %): 10 of 100 steps still describe the
+        // MPC, 11 do not, and a run without steps describes nothing
+        assert_eq!(fallback_verdict(10, 100), None);
+        let why = fallback_verdict(11, 100).expect("11 % of the steps on the fallback plan");
+        assert!(why.contains("11 of 100 steps (11 %)"), "{why}");
+        assert!(fallback_verdict(0, 0).is_some());
+    }
 }
