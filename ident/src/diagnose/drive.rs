@@ -62,9 +62,21 @@ fn refine_profile(start: (Vec<f64>, f64), step: f64, cost_of: &dyn Fn(&Vec<f64>)
     best
 }
 
-/// A candidate's score, its model, the lag-1 autocorrelation of its residual, the candidate
-/// and its parameters.
+/// A candidate's score, its model, the lag-1 autocorrelation of its residual, the candidate,
+/// its parameters, and whether its inertias and stiffnesses were fitted (or held at their
+/// re-fit) rather than held at the declared values.
 type Scored = (CandidateScore, DriveModel, f64, Candidate, Vec<f64>, bool);
+
+/// Whether `challenger` beats the `incumbent` clearly ([`super::clearly_beats`]), `reference`
+/// the model it adds to: the re-fitted declared model for a single effect, the single effect
+/// for a pair.
+fn clearly_beats(challenger: &CandidateScore, incumbent: &CandidateScore, reference: &CandidateScore) -> bool {
+    super::clearly_beats(challenger.score, challenger.error_after, incumbent.score, reference.error_after)
+}
+
+/// Times an answer kept from the screen is re-fitted with everything and chosen again (each
+/// round may bring up another candidate only screened).
+const ANSWER_REFITS: usize = 2;
 
 /// A declared inertia or stiffness may be re-fitted within this factor of its declared value.
 pub const MAX_REFIT_FACTOR: f64 = 100.0;
@@ -603,12 +615,14 @@ pub fn diagnose(rec: DriveRecord, progress: &(dyn Fn(&str) + Sync)) -> Result<Dr
         .chain(ranked.iter().take(SCREEN_KEEP).copied())
         .map(|s| s.0)
         .collect();
-    // the re-fit of everything of candidate `c` from `x0`
-    let fit_all = |c: Candidate, x0: &[f64]| {
-        let fitted = lm::minimise_to(&|x: &[f64]| problem.residual(c, x), x0, 20, LM_REL_TOL);
+    // the re-fit of candidate `c` from `x0`, its first `held` parameters held
+    let fit_from = |c: Candidate, x0: &[f64], held: usize| {
+        let free = |s: &[f64]| problem.residual(c, &[&x0[..held], s].concat());
+        let (s, cost) = lm::minimise_to(&free, &x0[held..], 20, LM_REL_TOL);
         progress(&label(c));
-        fitted
+        ([&x0[..held], &s[..]].concat(), cost)
     };
+    let fit_all = |c: Candidate, x0: &[f64]| fit_from(c, x0, 0);
     // the re-fit starts from the better of the screen and, where the screen held the declared
     // inertias and stiffnesses, the same size beside the declared model's re-fit (a play's or
     // a friction's cost is too rough for the re-fit to walk from one to the other)
@@ -676,7 +690,7 @@ pub fn diagnose(rec: DriveRecord, progress: &(dyn Fn(&str) + Sync)) -> Result<Dr
     let choose = |scored: &[Scored]| {
         let mut best = none;
         for (i, s) in scored.iter().enumerate() {
-            if s.0.score < scored[best].0.score && s.0.error_after < 0.9 * scored[none].0.error_after {
+            if clearly_beats(&s.0, &scored[best].0, &scored[none].0) {
                 best = i;
             }
         }
@@ -685,7 +699,7 @@ pub fn diagnose(rec: DriveRecord, progress: &(dyn Fn(&str) + Sync)) -> Result<Dr
     let mut best = choose(&scored);
     // an answer only screened (the inertias and stiffnesses held at the declared values) is
     // re-fitted with everything before anything is compared with it
-    for _ in 0..SCREEN_KEEP {
+    for _ in 0..ANSWER_REFITS {
         if scored[best].5 {
             break;
         }
@@ -746,21 +760,12 @@ pub fn diagnose(rec: DriveRecord, progress: &(dyn Fn(&str) + Sync)) -> Result<Dr
         let mut screened2 = super::on_two_workers(seconds.len(), &screen_second);
         screened2.sort_by(|a, b| a.2.total_cmp(&b.2));
         screened2.truncate(SCREEN_KEEP);
-        // the re-fit of candidate `c` from `x0`: everything, or (beside a nonlinear first
-        // effect) the effects' sizes with the inertias and stiffnesses held
-        let refit_pair = |c: Candidate, x0: &[f64]| {
-            if nonlinear_first {
-                let own = |s: &[f64]| problem.residual(c, &[&x0[..nbase], s].concat());
-                let (s, cost) = lm::minimise_to(&own, &x0[nbase..], 20, LM_REL_TOL);
-                progress(&label(c));
-                ([&x0[..nbase], &s[..]].concat(), cost)
-            } else {
-                fit_all(c, x0)
-            }
-        };
+        // the pair's re-fit: everything, or (beside a nonlinear first effect) the effects'
+        // sizes with the inertias and stiffnesses held
+        let held = if nonlinear_first { nbase } else { 0 };
         let fit_pair = |k: usize| -> (usize, Vec<f64>, f64) {
             let (j, x0, _) = &screened2[k];
-            let (x, cost) = refit_pair(Candidate::Pair(first, seconds[*j]), x0);
+            let (x, cost) = fit_from(Candidate::Pair(first, seconds[*j]), x0, held);
             (*j, x, cost)
         };
         let single = best;
@@ -768,9 +773,7 @@ pub fn diagnose(rec: DriveRecord, progress: &(dyn Fn(&str) + Sync)) -> Result<Dr
             if let Some(entry) = score_fit(Candidate::Pair(first, seconds[j]), x, cost, !nonlinear_first) {
                 scored.push(entry);
                 let i = scored.len() - 1;
-                if scored[i].0.score < scored[best].0.score
-                    && scored[i].0.error_after < 0.9 * scored[single].0.error_after
-                {
+                if clearly_beats(&scored[i].0, &scored[best].0, &scored[single].0) {
                     best = i;
                 }
             }
@@ -779,12 +782,11 @@ pub fn diagnose(rec: DriveRecord, progress: &(dyn Fn(&str) + Sync)) -> Result<Dr
         // second effect; the pair stays only where it still beats that
         if best != single {
             let x = &scored[best].4;
-            let (xs, cost) = refit_pair(Candidate::Effect(first), &x[..x.len() - 1]);
+            let (xs, cost) = fit_from(Candidate::Effect(first), &x[..x.len() - 1], held);
             if cost < scored[single].0.error_after.powi(2) {
                 if let Some(again) = score_fit(Candidate::Effect(first), xs, cost, scored[single].5) {
                     scored[single] = again;
-                    let (pair, alone) = (&scored[best].0, &scored[single].0);
-                    if !(pair.score < alone.score && pair.error_after < 0.9 * alone.error_after) {
+                    if !clearly_beats(&scored[best].0, &scored[single].0, &scored[single].0) {
                         best = single;
                     }
                 }

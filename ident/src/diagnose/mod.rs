@@ -68,6 +68,13 @@ pub fn bic(ssr: f64, n: usize, n_eff: f64, k: usize) -> f64 {
     n_eff * (ssr / n as f64).max(1e-300).ln() + k as f64 * n_eff.max(2.0).ln()
 }
 
+/// Whether a model of `score` and `error` beats another clearly — the rule of both engines: a
+/// lower score than `incumbent_score` and 10 % less error than `reference_error` (the model it
+/// adds to).
+pub(crate) fn clearly_beats(score: f64, error: f64, incumbent_score: f64, reference_error: f64) -> bool {
+    score < incumbent_score && error < 0.9 * reference_error
+}
+
 /// Lag-1 autocorrelation of `r` (0 for white noise).
 pub fn lag1_autocorrelation(r: &[f64]) -> f64 {
     let m = r.iter().sum::<f64>() / r.len().max(1) as f64;

@@ -719,7 +719,7 @@ impl Fit {
 
     /// Whether this fit beats `other` clearly: a lower score and 10 % less error.
     fn beats(&self, other: &Fit) -> bool {
-        self.score < other.score && self.error() < 0.9 * other.error()
+        super::clearly_beats(self.score, self.error(), other.score, other.error())
     }
 }
 

@@ -71,16 +71,18 @@ impl Default for BoundSettings {
 }
 
 /// Which of `parameters` (report keys with units) lie at or beyond their physical bounds, each
-/// as a sentence for the report. Keys without a bound here (re-fitted inertias, stiffnesses,
-/// dampings, plays) are not judged.
+/// as a sentence for the report; a dead time or time constant also at or below (within 1 %) the
+/// floor of its search ([`plant::drive::INPUT_TIME_FLOOR_SAMPLES`] of a sample). Keys without a
+/// bound here (re-fitted inertias, stiffnesses, dampings, plays) are not judged.
 pub fn out_of_bounds(parameters: &BTreeMap<String, f64>, scales: &RecordScales, s: &BoundSettings) -> Vec<String> {
     let mut out = Vec::new();
     for (key, &v) in parameters {
+        let time = key == "delay_s" || key == "time_constant_s";
         let (bound, what) = if key.starts_with("friction") {
             (s.friction_per_force * scales.max_force, "the largest force (torque) the record applies")
         } else if key.starts_with("smoothing_speed") {
             (s.smoothing_per_speed * scales.rms_speed, "a quarter of the record's RMS speed")
-        } else if key == "delay_s" || key == "time_constant_s" {
+        } else if time {
             (s.time_per_record * scales.duration_s, "a tenth of the record")
         } else {
             continue;
@@ -88,9 +90,8 @@ pub fn out_of_bounds(parameters: &BTreeMap<String, f64>, scales: &RecordScales, 
         if !v.is_finite() || v >= bound {
             out.push(format!("{key} = {v:.4e} is at or beyond its bound {bound:.4e} ({what})"));
         }
-        // a time at the floor of its search (within 1 %) is shorter than the record can show
         let floor = plant::drive::INPUT_TIME_FLOOR_SAMPLES * scales.sample_time_s;
-        if (key == "delay_s" || key == "time_constant_s") && v.is_finite() && v <= 1.01 * floor {
+        if time && v.is_finite() && v <= 1.01 * floor {
             out.push(format!(
                 "{key} = {v:.4e} is at or below the shortest the record can show, {floor:.4e} ({} of a sample)",
                 plant::drive::INPUT_TIME_FLOOR_SAMPLES
