@@ -28,98 +28,6 @@ pub fn prediction(params: &rigtwin_fmu::FmuParams) -> anyhow::Result<Prediction>
     Ok(mpc::prediction::prediction(&params.powertrain, params.variant, &params.effects, 1e-3)?)
 }
 
-/// The rig as the FMU integrates it (`rigtwin_fmu::model::Model`: exact ZOH pieces split at the
-/// dead time's switching instants, RK4 with backlash), its outputs in the order of a
-/// prediction model's output names: the plant a controller is tried on.
-pub struct FmuPlant {
-    model: rigtwin_fmu::model::Model,
-    z: nalgebra::DVector<f64>,
-    u: nalgebra::DVector<f64>,
-    delay: plant::effects::DelayLine,
-    t: f64,
-    dt_s: f64,
-    /// Per output: a powertrain state index (speed) or a side-shaft torque (0, 1).
-    outputs: Vec<Source>,
-    y: Vec<f64>,
-}
-
-#[derive(Debug, Clone, Copy)]
-enum Source {
-    State(usize),
-    Torque(usize),
-}
-
-impl FmuPlant {
-    /// The plant of `params` sampled every `dt_s`, spinning steadily at `speed_radps` with no
-    /// drive torque and `u0` applied before the start, reporting `output_names`.
-    pub fn new(
-        params: &rigtwin_fmu::FmuParams,
-        dt_s: f64,
-        speed_radps: f64,
-        u0: &[f64],
-        output_names: &[String],
-    ) -> anyhow::Result<Self> {
-        let model = rigtwin_fmu::model::Model::new(params).map_err(|e| anyhow::anyhow!("the plant: {e}"))?;
-        let pt = model.powertrain();
-        let n = pt.dofs();
-        let outputs = output_names
-            .iter()
-            .map(|name| {
-                Ok(match name.as_str() {
-                    "w_m2" => Source::State(n),
-                    "w_drive" => Source::State(n + 1),
-                    "w_m3" => Source::State(n + 2),
-                    // without a compliance the motor is the drive
-                    "w_motor" => Source::State(if n == 4 { n + 3 } else { n + 1 }),
-                    "T_short_side_shaft" => Source::Torque(0),
-                    "T_long_side_shaft" => Source::Torque(1),
-                    other => anyhow::bail!("the plant has no output `{other}`"),
-                })
-            })
-            .collect::<anyhow::Result<Vec<_>>>()?;
-        let x0 = pt.steady_state(0.0, speed_radps);
-        let z = model.state_of_powertrain(&x0);
-        let mut u = nalgebra::DVector::zeros(rigtwin_fmu::model::NU);
-        u.rows_mut(0, u0.len().min(3)).copy_from_slice(&u0[..u0.len().min(3)]);
-        let mut delay = plant::effects::DelayLine::default();
-        delay.record(f64::NEG_INFINITY, u[rigtwin_fmu::model::DRIVE_INPUT]);
-        let mut p = FmuPlant { model, z, u, delay, t: 0.0, dt_s, y: vec![0.0; outputs.len()], outputs };
-        p.read();
-        Ok(p)
-    }
-
-    fn read(&mut self) {
-        let x = self.model.powertrain_part(self.z.as_slice());
-        let torques = self.model.torques(self.z.as_slice());
-        for (y, s) in self.y.iter_mut().zip(&self.outputs) {
-            *y = match *s {
-                Source::State(i) => x[i],
-                Source::Torque(k) => torques[k],
-            };
-        }
-    }
-}
-
-impl Plant for FmuPlant {
-    fn outputs(&self) -> &[f64] {
-        &self.y
-    }
-    fn advance(&mut self, u: &[f64]) -> Result<(), String> {
-        self.u.rows_mut(0, 3).copy_from_slice(&u[..3]);
-        let tau = self.model.delay_s();
-        if tau > 0.0 {
-            self.delay.record(self.t, u[rigtwin_fmu::model::DRIVE_INPUT]);
-        }
-        self.model.step(&mut self.z, &self.u, self.t, self.dt_s, &self.delay)?;
-        self.t += self.dt_s;
-        if tau > 0.0 {
-            self.delay.forget_before(self.t, tau);
-        }
-        self.read();
-        Ok(())
-    }
-}
-
 /// Median, 99th percentile and maximum, µs.
 #[derive(Debug, Clone, Serialize)]
 pub struct Timing {
@@ -480,8 +388,10 @@ fn run_on(
     let ss = &prediction.model;
     let (_, u0) = mpc::closed_loop::steady_spin(ss, scenario.speed_radps)?;
     let mut make = |_: &nalgebra::DVector<f64>| -> Result<Box<dyn Plant>, String> {
-        let p = FmuPlant::new(truth, settings.dt_s, scenario.speed_radps, &u0, &ss.output_names)
-            .map_err(|e| e.to_string())?;
+        let (rig, speed) = (&truth.powertrain, scenario.speed_radps);
+        let p =
+            mpc::DrivePlant::paper_rig(rig, truth.variant, &truth.effects, settings.dt_s, speed, &u0, &ss.output_names)
+                .map_err(|e| format!("the plant: {e}"))?;
         Ok(Box::new(p))
     };
     compare(ss, &prediction.input_delays_s, &mut make, settings, scenario, j_load, PI_BANDWIDTH_HZ, probes)

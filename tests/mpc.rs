@@ -212,8 +212,9 @@ fn controller_fmu_closes_the_loop_in_fmpy() {
     let in_process = |delayed: bool| -> Vec<[f64; 6]> {
         let mut c = mpc::Controller::with_input_delays(&p.model, &p.input_delays_s, &settings).unwrap();
         c.reset(&x0, &u0);
+        let (rig, effects, names) = (&params.powertrain, &params.effects, &p.model.output_names);
         let mut plant =
-            rigtwin::control::FmuPlant::new(&params, settings.dt_s, speed, &u0, &p.model.output_names).unwrap();
+            mpc::DrivePlant::paper_rig(rig, params.variant, effects, settings.dt_s, speed, &u0, names).unwrap();
         let mut rows = Vec::new();
         let mut previous: Option<Vec<f64>> = None;
         for k in 0..steps {

@@ -166,7 +166,16 @@ fn c_program_commands_what_the_rust_loop_commands() {
     let speed = 10.0;
     let (x0, u0) = steady_spin(&p.model, speed).unwrap();
     c.reset(&x0, &u0);
-    let mut plant = rigtwin::control::FmuPlant::new(&params, settings.dt_s, speed, &u0, &p.model.output_names).unwrap();
+    let mut plant = mpc::DrivePlant::paper_rig(
+        &params.powertrain,
+        params.variant,
+        &params.effects,
+        settings.dt_s,
+        speed,
+        &u0,
+        &p.model.output_names,
+    )
+    .unwrap();
     let picked = measured(&p, &settings);
     let record =
         close_loop(&mut c, &mut plant, &picked, speed, |k| vec![speed, speed, if k >= 50 { 40.0 } else { 0.0 }]);

@@ -53,12 +53,12 @@ fn fmu_step(c: &mut Criterion) {
     let mut m = Model::new(&p).unwrap();
     let mut z = nalgebra::DVector::zeros(m.nx());
     z[1] = 0.01;
-    let u = nalgebra::DVector::zeros(NU);
-    let delay = plant::effects::DelayLine::default();
+    let u = [0.0; NU];
+    let delays = vec![plant::effects::DelayLine::default(); NU];
     let mut t = 0.0;
     c.bench_function("Model::step (h = 1 ms, 6 states)", |b| {
         b.iter(|| {
-            let r = m.step(black_box(&mut z), &u, t, 1e-3, &delay);
+            let r = m.step(black_box(&mut z), &u, t, 1e-3, &delays);
             t += 1e-3;
             black_box(r)
         })
@@ -77,6 +77,7 @@ fn fmu_step(c: &mut Criterion) {
     let mut m = Model::new(&p).unwrap();
     let nx = m.nx();
     let (ad, bd) = m.discretisation(1e-3).unwrap();
+    let nu = bd.ncols();
     let (ad, bd): (Vec<f64>, Vec<f64>) = (ad.transpose().as_slice().to_vec(), bd.transpose().as_slice().to_vec()); // row-major
     unsafe {
         let lib = libloading::Library::new(&lib).unwrap();
@@ -85,13 +86,13 @@ fn fmu_step(c: &mut Criterion) {
         > = lib.get(b"reference_step").unwrap();
         let mut x = vec![0.0; nx];
         x[1] = 0.01;
-        let u = [0.0; NU];
+        let u = vec![0.0; nu];
         let mut scratch = vec![0.0; nx];
         c.bench_function("C reference step (gcc -O2, same 6-state ZOH matrices)", |b| {
             b.iter(|| {
                 step(
                     nx as i32,
-                    NU as i32,
+                    nu as i32,
                     ad.as_ptr(),
                     bd.as_ptr(),
                     black_box(x.as_mut_ptr()),

@@ -2,18 +2,13 @@
 //! Reference FMUs do), parameters, states, inputs, the model, and what the standard asks of
 //! each call. The version glue (`fmi2`, `fmi3`) only converts arguments and statuses.
 
-use std::borrow::Cow;
-
-use nalgebra::{DMatrix, DVector};
+use nalgebra::DVector;
 
 use crate::controller::ControllerMachine;
 use crate::model::{Model, DRIVE_INPUT};
 use crate::params::FmuParams;
 use crate::variables::{parameter_set, parameter_values, rig_parameter, variant_number, Causality, Kind, Slot, Table};
 use plant::effects::DelayLine;
-
-/// A Jacobian borrowed from the rig's model or evaluated for a drive model.
-type Matrix<'a> = Cow<'a, DMatrix<f64>>;
 
 /// Whether the instance simulates itself (co-simulation) or lends its derivatives to the
 /// importer's solver (model exchange).
@@ -233,11 +228,10 @@ impl Snapshot {
     }
 }
 
-/// The dynamics an instance steps: the paper rig's or a drive model's.
+/// What an instance runs: a plant (the paper rig or any drive model) or the controller.
 #[derive(Debug)]
 enum Machine {
-    Rig(Box<Model>),
-    Drive(Box<plant::Stepper>),
+    Plant(Box<Model>),
     Controller(Box<ControllerMachine>),
 }
 
@@ -419,8 +413,7 @@ impl Instance {
                 }
                 Machine::Controller(Box::new(m))
             }),
-            (None, None) => Model::new(&p).map(|m| Machine::Rig(Box::new(m))),
-            (Some(d), None) => plant::Stepper::new(d).map(|m| Machine::Drive(Box::new(m))).map_err(|e| e.to_string()),
+            (_, None) => Model::new(&p).map(|m| Machine::Plant(Box::new(m))),
         };
         self.model = Some(built.or_else(|e| error(format!("the parameters do not describe a model: {e}")))?);
         Ok(())
@@ -430,8 +423,7 @@ impl Instance {
     fn evaluate_derivatives(&mut self, out: &mut [f64]) {
         self.update_acting();
         match self.model.as_mut().expect("built by the caller") {
-            Machine::Rig(m) => m.derivatives(self.x.as_slice(), self.u.as_slice(), self.acting[DRIVE_INPUT], out),
-            Machine::Drive(m) => m.derivatives(self.x.as_slice(), &self.acting, out),
+            Machine::Plant(m) => m.derivatives(self.x.as_slice(), &self.acting, out),
             Machine::Controller(_) => {}
         }
     }
@@ -596,10 +588,7 @@ impl Instance {
         }
         self.ensure_model()?;
         let stepped = match self.model.as_mut().expect("built above") {
-            Machine::Rig(m) => m.step(&mut self.x, &self.u, self.time, h, &self.delays[DRIVE_INPUT]),
-            Machine::Drive(m) => {
-                m.step(&mut self.x, self.u.as_slice(), self.time, h, &self.delays).map_err(|e| e.to_string())
-            }
+            Machine::Plant(m) => m.step(&mut self.x, self.u.as_slice(), self.time, h, &self.delays),
             Machine::Controller(m) => m.advance(self.time, h, self.u.as_slice()),
         };
         if let Err(e) = stepped {
@@ -653,12 +642,7 @@ impl Instance {
             self.evaluate_derivatives(&mut dx);
             let x = self.x.as_slice();
             let (torques, angles) = match self.model.as_mut().expect("built above") {
-                Machine::Rig(m) => (m.torques(x).to_vec(), m.angles(x).to_vec()),
-                Machine::Drive(m) => {
-                    let mut forces = vec![0.0; m.couplings()];
-                    m.coupling_forces(x, &mut forces);
-                    (forces, m.positions(x))
-                }
+                Machine::Plant(m) => (m.forces(x).to_vec(), m.angles(x)),
                 Machine::Controller(_) => (Vec::new(), Vec::new()),
             };
             Some((dx, torques, angles))
@@ -894,21 +878,13 @@ impl Instance {
         self.ensure_model()?;
         let nx = self.nx();
         self.update_acting();
-        // the rig's matrices are borrowed; a drive model's are evaluated at the present state
-        let (a, b, torque): (Matrix<'_>, Matrix<'_>, Matrix<'_>) = match self.model.as_ref().expect("built above") {
-            Machine::Rig(m) => {
-                let (a, b, t) = m.jacobians(self.x.as_slice());
-                (a, Cow::Borrowed(b), Cow::Borrowed(t))
-            }
-            Machine::Drive(m) => {
-                let (a, b, t) = m.jacobians(self.x.as_slice(), &self.acting);
-                (Cow::Owned(a), Cow::Owned(b), Cow::Owned(t))
-            }
+        // the Jacobians at the present state and inputs
+        let (a, b, torque) = match self.model.as_mut().expect("built above") {
+            Machine::Plant(m) => m.jacobians(self.x.as_slice(), &self.acting),
             Machine::Controller(_) => return error("the controller FMU provides no directional derivatives"),
         };
         let angle_gradient = |i: usize, col: usize| match self.model.as_ref() {
-            Some(Machine::Rig(m)) => m.angle_gradient(i, col),
-            Some(Machine::Drive(m)) => m.position_gradient(i, col),
+            Some(Machine::Plant(m)) => m.angle_gradient(i, col),
             _ => 0.0,
         };
         // column of a known in [x u]

@@ -43,10 +43,7 @@ pub fn check(p: &FmuParams) -> Result<(), String> {
     if p.controller.is_some() {
         return controller::ControllerMachine::new(p).map(|_| ());
     }
-    match &p.drive {
-        None => model::Model::new(p).map(|_| ()),
-        Some(m) => plant::Stepper::new(m).map(|_| ()).map_err(|e| e.to_string()),
-    }
+    model::Model::new(p).map(|_| ())
 }
 
 /// The variable table of parameter set `p`: the controller FMU's (its ports, generated from the

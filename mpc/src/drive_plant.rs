@@ -2,8 +2,9 @@
 //! of any drive model is tried on (`rigtwin mpc`, the C API's and the controller FMU's tests).
 
 use nalgebra::DVector;
-use plant::effects::DelayLine;
-use plant::{DriveModel, Stepper};
+use plant::effects::{DelayLine, Powertrain};
+use plant::rig::DriveEffects;
+use plant::{DriveModel, RigParams, Stepper, Variant};
 
 use crate::closed_loop::Plant;
 use crate::error::{MpcError, Result};
@@ -36,7 +37,24 @@ pub struct DrivePlant {
 impl DrivePlant {
     /// The plant of `model` at rest, sampled every `dt_s`, reporting `output_names`.
     pub fn new(model: &DriveModel, dt_s: f64, output_names: &[String]) -> Result<Self> {
-        let dynamics = Stepper::new(model)?;
+        let stepper = Stepper::new(model)?;
+        let nu = model.inputs.len();
+        let x0 = stepper.dynamics.initial_state(0.0, &vec![0.0; nu]);
+        DrivePlant::starting(model, stepper, dt_s, &x0, &vec![0.0; nu], output_names)
+    }
+
+    /// The plant of `model` stepped by `stepper` (a preset's: the paper rig steps in its own
+    /// coordinates, `plant::effects::Powertrain::stepper`), from the plant's state `x0` with
+    /// the inputs `u0` applied before the start, sampled every `dt_s`, reporting
+    /// `output_names` (the bodies' speeds, the couplings' forces).
+    pub fn starting(
+        model: &DriveModel,
+        stepper: Stepper,
+        dt_s: f64,
+        x0: &[f64],
+        u0: &[f64],
+        output_names: &[String],
+    ) -> Result<Self> {
         let n = model.line.bodies.len();
         let states = model.state_names();
         let forces = model.coupling_force_names();
@@ -58,14 +76,14 @@ impl DrivePlant {
             })
             .collect::<Result<Vec<_>>>()?;
         let nu = model.inputs.len();
-        let x = dynamics.state_of(&dynamics.dynamics.initial_state(0.0, &vec![0.0; nu]));
+        let x = stepper.state_of(x0);
         let mut delays = vec![DelayLine::default(); nu];
-        for d in delays.iter_mut() {
-            d.record(f64::NEG_INFINITY, 0.0);
+        for (d, &u) in delays.iter_mut().zip(u0.iter().chain(std::iter::repeat(&0.0))) {
+            d.record(f64::NEG_INFINITY, u);
         }
         let mut p = DrivePlant {
-            forces: vec![0.0; dynamics.couplings()],
-            dynamics,
+            forces: vec![0.0; stepper.couplings()],
+            dynamics: stepper,
             x,
             delays,
             t: 0.0,
@@ -75,6 +93,23 @@ impl DrivePlant {
         };
         p.read();
         Ok(p)
+    }
+
+    /// The paper rig (`rig` in `variant` with `effects`) as its FMU steps it
+    /// (`Powertrain::stepper`), spinning steadily at `speed_radps` with no drive torque and
+    /// `u0` applied before the start, sampled every `dt_s`, reporting `output_names`.
+    pub fn paper_rig(
+        rig: &RigParams,
+        variant: Variant,
+        effects: &DriveEffects,
+        dt_s: f64,
+        speed_radps: f64,
+        u0: &[f64],
+        output_names: &[String],
+    ) -> Result<Self> {
+        let truth = Powertrain::new(rig, variant, effects)?;
+        let x0 = truth.steady_state(0.0, speed_radps);
+        DrivePlant::starting(truth.model(), Stepper::paper_rig(&truth)?, dt_s, &x0, u0, output_names)
     }
 
     fn read(&mut self) {

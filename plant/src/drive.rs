@@ -711,15 +711,41 @@ impl Dynamics {
     }
 
     /// The exact steps of each of `lengths` (s) of the three pieces of a model whose only
-    /// nonlinearity is one coupling's play (no friction, at most [`AFFINE_MAX_STATES`] states):
-    /// inside the play, beyond it, below it. `None` for any other model.
-    pub fn single_play_maps(&self, lengths: &[f64]) -> Option<Vec<PieceMaps>> {
-        let plays = self.couplings.iter().filter(|s| s.half > 0.0).count();
-        if plays != 1 || self.friction.iter().any(|f| f.0 > 0.0) || self.nstates > AFFINE_MAX_STATES {
+    /// nonlinearity is play that engages at once ([`Dynamics::plays_engage_at_once`]; no
+    /// friction, at most [`AFFINE_MAX_STATES`] states): inside the play, beyond it, below it.
+    /// `None` for any other model.
+    pub fn play_maps(&self, lengths: &[f64]) -> Option<Vec<PieceMaps>> {
+        if !self.plays_engage_at_once() || self.friction.iter().any(|f| f.0 > 0.0) || self.nstates > AFFINE_MAX_STATES {
             return None;
         }
         let offset = self.play_offset();
         lengths.iter().map(|&h| PieceMaps::new(h, &|contact| self.linear_piece(contact), &offset)).collect()
+    }
+
+    /// Whether the model has play and every play enters and leaves contact together: one
+    /// coupling's, or several whose twists are one twist scaled, their plays scaled alike (the
+    /// paper rig's two side shafts on the differential's twist, eq. (A1)). Its pieces are then
+    /// three, each linear where nothing else is nonlinear.
+    pub fn plays_engage_at_once(&self) -> bool {
+        let mut plays = self.couplings.iter().filter(|s| s.half > 0.0);
+        let Some(first) = plays.next() else { return false };
+        // each play's twist per half play, as a dense row
+        let row = |s: &Spring| {
+            let mut r = vec![0.0; self.n];
+            for &(j, e) in &self.terms[s.terms.0..s.terms.1] {
+                r[j] += e / s.half;
+            }
+            r
+        };
+        let r0 = row(first);
+        let size = r0.iter().map(|v| v.abs()).fold(0.0, f64::max);
+        plays.all(|s| row(s).iter().zip(&r0).all(|(a, b)| (a - b).abs() <= 1e-12 * size))
+    }
+
+    /// The piece key of a model whose plays engage at once, all in `class` (0 inside, 1
+    /// beyond, 2 below: [`Dynamics::piece`]'s).
+    fn play_piece_key(&self, class: u64) -> u64 {
+        self.couplings.iter().filter(|s| s.half > 0.0).fold(0, |key, _| mix_piece(key, class))
     }
 
     /// The friction's contribution to ∂v̇_i/∂v_i at state `x`: (speed's state index, slope
@@ -982,9 +1008,10 @@ impl Dynamics {
             )));
         }
         // each step starts in the piece the last one ended in (pieces do not depend on inputs);
-        // with one play and nothing else nonlinear, a step that stays in its piece is exact
+        // with play that engages at once and nothing else nonlinear, a step that stays in its
+        // piece is exact
         let lengths: Vec<f64> = pieces.iter().map(|&(_, frac)| frac * dt).collect();
-        let exact = self.single_play_maps(&lengths);
+        let exact = self.play_maps(&lengths);
         let mut piece = None;
         for k in 0..len {
             for (yo, &o) in y.iter_mut().zip(outputs) {
@@ -1014,8 +1041,8 @@ pub struct HeldInputs<'a> {
     pub d: &'a Dynamics,
     /// The inputs after their dead times.
     pub u: &'a [f64],
-    /// The exact steps of its pieces where its only nonlinearity is one play
-    /// ([`Dynamics::single_play_maps`]).
+    /// The exact steps of its pieces where its only nonlinearity is play that engages at once
+    /// ([`Dynamics::play_maps`]).
     pub maps: Option<&'a PieceMaps>,
 }
 
@@ -1028,11 +1055,11 @@ impl PiecewiseSmooth for HeldInputs<'_> {
     fn piece(&mut self, x: &[f64]) -> u64 {
         self.d.piece(x)
     }
-    /// With one play and nothing else nonlinear, the piece's key is that play's class alone:
-    /// inside (0), beyond (1), below (2), the order of [`PieceMaps`].
+    /// With play that engages at once and nothing else nonlinear, the piece's key is the plays'
+    /// one class: inside (0), beyond (1), below (2), the order of [`PieceMaps`].
     fn exact(&mut self, piece: u64, x: &[f64], h: f64, out: &mut [f64]) -> bool {
         let Some(maps) = self.maps else { return false };
-        let Some(index) = (0..3).find(|&class| mix_piece(0, class) == piece) else { return false };
+        let Some(index) = (0..3).find(|&class| self.d.play_piece_key(class) == piece) else { return false };
         maps.step(index, x, self.u, h, out)
     }
 }
@@ -1289,7 +1316,7 @@ mod tests {
         }
     }
 
-    /// A rattling play stepped exactly within its pieces ([`Dynamics::single_play_maps`])
+    /// A rattling play stepped exactly within its pieces ([`Dynamics::play_maps`])
     /// against RK4 written out here over 10 µs steps, the dead zone as its own branches: two
     /// bodies, a spring with 20 mrad of play damped to 35 % of critical (lighter damping makes
     /// the impacts' timing, and so any two integrations, drift apart), a two-tone torque that
@@ -1299,7 +1326,7 @@ mod tests {
         let (j1, j2, c, d, b, dt) = (0.01, 0.05, 1000.0, 2.0, 0.02, 1e-3);
         let backlash = Effect::Backlash(Backlash { coupling: 0, backlash: b });
         let model = two_bodies([j1, j2], [0.01, 0.02], Coupling::new(c, d, 1.0), vec![backlash]);
-        assert!(Dynamics::new(&model).unwrap().single_play_maps(&[dt]).is_some(), "the exact path is taken");
+        assert!(Dynamics::new(&model).unwrap().play_maps(&[dt]).is_some(), "the exact path is taken");
         let u: Vec<f64> = (0..2000)
             .map(|k| {
                 let t = k as f64 * dt;

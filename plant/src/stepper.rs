@@ -17,11 +17,11 @@
 use nalgebra::{DMatrix, DVector};
 
 use crate::drive::{HeldInputs, MAX_INPUTS};
-use crate::effects::DelayLine;
+use crate::effects::{DelayLine, Powertrain};
 use crate::error::{PlantError, Result};
-use crate::integrate::PiecewiseRk4;
+use crate::integrate::{PieceMaps, PiecewiseRk4};
 use crate::line::MAX_BODIES;
-use crate::zoh_step::{longest_exact_piece, ZohCache, MAX_PIECES};
+use crate::zoh_step::{longest_exact_piece, ZohCache, CACHE, MAX_PIECES};
 use crate::{DriveModel, Dynamics, Quantity};
 
 /// Most states a drive model has: positions and speeds of the largest line, one lag per input.
@@ -73,8 +73,8 @@ pub fn coordinates(m: &DriveModel) -> Result<(Vec<Coordinate>, DMatrix<f64>)> {
 pub struct Stepper {
     /// The plant's model.
     pub dynamics: Dynamics,
-    /// The position coordinates of the state vector z.
-    pub coordinates: Vec<Coordinate>,
+    /// Number of position coordinates (bodies).
+    npos: usize,
     /// x = to_x z (the plant's state from the stepped one).
     to_x: DMatrix<f64>,
     /// z = to_z x.
@@ -92,6 +92,13 @@ pub struct Stepper {
     /// The nonlinear model's integrator.
     rk: PiecewiseRk4,
     cache: ZohCache,
+    /// Exact steps of the pieces of a model whose only nonlinearity is play that engages at
+    /// once (`Dynamics::play_maps`), per piece length (at most [`CACHE`] lengths).
+    play_maps: Vec<PieceMaps>,
+    /// Whether `play_maps` applies to this model.
+    has_play_maps: bool,
+    /// No input has a dead time.
+    undelayed: bool,
     breaks: Vec<f64>,
     segments: Vec<(f64, f64)>,
     u_piece: Vec<f64>,
@@ -100,9 +107,18 @@ pub struct Stepper {
 }
 
 impl Stepper {
-    /// The dynamics of `m`; the error names what is wrong.
+    /// The dynamics of `m`, its positions entering as [`coordinates`] chooses them; the error
+    /// names what is wrong.
     pub fn new(m: &DriveModel) -> Result<Stepper> {
-        let dynamics = Dynamics::new(m)?;
+        let (_, p) = coordinates(m)?;
+        Stepper::with_positions(m, Dynamics::new(m)?, &p)
+    }
+
+    /// The dynamics `dynamics` of `m` (a preset may choose its integrator's steps) with the
+    /// position coordinates z_pos = P q of the invertible `p` (a preset may choose its own
+    /// twists, as the paper rig's FMU keeps the differential's twist and the load machines'
+    /// angles); the error names what is wrong.
+    pub fn with_positions(m: &DriveModel, dynamics: Dynamics, p: &DMatrix<f64>) -> Result<Stepper> {
         let (a, b) = dynamics.linear();
         if a.iter().chain(b.iter()).any(|v| !v.is_finite()) {
             return Err(PlantError::Invalid("the parameters give a system matrix with non-finite entries".into()));
@@ -112,14 +128,16 @@ impl Stepper {
             return Err(PlantError::Invalid(format!("{nx} states: at most {MAX_STATES}")));
         }
         let n = m.line.bodies.len();
-        let (coordinates, p) = coordinates(m)?;
+        if p.shape() != (n, n) {
+            return Err(PlantError::Invalid(format!("{} position coordinates for {n} bodies", p.nrows())));
+        }
         let p_inv = p
             .clone()
             .try_inverse()
             .ok_or_else(|| PlantError::Invalid("the couplings' elongations and the positions are dependent".into()))?;
         let mut to_z = DMatrix::identity(nx, nx);
         let mut to_x = DMatrix::identity(nx, nx);
-        to_z.view_mut((0, 0), (n, n)).copy_from(&p);
+        to_z.view_mut((0, 0), (n, n)).copy_from(p);
         to_x.view_mut((0, 0), (n, n)).copy_from(&p_inv);
         let (a, b) = (&to_z * a * &to_x, &to_z * b);
         let forces = m.coupling_forces(nx) * &to_x;
@@ -130,8 +148,10 @@ impl Stepper {
         }
         let rk = dynamics.integrator();
         let nu = dynamics.ninputs();
+        let has_play_maps = dynamics.is_nonlinear() && dynamics.play_maps(&[]).is_some();
+        let undelayed = (0..nu).all(|j| dynamics.delay_s(j) <= 0.0);
         Ok(Stepper {
-            coordinates,
+            npos: n,
             to_x,
             to_z,
             forces,
@@ -142,6 +162,9 @@ impl Stepper {
             a,
             b,
             cache: ZohCache::default(),
+            play_maps: Vec::new(),
+            has_play_maps,
+            undelayed,
             breaks: Vec::new(),
             segments: Vec::new(),
             u_piece: vec![0.0; nu],
@@ -149,6 +172,23 @@ impl Stepper {
             xs: DVector::zeros(nx),
             dynamics,
         })
+    }
+
+    /// The paper rig's powertrain `p` as its FMU steps it: the diagnosis's integrator and
+    /// steps ([`Powertrain::dynamics`]), its positions entering as the load machines' angles
+    /// φ_m2, φ_m3, the side shafts' generalised twist s = 2φ_drive − φ_m2 − φ_m3 in place of
+    /// φ_drive (eq. (A1)) and, with a compliance, its twist φ_motor − φ_drive in place of
+    /// φ_motor: the rig FMU's states, in [`Powertrain::state_names`]' order.
+    pub fn paper_rig(p: &Powertrain) -> Result<Stepper> {
+        let n = p.dofs();
+        let mut rows = DMatrix::identity(n, n);
+        rows[(1, 0)] = -1.0;
+        rows[(1, 1)] = 2.0;
+        rows[(1, 2)] = -1.0;
+        if n == 4 {
+            rows[(3, 1)] = -1.0;
+        }
+        Stepper::with_positions(p.model(), p.dynamics().clone(), &rows)
     }
 
     /// Number of states.
@@ -168,13 +208,13 @@ impl Stepper {
 
     /// Every body's position at state `z`.
     pub fn positions(&self, z: &[f64]) -> Vec<f64> {
-        let n = self.coordinates.len();
+        let n = self.npos;
         (0..n).map(|i| (0..n).map(|j| self.to_x[(i, j)] * z[j]).sum()).collect()
     }
 
     /// ∂(position of body i)/∂z_j.
     pub fn position_gradient(&self, i: usize, j: usize) -> f64 {
-        if j < self.coordinates.len() {
+        if j < self.npos {
             self.to_x[(i, j)]
         } else {
             0.0
@@ -279,10 +319,21 @@ impl Stepper {
     /// discretised.
     pub fn step(&mut self, x: &mut DVector<f64>, u: &[f64], t: f64, h: f64, delays: &[DelayLine]) -> Result<()> {
         let nonlinear = self.dynamics.is_nonlinear();
-        let sub_steps = if nonlinear { h / self.rk.fine_s } else { h / self.max_piece_s };
+        // the common case — linear, no dead time: one exact step over [Ad Bd]
+        if !nonlinear && self.undelayed && h <= MAX_PIECES as f64 * self.max_piece_s {
+            let i = self.cache.index(&self.a, &self.b, h, self.max_piece_s)?;
+            return self
+                .cache
+                .advance(i, x.as_mut_slice(), u)
+                .map_err(|k| PlantError::Invalid(format!("state {k} became non-finite over the step from {t} s")));
+        }
+        let finest = if nonlinear { self.rk.fine_s } else { self.max_piece_s };
+        let sub_steps = h / finest;
         if sub_steps.is_nan() || sub_steps > MAX_PIECES as f64 {
+            let longest = MAX_PIECES as f64 * finest;
             return Err(PlantError::Invalid(format!(
-                "a step of {h} s needs more than {MAX_PIECES} pieces for this model"
+                "a step of {h} s is longer than this model integrates exactly (at most {longest:.4e} s: {MAX_PIECES} \
+                 pieces)"
             )));
         }
         // the instants in (t, t+h) where a delayed input switches
@@ -317,7 +368,8 @@ impl Stepper {
         let mut result = Ok(());
         for p in 0..self.breaks.len() - 1 {
             let (a, b) = (self.breaks[p], self.breaks[p + 1]);
-            let len = b - a;
+            // one piece is the whole step: its length exactly h (a cached piece length)
+            let len = if self.breaks.len() == 2 { h } else { b - a };
             if len <= 0.0 {
                 continue;
             }
@@ -327,8 +379,9 @@ impl Stepper {
                 *value = if tau > 0.0 { delays[j].value_at(mid - tau, u[j]) } else { u[j] };
             }
             if nonlinear {
+                let maps = self.play_maps_for(len);
                 self.rk.advance(
-                    &mut HeldInputs { d: &self.dynamics, u: &self.u_piece, maps: None },
+                    &mut HeldInputs { d: &self.dynamics, u: &self.u_piece, maps: maps.map(|i| &self.play_maps[i]) },
                     state.as_mut_slice(),
                     len,
                 );
@@ -359,5 +412,29 @@ impl Stepper {
         }
         self.xs = state;
         result
+    }
+
+    /// The index of the exact piece steps of length `h` (built on first use, [`CACHE`]
+    /// lengths kept); `None` where the model's pieces are not linear (RK4 alone then).
+    fn play_maps_for(&mut self, h: f64) -> Option<usize> {
+        if !self.has_play_maps {
+            return None;
+        }
+        if let Some(i) = self.play_maps.iter().position(|m| m.h() == h) {
+            return Some(i);
+        }
+        let maps = self.dynamics.play_maps(&[h])?.pop()?;
+        if self.play_maps.len() >= CACHE {
+            self.play_maps.remove(0);
+        }
+        self.play_maps.push(maps);
+        Some(self.play_maps.len() - 1)
+    }
+
+    /// (Ad, Bd) of the linear model in z over `h` (the common step's matrices: a reference
+    /// implementation can be run on them).
+    pub fn discretisation(&mut self, h: f64) -> Result<(&DMatrix<f64>, &DMatrix<f64>)> {
+        let i = self.cache.index(&self.a, &self.b, h, self.max_piece_s)?;
+        Ok(self.cache.get(i))
     }
 }
