@@ -3,20 +3,17 @@
 //! QPs for other solvers.
 
 use mpc::closed_loop::{
-    compare, median_p99, step_figures, Comparison, Plant, Probes, RigSignals, Scenario, ScenarioKind, StepFigures,
+    compare, median_p99, step_figures, Comparison, HarnessSettings, Plant, Probes, RigSignals, Scenario, ScenarioKind,
+    StepFigures,
 };
 use mpc::qp::QpSnapshot;
 use mpc::{Controller, MpcSettings, StepInfo};
 use serde::Serialize;
 
-/// The PI baseline's speed-loop crossover, Hz (a typical rig's load-machine speed loop).
-pub const PI_BANDWIDTH_HZ: f64 = 5.0;
-/// Settling band of the shuffle figures, relative to the step height.
-pub const SETTLING_BAND: f64 = 0.02;
-/// Longest closed-loop run `rigtwin mpc --duration` takes, s.
-pub const MAX_DURATION_S: f64 = 120.0;
-/// Every this many steps the real-time first input is compared with the exact optimum.
-pub const CHECK_EVERY: usize = 25;
+/// How the closed loops are judged (`mpc::closed_loop::HarnessSettings`' documented defaults).
+fn harness() -> HarnessSettings {
+    HarnessSettings::default()
+}
 
 pub use mpc::Prediction;
 
@@ -284,7 +281,7 @@ impl MpcReport {
         for n in &self.prediction {
             s += &format!("  prediction: {n}\n");
         }
-        let baseline = format!("PI ({PI_BANDWIDTH_HZ} Hz speed loops)");
+        let baseline = format!("PI ({} Hz speed loops)", harness().pi_bandwidth_hz);
         for (who, why) in [("MPC", Some(&self.stopped.mpc)), (baseline.as_str(), self.stopped.baseline.as_ref())] {
             if let Some(Some(w)) = why {
                 s += &format!("  {who} loop UNSTABLE: stopped {w}\n");
@@ -394,7 +391,8 @@ fn run_on(
                 .map_err(|e| format!("the plant: {e}"))?;
         Ok(Box::new(p))
     };
-    compare(ss, &prediction.input_delays_s, &mut make, settings, scenario, j_load, PI_BANDWIDTH_HZ, probes)
+    let pi_hz = harness().pi_bandwidth_hz;
+    compare(ss, &prediction.input_delays_s, &mut make, settings, scenario, j_load, pi_hz, probes)
         .map_err(|e| anyhow::anyhow!(e))
 }
 
@@ -447,10 +445,10 @@ pub fn report(
     let j_load = params.powertrain.effective(params.variant)?.j_m2;
     let mut scenario = Scenario::new(kind);
     if let Some(d) = duration_s {
-        // both runs keep their traces (≈ 0.4 kB per sample): 120 s stays under ≈ 100 MB
-        if !(d.is_finite() && d > scenario.start_s && d <= MAX_DURATION_S) {
+        let longest = harness().max_duration_s;
+        if !(d.is_finite() && d > scenario.start_s && d <= longest) {
             anyhow::bail!(
-                "--duration {d} s: expected more than the scenario's start {} s and at most {MAX_DURATION_S} s",
+                "--duration {d} s: expected more than the scenario's start {} s and at most {longest} s",
                 scenario.start_s
             );
         }
@@ -460,7 +458,7 @@ pub fn report(
     let mut checked = 0;
     let mut failure: Option<String> = None;
     let mut hook = |k: usize, c: &Controller, info: &StepInfo| {
-        if !k.is_multiple_of(CHECK_EVERY) || info.fallback {
+        if !k.is_multiple_of(harness().check_every) || info.fallback {
             return;
         }
         match first_input_error(c) {
@@ -493,7 +491,7 @@ pub fn report(
         if t.stopped.is_some() {
             StepFigures { overshoot: f64::NAN, settling_time_s: f64::NAN }
         } else {
-            step_figures(&t.output(sig.short_shaft), k_step, settings.dt_s, SETTLING_BAND)
+            step_figures(&t.output(sig.short_shaft), k_step, settings.dt_s, harness().settling_band)
         }
     };
     let at_bounds =
@@ -552,7 +550,7 @@ pub fn report(
             step: step_scenario.torque_nm,
             at_s: step_scenario.start_s,
             signal: ss.output_names[sig.short_shaft].clone(),
-            settling_band: SETTLING_BAND,
+            settling_band: harness().settling_band,
             figures: Compared { mpc: fig(&step.mpc), baseline: Some(fig(&step.baseline)) },
             final_value: both(&|t| final_mean(t.outputs.iter().map(|y| y[sig.short_shaft]), t.stopped.is_some())),
         },
@@ -647,7 +645,7 @@ impl Tuning {
 /// The MPC of a drive model with its `[mpc]` section, in closed loop on `truth` (as the FMU
 /// integrates it) from rest: every tracked speed's reference steps by `step` at 0.05 s (tracked
 /// inputs' references stay 0), for 1 s. The first input is checked against the exact optimum
-/// every [`CHECK_EVERY`] steps and the allocations counted, as for the paper rig.
+/// every `HarnessSettings::check_every` steps and the allocations counted, as for the paper rig.
 pub fn drive_report(
     model: &plant::DriveModel,
     truth: &plant::DriveModel,
@@ -695,7 +693,7 @@ pub fn drive_report(
         let (u, fallback) = (u.to_vec(), info.fallback);
         times.push(info.elapsed_s * 1e6);
         iterations.push(info.solve.iterations as f64);
-        if k.is_multiple_of(CHECK_EVERY) && !fallback {
+        if k.is_multiple_of(harness().check_every) && !fallback {
             let (e, _) = first_input_error(&controller)
                 .map_err(|e| anyhow::anyhow!("reference solve of the exact optimum failed: {e}"))?;
             u0_error = u0_error.max(e);
@@ -709,7 +707,9 @@ pub fn drive_report(
         }
     }
     let response = match (tracked.first(), &stopped) {
-        (Some(&j), None) => step_figures(&trace.iter().map(|y| y[j]).collect::<Vec<_>>(), k_step, dt, SETTLING_BAND),
+        (Some(&j), None) => {
+            step_figures(&trace.iter().map(|y| y[j]).collect::<Vec<_>>(), k_step, dt, harness().settling_band)
+        }
         _ => StepFigures { overshoot: f64::NAN, settling_time_s: f64::NAN },
     };
     let after = &trace[k_step.min(trace.len())..];
@@ -752,7 +752,7 @@ pub fn drive_report(
             step,
             at_s: k_step as f64 * dt,
             signal: tracked.first().map_or("nothing tracked".into(), |&j| ss.output_names[j].clone()),
-            settling_band: SETTLING_BAND,
+            settling_band: harness().settling_band,
             figures: Compared { mpc: response, baseline: None },
             final_value: Compared {
                 mpc: tracked.first().map_or(f64::NAN, |&j| final_mean(trace.iter().map(|y| y[j]), stopped.is_some())),

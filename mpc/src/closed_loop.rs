@@ -9,6 +9,32 @@ use serde::Serialize;
 use crate::controller::Controller;
 use crate::error::Result;
 
+/// How `rigtwin mpc` judges a closed loop: the baseline it compares the MPC with, the band its
+/// figures settle in, the longest run it takes and how often it checks the real-time solve.
+/// The defaults are documented per field.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct HarnessSettings {
+    /// The PI baseline's speed-loop crossover, Hz. Default 5 Hz: a typical rig's load-machine
+    /// speed loop, well below the shuffle (≈ 20 Hz on the paper's rig).
+    pub pi_bandwidth_hz: f64,
+    /// Settling band of the step figures, relative to the step height. Default 0.02 (the 2 %
+    /// settling time of control texts).
+    pub settling_band: f64,
+    /// Longest closed-loop run taken, s. Default 120 s: both runs keep their traces
+    /// (≈ 0.4 kB per sample), so a run stays under ≈ 100 MB.
+    pub max_duration_s: f64,
+    /// Every this many steps the real-time first input is compared with the exact optimum.
+    /// Default 25: the exact solve costs tens of real-time steps, so checking one step in 25
+    /// keeps a 60 s run within seconds while still sampling every phase of the scenario.
+    pub check_every: usize,
+}
+
+impl Default for HarnessSettings {
+    fn default() -> Self {
+        HarnessSettings { pi_bandwidth_hz: 5.0, settling_band: 0.02, max_duration_s: 120.0, check_every: 25 }
+    }
+}
+
 /// Largest share of a run's controller steps that may fall back to the shifted previous plan
 /// (the QP missed its time limit or failed) for the run to describe the MPC: past it the loop
 /// was mostly driven by stale plans, and its figures are the fallback's, not the controller's.
