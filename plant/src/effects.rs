@@ -4,9 +4,9 @@
 
 use nalgebra::DMatrix;
 
-use crate::drive::{DriveModel, Dynamics};
+use crate::drive::{DriveModel, Dynamics, HeldInputs};
 use crate::error::{PlantError, Result};
-use crate::integrate::{AffineStep, PieceMaps, PiecewiseRk4, PiecewiseSmooth};
+use crate::integrate::{AffineStep, PiecewiseRk4};
 use crate::line::Quantity;
 use crate::rig::{DriveEffects, RigParams, Variant};
 use crate::statespace::StateSpace;
@@ -33,9 +33,6 @@ pub struct Powertrain {
     /// RK4 steps within a piece and across pieces, s.
     coarse_s: f64,
     fine_s: f64,
-    /// (speed's state index, half-width) of each machine's steep friction band, in the order
-    /// of [`DriveEffects::coulomb_friction_nm`]: the pieces [`Powertrain::piece`] tells apart.
-    bands: Vec<(usize, f64)>,
     /// The effects.
     pub effects: DriveEffects,
 }
@@ -66,13 +63,7 @@ impl Powertrain {
             dynamics = dynamics.with_steps(coarse, fine);
             (coarse_s, fine_s) = (coarse, fine);
         }
-        let n = model.line.bodies.len();
-        let bands = [0, input_dof, 2]
-            .iter()
-            .map(|&i| (n + i, dynamics.friction_band(i)))
-            .filter(|&(_, band)| band > 0.0)
-            .collect();
-        Ok(Powertrain { model, dynamics, c_s, coarse_s, fine_s, bands, effects: *effects })
+        Ok(Powertrain { model, dynamics, c_s, coarse_s, fine_s, effects: *effects })
     }
 
     /// The rig as a drive model ([`DriveModel::paper_rig`]).
@@ -281,11 +272,6 @@ impl Powertrain {
         x
     }
 
-    /// Whether the side shafts are engaged (the twist beyond the play; always without backlash).
-    pub fn in_contact(&self, x: &[f64]) -> bool {
-        self.dynamics.coupling_twist(0, x).1
-    }
-
     /// Side-shaft torques [T_short, T_long] of state `x`: stiffness on the twist beyond the
     /// play, damping only in contact.
     pub fn shaft_torques(&self, x: &[f64]) -> [f64; 2] {
@@ -307,103 +293,31 @@ impl Powertrain {
         (self.coarse_s, self.fine_s)
     }
 
-    /// The smooth piece state `x` lies in: the side shafts in contact on either side or inside
-    /// the play, and each machine with friction clear of its steep band on either side or in it.
-    pub fn piece(&self, x: &[f64]) -> u64 {
-        let mut key = 0;
-        if self.effects.backlash_rad > 0.0 {
-            let (s, engaged) = self.dynamics.coupling_twist(0, x);
-            key = u64::from(engaged && s > 0.0) + 2 * u64::from(engaged && s < 0.0);
-        }
-        for &(i, band) in &self.bands {
-            let w = x[i];
-            key = 4 * key + u64::from(w > band) + 2 * u64::from(w < -band);
-        }
-        key
-    }
-
     /// An integrator of this model ([`Powertrain::rk4_steps_s`]) for `nstates` states (the
     /// powertrain's, or a larger model's that embeds it).
     pub fn integrator(&self, nstates: usize) -> PiecewiseRk4 {
         PiecewiseRk4::new(nstates, self.coarse_s, self.fine_s)
     }
 
-    /// The friction's contribution to ∂ẇ_i/∂w_i at state `x`: (speed's state index, slope)
-    /// for each machine with friction, −T_c v_s²/((w² + v_s²)^{3/2} J_i).
-    pub fn friction_slopes(&self, x: &[f64]) -> Vec<(usize, f64)> {
-        self.dynamics.friction_slopes(x)
-    }
-
+    /// The nonlinear model under the drive torque `u` (already delayed), stepped as every drive
+    /// model is ([`HeldInputs`] on the diagnosis's integrator, the play's pieces exactly where
+    /// it is the only nonlinearity: [`Dynamics::play_maps`]).
     fn simulate_rk4(&self, u: &[f64], dt_s: f64, mut x: Vec<f64>) -> (Vec<f64>, Vec<f64>) {
         let n = self.dofs();
-        let mut rk = self.integrator(x.len());
-        let maps = self.piece_maps(dt_s);
+        let mut rk = self.dynamics.integrator();
+        let maps = self.dynamics.play_maps(&[dt_s]).and_then(|mut m| m.pop());
         let (mut w2, mut w3) = (Vec::with_capacity(u.len()), Vec::with_capacity(u.len()));
         // each sample starts in the piece the last one ended in
         let mut piece = None;
+        let mut torques = [0.0; 3];
         for &uk in u {
             w2.push(x[n]);
             w3.push(x[n + 2]);
-            let held = &mut Held { p: self, torques: [0.0, uk, 0.0], maps: maps.as_ref() };
+            torques[1] = uk;
+            let held = &mut HeldInputs { d: &self.dynamics, u: &torques, maps: maps.as_ref() };
             piece = rk.advance_from(held, &mut x, dt_s, piece).1;
         }
         (w2, w3)
-    }
-
-    /// The constant generalised force of the play beyond its positive edge, as a state
-    /// derivative: in contact there the shafts' force c_s (s − b) + d_s ṡ is the engaged model's
-    /// less c_s b, a force a_i c_s b on each coordinate (below the negative edge its negative).
-    pub fn play_offset(&self) -> Vec<f64> {
-        self.dynamics.play_offset()
-    }
-
-    /// Whether the only nonlinearity is the play (no friction): its pieces are linear and
-    /// are stepped exactly ([`PieceMaps`]).
-    pub fn pieces_are_linear(&self) -> bool {
-        self.effects.coulomb_friction_nm == [0.0; 3] && self.effects.backlash_rad > 0.0
-    }
-
-    /// The exact steps of `h` of the three linear pieces of a model whose only nonlinearity is
-    /// the play, driven by the drive torque alone; `None` otherwise.
-    pub fn piece_maps(&self, h: f64) -> Option<PieceMaps> {
-        if !self.pieces_are_linear() {
-            return None;
-        }
-        let offset = self.play_offset();
-        PieceMaps::new(
-            h,
-            &|contact| {
-                let (a, b, _) = self.linear(contact);
-                (a, b.columns(1, 1).into_owned())
-            },
-            &offset,
-        )
-    }
-}
-
-/// The powertrain with its torques held over a step.
-pub struct Held<'a> {
-    /// The model.
-    pub p: &'a Powertrain,
-    /// [M_m2, M_drive, M_m3], the drive's already delayed.
-    pub torques: [f64; 3],
-    /// Exact steps of its linear pieces (the load torques then zero).
-    pub maps: Option<&'a PieceMaps>,
-}
-
-impl PiecewiseSmooth for Held<'_> {
-    #[inline]
-    fn rhs(&mut self, x: &[f64], dx: &mut [f64]) {
-        self.p.derivative(x, self.torques, dx);
-    }
-    #[inline]
-    fn piece(&mut self, x: &[f64]) -> u64 {
-        self.p.piece(x)
-    }
-    fn exact(&mut self, piece: u64, x: &[f64], h: f64, out: &mut [f64]) -> bool {
-        self.torques[0] == 0.0
-            && self.torques[2] == 0.0
-            && self.maps.is_some_and(|m| m.step(piece, x, &self.torques[1..2], h, out))
     }
 }
 
@@ -511,9 +425,11 @@ mod tests {
     /// twist coordinates) replays what the diagnosis simulates ([`Powertrain::simulate`]) —
     /// with play alone (exact pieces), with friction and a compliance (RK4), with a dead time
     /// of whole samples (the diagnosis shifts the record; the FMU's delay line is exact at
-    /// any dead time) and a lag (exact ZOH pieces) — under a torque that reverses through the play. The two
-    /// share the right-hand side and the integrator's steps but not their loops, piece keys or
-    /// coordinates: agreement to 1e-9 of the speeds' range is rounding, not a matched error.
+    /// any dead time) and a lag (exact ZOH pieces) — under a torque that reverses through the
+    /// play. The two share the right-hand side and the nonlinear integrator but not their
+    /// loops, the dead time's handling, the linear model's discretisation or the coordinates
+    /// (the FMU's twists against absolute angles): agreement to 1e-9 of the speeds' range is
+    /// rounding, not a matched error.
     #[test]
     fn the_rig_stepper_replays_the_diagnosis_simulation() {
         let cases = [
@@ -627,7 +543,6 @@ mod tests {
             let torques = p.shaft_torques(&x);
             let t_short = if t == 0.0 { 0.0 } else { t - d_s * sdot + e.d_left * cr / (cl + cr) * sdot };
             assert!((torques[0] - t_short).abs() <= 1e-12 * c_s, "{} vs {t_short}", torques[0]);
-            assert_eq!(p.in_contact(&x), s.abs() > b);
         }
     }
 
@@ -700,7 +615,6 @@ mod tests {
             x[0] = 0.0;
             x[2] = 0.0;
             x[1] = twist / 2.0;
-            assert_eq!(p.in_contact(&x), contact);
             p.derivative(&x, u, &mut dx);
             let (a, b, c) = p.linear(true);
             let (a_open, b_open, _) = p.linear(false);
@@ -748,7 +662,7 @@ mod tests {
         // rate: bounded by the amplitude that a 3 Nm change of torque excites, < 1 % here
         assert!((momentum - expected).abs() < 0.01 * tc * t, "{momentum} vs {expected}");
         let x = vec![0.01, -0.02, 0.005, 1.0, 0.03, -2.0];
-        let slopes = p.friction_slopes(&x);
+        let slopes = p.dynamics().friction_slopes(&x);
         assert_eq!(slopes.len(), 1);
         let (i, slope) = slopes[0];
         let h = 1e-6;
