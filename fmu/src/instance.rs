@@ -262,6 +262,8 @@ pub struct Instance {
     delays: Vec<DelayLine>,
     /// The inputs acting now (after their dead times), scratch.
     acting: Vec<f64>,
+    /// Scratch of the computed outputs: ẋ, the coupling forces, the angles that are not states.
+    computed: (Vec<f64>, Vec<f64>, Vec<f64>),
     time: f64,
     /// Model exchange: the last accepted time (initialisation, event, completed integrator
     /// step); SetTime may not go back before it.
@@ -310,6 +312,7 @@ impl Instance {
             delay_param,
             delays: vec![DelayLine::default(); nu],
             acting: vec![0.0; nu],
+            computed: Default::default(),
             time: 0.0,
             accepted_time: 0.0,
             model: None,
@@ -636,34 +639,41 @@ impl Instance {
         let needs_model = vrs.iter().any(|&v| {
             matches!(self.lookup(v).map(|x| x.slot), Some(Slot::Derivative(_) | Slot::Torque(_) | Slot::Angle(_)))
         });
-        let computed = if needs_model {
+        // the computed outputs into the instance's scratch (allocation-free once sized)
+        let mut computed = std::mem::take(&mut self.computed);
+        if needs_model {
             self.ensure_model()?;
-            let mut dx = vec![0.0; self.x.len()];
-            self.evaluate_derivatives(&mut dx);
-            let x = self.x.as_slice();
-            let (torques, angles) = match self.model.as_mut().expect("built above") {
-                Machine::Plant(m) => (m.forces(x).to_vec(), m.angles(x)),
-                Machine::Controller(_) => (Vec::new(), Vec::new()),
-            };
-            Some((dx, torques, angles))
-        } else {
-            None
-        };
+            computed.0.resize(self.x.len(), 0.0);
+            self.evaluate_derivatives(&mut computed.0);
+            if let Some(Machine::Plant(m)) = self.model.as_mut() {
+                m.forces_into(self.x.as_slice(), &mut computed.1);
+                m.angles_into(self.x.as_slice(), &mut computed.2);
+            }
+        }
+        let mut result = Ok(());
         for (&vr, o) in vrs.iter().zip(out.iter_mut()) {
             let var = self.lookup(vr).filter(|v| v.kind == Kind::Float64);
-            *o = match var.map(|v| v.slot) {
-                Some(Slot::Time) => self.time,
-                Some(Slot::Param(i)) => self.params[i],
-                Some(Slot::State(i)) => self.x[i],
-                Some(Slot::Input(i)) => self.u[i],
-                Some(Slot::Derivative(i)) => computed.as_ref().expect("computed above").0[i],
-                Some(Slot::Torque(i)) => computed.as_ref().expect("computed above").1[i],
-                Some(Slot::Angle(i)) => computed.as_ref().expect("computed above").2[i],
-                Some(Slot::Command(i)) => commands[i],
-                _ => return error(format!("value reference {vr} is not a Float64 variable of this FMU")),
+            let value = match var.map(|v| v.slot) {
+                Some(Slot::Time) => Some(self.time),
+                Some(Slot::Param(i)) => Some(self.params[i]),
+                Some(Slot::State(i)) => Some(self.x[i]),
+                Some(Slot::Input(i)) => Some(self.u[i]),
+                Some(Slot::Derivative(i)) => computed.0.get(i).copied(),
+                Some(Slot::Torque(i)) => computed.1.get(i).copied(),
+                Some(Slot::Angle(i)) => computed.2.get(i).copied(),
+                Some(Slot::Command(i)) => Some(commands[i]),
+                _ => None,
             };
+            match value {
+                Some(v) => *o = v,
+                None => {
+                    result = error(format!("value reference {vr} is not a Float64 variable of this FMU"));
+                    break;
+                }
+            }
         }
-        Ok(())
+        self.computed = computed;
+        result
     }
 
     /// Sets Float64 values; nothing is changed if any value is refused. Allocation-free unless

@@ -48,10 +48,11 @@ pub struct Model {
     input_slots: usize,
     /// The bodies whose positions are the table's angle outputs, in `Slot::Angle` order.
     angle_bodies: Vec<usize>,
-    /// Scratch: the stepper's state, its derivative, the coupling forces.
+    /// Scratch: the stepper's state, its derivative, the coupling forces, the positions.
     zp: DVector<f64>,
     dzp: Vec<f64>,
     forces: Vec<f64>,
+    q: Vec<f64>,
 }
 
 impl Model {
@@ -106,6 +107,7 @@ impl Model {
             zp: DVector::zeros(nzp),
             dzp: vec![0.0; nzp],
             forces: vec![0.0; stepper.couplings()],
+            q: vec![0.0; angle_bodies.iter().max().map_or(0, |&b| b + 1).max(stepper.bodies())],
             nu: stepper.dynamics.ninputs(),
             input_slots,
             angle_bodies,
@@ -144,20 +146,23 @@ impl Model {
         }
     }
 
-    /// Every coupling's force (torque) in state `z` (the rig's side shafts first: T_short,
-    /// T_long).
-    pub fn forces(&mut self, z: &[f64]) -> &[f64] {
+    /// Every coupling's force (torque) in state `z` into `out` (the rig's side shafts first:
+    /// T_short, T_long). Allocation-free once `out` has held them.
+    pub fn forces_into(&mut self, z: &[f64], out: &mut Vec<f64>) {
         self.gather(z);
         self.stepper.coupling_forces(self.zp.as_slice(), &mut self.forces);
-        &self.forces
+        out.clear();
+        out.extend_from_slice(&self.forces);
     }
 
-    /// The absolute positions that are angle outputs (`Slot::Angle`): a drive model's every
-    /// body's, the rig's [φ_drive, φ_motor].
-    pub fn angles(&mut self, z: &[f64]) -> Vec<f64> {
+    /// The absolute positions that are angle outputs (`Slot::Angle`) in state `z` into `out`:
+    /// a drive model's every body's, the rig's [φ_drive, φ_motor]. Allocation-free once `out`
+    /// has held them.
+    pub fn angles_into(&mut self, z: &[f64], out: &mut Vec<f64>) {
         self.gather(z);
-        let q = self.stepper.positions(self.zp.as_slice());
-        self.angle_bodies.iter().map(|&b| q[b]).collect()
+        self.stepper.positions_into(self.zp.as_slice(), &mut self.q);
+        out.clear();
+        out.extend(self.angle_bodies.iter().map(|&b| self.q[b]));
     }
 
     /// ∂(angle output i)/∂z_j.

@@ -208,8 +208,23 @@ impl Stepper {
 
     /// Every body's position at state `z`.
     pub fn positions(&self, z: &[f64]) -> Vec<f64> {
+        let mut q = vec![0.0; self.npos];
+        self.positions_into(z, &mut q);
+        q
+    }
+
+    /// Every body's position at state `z` into `out` (at least one slot per body).
+    /// Allocation-free.
+    pub fn positions_into(&self, z: &[f64], out: &mut [f64]) {
         let n = self.npos;
-        (0..n).map(|i| (0..n).map(|j| self.to_x[(i, j)] * z[j]).sum()).collect()
+        for (i, o) in out.iter_mut().take(n).enumerate() {
+            *o = (0..n).map(|j| self.to_x[(i, j)] * z[j]).sum();
+        }
+    }
+
+    /// Number of bodies.
+    pub fn bodies(&self) -> usize {
+        self.npos
     }
 
     /// ∂(position of body i)/∂z_j.
