@@ -158,8 +158,8 @@ fn c_program_commands_what_the_rust_loop_commands() {
     std::fs::write(&rig, format!("{paper}\n[effects]\ntime_delay_s = 0.0043\n")).unwrap();
 
     // the Rust closed loop, assembled as `rigtwin mpc` assembles it
-    let params = rigtwin::fmu_package::params_of_file(&rig).unwrap();
-    let p = rigtwin::control::prediction(&params).unwrap();
+    let modelfile::Model::Rig(params) = modelfile::read(&rig).unwrap().model else { panic!("a rig file") };
+    let p = mpc::prediction::prediction(&params.model, params.variant, &params.effects, 1e-3).unwrap();
     let mut settings = MpcSettings::powertrain(50);
     settings.solver.time_limit_s = 1.0;
     let mut c = Controller::with_input_delays(&p.model, &p.input_delays_s, &settings).unwrap();
@@ -167,7 +167,7 @@ fn c_program_commands_what_the_rust_loop_commands() {
     let (x0, u0) = steady_spin(&p.model, speed).unwrap();
     c.reset(&x0, &u0);
     let mut plant = mpc::DrivePlant::paper_rig(
-        &params.powertrain,
+        &params.model,
         params.variant,
         &params.effects,
         settings.dt_s,
