@@ -609,12 +609,23 @@ pub fn diagnose(rec: DriveRecord, progress: &(dyn Fn(&str) + Sync)) -> Result<Dr
     let mut ranked: Vec<&(usize, Vec<f64>, f64)> =
         screened.iter().filter(|s| !matches!(cands[s.0], Candidate::None | Candidate::Damping)).collect();
     ranked.sort_by(|a, b| a.2.total_cmp(&b.2));
-    let refit: Vec<usize> = screened
+    // where the declared model's re-fit is implausible the screens held the declared mechanics,
+    // whose few per cent of error the screens' costs then mostly measure, alike for every
+    // place of one effect but not across effects: the best place of each effect is re-fitted
+    let mut refit: Vec<usize> = screened
         .iter()
         .filter(|s| matches!(cands[s.0], Candidate::Damping))
         .chain(ranked.iter().take(SCREEN_KEEP).copied())
         .map(|s| s.0)
         .collect();
+    if !base_refitted {
+        for s in &ranked {
+            let name = cands[s.0].name();
+            if !refit.iter().any(|&i| cands[i].name() == name) {
+                refit.push(s.0);
+            }
+        }
+    }
     // the re-fit of candidate `c` from `x0`, its first `held` parameters held
     let fit_from = |c: Candidate, x0: &[f64], held: usize| {
         let free = |s: &[f64]| problem.residual(c, &[&x0[..held], s].concat());
