@@ -7,14 +7,12 @@
 #[global_allocator]
 static ALLOCATOR: mpc::alloc_counter::Counting = mpc::alloc_counter::Counting;
 
-use rigtwin_fmu::instance::{Instance, Interface, Logger, Status};
+mod common;
+
+use common::Quiet;
+use rigtwin_fmu::instance::{Instance, Interface};
 use rigtwin_fmu::variables::{Causality, Slot};
 use rigtwin_fmu::FmuParams;
-
-struct Quiet;
-impl Logger for Quiet {
-    fn log(&self, _status: Status, _category: &str, _message: &str) {}
-}
 
 fn rig(f: impl FnOnce(&mut plant::rig::DriveEffects)) -> FmuParams {
     let mut p = FmuParams::default();

@@ -1,4 +1,5 @@
-//! The controller FMU's instance as the tests drive it.
+//! The FMU instances as the tests drive them (each test binary uses some of it).
+#![allow(dead_code)]
 
 use rigtwin_fmu::instance::{Instance, Interface, Logger, Status};
 use rigtwin_fmu::variables::Slot;
