@@ -11,9 +11,7 @@ use mpc::{Controller, MpcSettings, StepInfo};
 use serde::Serialize;
 
 /// How the closed loops are judged (`mpc::closed_loop::HarnessSettings`' documented defaults).
-fn harness() -> HarnessSettings {
-    HarnessSettings::default()
-}
+const HARNESS: HarnessSettings = HarnessSettings::DEFAULT;
 
 pub use mpc::Prediction;
 
@@ -281,7 +279,7 @@ impl MpcReport {
         for n in &self.prediction {
             s += &format!("  prediction: {n}\n");
         }
-        let baseline = format!("PI ({} Hz speed loops)", harness().pi_bandwidth_hz);
+        let baseline = format!("PI ({} Hz speed loops)", HARNESS.pi_bandwidth_hz);
         for (who, why) in [("MPC", Some(&self.stopped.mpc)), (baseline.as_str(), self.stopped.baseline.as_ref())] {
             if let Some(Some(w)) = why {
                 s += &format!("  {who} loop UNSTABLE: stopped {w}\n");
@@ -391,7 +389,7 @@ fn run_on(
                 .map_err(|e| format!("the plant: {e}"))?;
         Ok(Box::new(p))
     };
-    let pi_hz = harness().pi_bandwidth_hz;
+    let pi_hz = HARNESS.pi_bandwidth_hz;
     compare(ss, &prediction.input_delays_s, &mut make, settings, scenario, j_load, pi_hz, probes)
         .map_err(|e| anyhow::anyhow!(e))
 }
@@ -445,7 +443,7 @@ pub fn report(
     let j_load = params.powertrain.effective(params.variant)?.j_m2;
     let mut scenario = Scenario::new(kind);
     if let Some(d) = duration_s {
-        let longest = harness().max_duration_s;
+        let longest = HARNESS.max_duration_s;
         if !(d.is_finite() && d > scenario.start_s && d <= longest) {
             anyhow::bail!(
                 "--duration {d} s: expected more than the scenario's start {} s and at most {longest} s",
@@ -458,7 +456,7 @@ pub fn report(
     let mut checked = 0;
     let mut failure: Option<String> = None;
     let mut hook = |k: usize, c: &Controller, info: &StepInfo| {
-        if !k.is_multiple_of(harness().check_every) || info.fallback {
+        if !k.is_multiple_of(HARNESS.check_every) || info.fallback {
             return;
         }
         match first_input_error(c) {
@@ -491,7 +489,7 @@ pub fn report(
         if t.stopped.is_some() {
             StepFigures { overshoot: f64::NAN, settling_time_s: f64::NAN }
         } else {
-            step_figures(&t.output(sig.short_shaft), k_step, settings.dt_s, harness().settling_band)
+            step_figures(&t.output(sig.short_shaft), k_step, settings.dt_s, HARNESS.settling_band)
         }
     };
     let at_bounds =
@@ -550,7 +548,7 @@ pub fn report(
             step: step_scenario.torque_nm,
             at_s: step_scenario.start_s,
             signal: ss.output_names[sig.short_shaft].clone(),
-            settling_band: harness().settling_band,
+            settling_band: HARNESS.settling_band,
             figures: Compared { mpc: fig(&step.mpc), baseline: Some(fig(&step.baseline)) },
             final_value: both(&|t| final_mean(t.outputs.iter().map(|y| y[sig.short_shaft]), t.stopped.is_some())),
         },
@@ -693,7 +691,7 @@ pub fn drive_report(
         let (u, fallback) = (u.to_vec(), info.fallback);
         times.push(info.elapsed_s * 1e6);
         iterations.push(info.solve.iterations as f64);
-        if k.is_multiple_of(harness().check_every) && !fallback {
+        if k.is_multiple_of(HARNESS.check_every) && !fallback {
             let (e, _) = first_input_error(&controller)
                 .map_err(|e| anyhow::anyhow!("reference solve of the exact optimum failed: {e}"))?;
             u0_error = u0_error.max(e);
@@ -708,7 +706,7 @@ pub fn drive_report(
     }
     let response = match (tracked.first(), &stopped) {
         (Some(&j), None) => {
-            step_figures(&trace.iter().map(|y| y[j]).collect::<Vec<_>>(), k_step, dt, harness().settling_band)
+            step_figures(&trace.iter().map(|y| y[j]).collect::<Vec<_>>(), k_step, dt, HARNESS.settling_band)
         }
         _ => StepFigures { overshoot: f64::NAN, settling_time_s: f64::NAN },
     };
@@ -752,7 +750,7 @@ pub fn drive_report(
             step,
             at_s: k_step as f64 * dt,
             signal: tracked.first().map_or("nothing tracked".into(), |&j| ss.output_names[j].clone()),
-            settling_band: harness().settling_band,
+            settling_band: HARNESS.settling_band,
             figures: Compared { mpc: response, baseline: None },
             final_value: Compared {
                 mpc: tracked.first().map_or(f64::NAN, |&j| final_mean(trace.iter().map(|y| y[j]), stopped.is_some())),

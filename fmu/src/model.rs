@@ -107,7 +107,7 @@ impl Model {
             zp: DVector::zeros(nzp),
             dzp: vec![0.0; nzp],
             forces: vec![0.0; stepper.couplings()],
-            q: vec![0.0; angle_bodies.iter().max().map_or(0, |&b| b + 1).max(stepper.bodies())],
+            q: vec![0.0; stepper.bodies()],
             nu: stepper.dynamics.ninputs(),
             input_slots,
             angle_bodies,

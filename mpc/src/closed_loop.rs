@@ -29,9 +29,15 @@ pub struct HarnessSettings {
     pub check_every: usize,
 }
 
+impl HarnessSettings {
+    /// The documented defaults.
+    pub const DEFAULT: HarnessSettings =
+        HarnessSettings { pi_bandwidth_hz: 5.0, settling_band: 0.02, max_duration_s: 120.0, check_every: 25 };
+}
+
 impl Default for HarnessSettings {
     fn default() -> Self {
-        HarnessSettings { pi_bandwidth_hz: 5.0, settling_band: 0.02, max_duration_s: 120.0, check_every: 25 }
+        HarnessSettings::DEFAULT
     }
 }
 

@@ -44,7 +44,7 @@ impl DrivePlant {
     }
 
     /// The plant of `model` stepped by `stepper` (a preset's: the paper rig steps in its own
-    /// coordinates, `plant::effects::Powertrain::stepper`), from the plant's state `x0` with
+    /// coordinates, `plant::Stepper::paper_rig`), from the plant's state `x0` with
     /// the inputs `u0` applied before the start, sampled every `dt_s`, reporting
     /// `output_names` (the bodies' speeds, the couplings' forces).
     pub fn starting(
@@ -96,7 +96,7 @@ impl DrivePlant {
     }
 
     /// The paper rig (`rig` in `variant` with `effects`) as its FMU steps it
-    /// (`Powertrain::stepper`), spinning steadily at `speed_radps` with no drive torque and
+    /// (`plant::Stepper::paper_rig`), spinning steadily at `speed_radps` with no drive torque and
     /// `u0` applied before the start, sampled every `dt_s`, reporting `output_names`.
     pub fn paper_rig(
         rig: &RigParams,

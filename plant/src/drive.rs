@@ -715,11 +715,18 @@ impl Dynamics {
     /// friction, at most [`AFFINE_MAX_STATES`] states): inside the play, beyond it, below it.
     /// `None` for any other model.
     pub fn play_maps(&self, lengths: &[f64]) -> Option<Vec<PieceMaps>> {
-        if !self.plays_engage_at_once() || self.friction.iter().any(|f| f.0 > 0.0) || self.nstates > AFFINE_MAX_STATES {
+        if !self.pieces_are_linear() {
             return None;
         }
         let offset = self.play_offset();
         lengths.iter().map(|&h| PieceMaps::new(h, &|contact| self.linear_piece(contact), &offset)).collect()
+    }
+
+    /// Whether [`Dynamics::play_maps`] steps this model's pieces exactly: its only
+    /// nonlinearity is play that engages at once, and it has at most [`AFFINE_MAX_STATES`]
+    /// states.
+    pub fn pieces_are_linear(&self) -> bool {
+        self.plays_engage_at_once() && self.friction.iter().all(|f| f.0 <= 0.0) && self.nstates <= AFFINE_MAX_STATES
     }
 
     /// Whether the model has play and every play enters and leaves contact together: one

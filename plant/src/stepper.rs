@@ -148,7 +148,7 @@ impl Stepper {
         }
         let rk = dynamics.integrator();
         let nu = dynamics.ninputs();
-        let has_play_maps = dynamics.is_nonlinear() && dynamics.play_maps(&[]).is_some();
+        let has_play_maps = dynamics.pieces_are_linear();
         let undelayed = (0..nu).all(|j| dynamics.delay_s(j) <= 0.0);
         Ok(Stepper {
             npos: n,
