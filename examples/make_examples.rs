@@ -98,9 +98,8 @@ fn main() {
     let (n, dt) = (40_000, 1e-3);
     let torque = sweep(n, dt, 1.0, 30.0, 20.0, 15.0);
     let truth = DriveEffects { time_delay_s: 4.0e-3, ..DriveEffects::default() };
-    let (w2, w3) = plant::effects::Powertrain::new(&declared, Variant::V1, &truth)
-        .and_then(|p| p.simulate(&torque, dt, 10.0))
-        .expect("the sweep simulates");
+    let (w2, w3) =
+        plant::record_speeds(&declared, Variant::V1, &truth, &torque, dt, 10.0).expect("the sweep simulates");
     let mut mat = matrw::MatFile::new();
     let t: Vec<f64> = (0..n).map(|k| k as f64 * dt).collect();
     let speed =
@@ -141,8 +140,7 @@ fn main() {
     let (n, dt) = (15_000, 2e-3);
     for v in Variant::ALL {
         let torque = sweep(n, dt, 1.0, 30.0, 40.0, 25.0);
-        let (w2, w3) = plant::effects::Powertrain::new(&truth_rig, v, &DriveEffects::default())
-            .and_then(|p| p.simulate(&torque, dt, 40.0))
+        let (w2, w3) = plant::record_speeds(&truth_rig, v, &DriveEffects::default(), &torque, dt, 40.0)
             .expect("the variant simulates");
         let t: Vec<f64> = (0..n).map(|k| k as f64 * dt).collect();
         let m: Vec<f64> = torque.iter().map(|x| x + 0.02 * noise.normal()).collect();

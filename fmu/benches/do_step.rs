@@ -59,7 +59,7 @@ fn fmu_step(c: &mut Criterion) {
     z[1] = 0.01;
     let mut u = [0.0; NU];
     u[1] = 1.0;
-    let delays = vec![plant::effects::DelayLine::default(); NU];
+    let delays = vec![plant::DelayLine::default(); NU];
     let mut t = 0.0;
     c.bench_function("Model::step (h = 1 ms, 6 states)", |b| {
         b.iter(|| {

@@ -8,7 +8,7 @@ use crate::controller::ControllerMachine;
 use crate::model::{Model, DRIVE_INPUT};
 use crate::params::FmuParams;
 use crate::variables::{parameter_set, parameter_values, rig_parameter, variant_number, Causality, Kind, Slot, Table};
-use plant::effects::DelayLine;
+use plant::DelayLine;
 
 /// Whether the instance simulates itself (co-simulation) or lends its derivatives to the
 /// importer's solver (model exchange).

@@ -10,10 +10,8 @@ use nalgebra::{DMatrix, DVector};
 
 use crate::params::FmuParams;
 use crate::variables::{powertrain_states, Table};
-use plant::effects::{DelayLine, Powertrain};
 use plant::zoh_step::{longest_exact_piece, ZohCache, MAX_PIECES};
-use plant::DriveModel;
-use plant::Stepper;
+use plant::{DelayLine, DriveModel, Stepper};
 
 /// The paper rig's input slots: M_m2, M_drive, M_m3, bearing F_x, F_y.
 pub const NU: usize = 5;
@@ -72,10 +70,11 @@ impl Model {
         Ok(Model::assemble(stepper, None, (0..nx).collect(), input_slots, (0..m.line.bodies.len()).collect()))
     }
 
-    /// The paper rig: its powertrain ([`Stepper::paper_rig`]) and bearing block.
+    /// The paper rig: its drive model ([`DriveModel::paper_rig`], stepped by
+    /// [`Stepper::paper_rig`]) and bearing block.
     fn of_rig(p: &FmuParams, table: &Table) -> Result<Self, String> {
-        let powertrain = Powertrain::new(&p.powertrain, p.variant, &p.effects).map_err(|e| e.to_string())?;
-        let stepper = Stepper::paper_rig(&powertrain).map_err(|e| e.to_string())?;
+        let rig = DriveModel::paper_rig(&p.powertrain, p.variant, &p.effects).map_err(|e| e.to_string())?;
+        let stepper = Stepper::paper_rig(&rig).map_err(|e| e.to_string())?;
         let map: Vec<usize> = powertrain_states(&p.effects)
             .iter()
             .map(|s| table.states.iter().position(|x| x == s).expect("every powertrain state is in the table"))
@@ -90,7 +89,7 @@ impl Model {
             }
         };
         // φ_drive, then φ_motor (the cage's without a compliance)
-        let motor = if powertrain.dofs() == 4 { 3 } else { 1 };
+        let motor = if rig.line.bodies.len() == 4 { 3 } else { 1 };
         Ok(Model::assemble(stepper, bearing, map, table.input_slots, vec![1, motor]))
     }
 

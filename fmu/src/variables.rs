@@ -435,7 +435,7 @@ pub struct Table {
     pub input_slots: usize,
 }
 
-/// [`STATES`] indices of a powertrain's states (`plant::effects::Powertrain` order: angles,
+/// [`STATES`] indices of the rig model's states (`plant::Stepper::paper_rig` order: angles,
 /// speeds, lagged torque).
 pub fn powertrain_states(effects: &plant::rig::DriveEffects) -> Vec<usize> {
     let mut v = if effects.compliance_stiffness_nm_per_rad > 0.0 {

@@ -1,6 +1,5 @@
 //! Cost of one 60 s, 1 kHz simulation of the rig with side-shaft play (the backlash candidate's
 //! unit of work): `cargo run --release -p ident --example sim_cost`.
-use plant::effects::Powertrain;
 use plant::rig::DriveEffects;
 use std::time::Instant;
 fn main() {
@@ -18,11 +17,10 @@ fn main() {
             },
         ),
     ] {
-        let p = Powertrain::new(&rig, plant::Variant::V1, &e).unwrap();
         let t0 = Instant::now();
         let n = 10;
         for _ in 0..n {
-            std::hint::black_box(p.simulate(&u, 1e-3, 0.0).unwrap());
+            std::hint::black_box(plant::record_speeds(&rig, plant::Variant::V1, &e, &u, 1e-3, 0.0).unwrap());
         }
         println!("{name}: {:.1} ms per 60 s simulation", t0.elapsed().as_secs_f64() * 1e3 / n as f64);
     }

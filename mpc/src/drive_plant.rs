@@ -2,9 +2,8 @@
 //! of any drive model is tried on (`rigtwin mpc`, the C API's and the controller FMU's tests).
 
 use nalgebra::DVector;
-use plant::effects::{DelayLine, Powertrain};
 use plant::rig::DriveEffects;
-use plant::{DriveModel, RigParams, Stepper, Variant};
+use plant::{DelayLine, DriveModel, RigParams, Stepper, Variant};
 
 use crate::closed_loop::Plant;
 use crate::error::{MpcError, Result};
@@ -107,9 +106,9 @@ impl DrivePlant {
         u0: &[f64],
         output_names: &[String],
     ) -> Result<Self> {
-        let truth = Powertrain::new(rig, variant, effects)?;
-        let x0 = truth.steady_state(0.0, speed_radps);
-        DrivePlant::starting(truth.model(), Stepper::paper_rig(&truth)?, dt_s, &x0, u0, output_names)
+        let truth = DriveModel::paper_rig(rig, variant, effects)?;
+        let x0 = plant::record_start(&truth, 0.0, speed_radps);
+        DrivePlant::starting(&truth, Stepper::paper_rig(&truth)?, dt_s, &x0, u0, output_names)
     }
 
     fn read(&mut self) {

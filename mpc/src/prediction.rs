@@ -2,7 +2,6 @@
 //! the settings its `[mpc]` section gives — the paper rig (the open-differential powertrain with
 //! the effects a rig file declares or the diagnosis found) and any drive model alike.
 
-use plant::effects::Powertrain;
 use plant::rig::DriveEffects;
 use plant::rig::{RigParams, Variant};
 use plant::statespace::StateSpace;
@@ -11,9 +10,9 @@ use plant::DriveModel;
 use crate::error::{MpcError, Result};
 use crate::{MpcSection, MpcSettings};
 
-/// What the controller predicts with: the model's linearisation (the rig's
-/// `plant::effects::Powertrain::control_state_space`, a drive model's
-/// `plant::DriveModel::control_state_space`) and the inputs' dead times. Backlash and friction
+/// What the controller predicts with: the model's linearisation
+/// (`plant::DriveModel::control_state_space`, the rig's with its own names:
+/// [`rig_control_state_space`]) and the inputs' dead times. Backlash and friction
 /// are left out of the prediction (linear in contact, without friction): [`Prediction::notes`]
 /// says so.
 #[derive(Debug, Clone)]
@@ -73,7 +72,7 @@ pub fn prediction(rig: &RigParams, variant: Variant, effects: &DriveEffects, dt_
             rig.c_long()
         )));
     }
-    let pt = Powertrain::new(rig, variant, effects)?;
+    let model = DriveModel::paper_rig(rig, variant, effects)?;
     let e = effects;
     let mut notes = Vec::new();
     if e.time_delay_s > 0.0 {
@@ -102,10 +101,49 @@ pub fn prediction(rig: &RigParams, variant: Variant, effects: &DriveEffects, dt_
             ));
         }
     }
-    let model = pt.control_state_space();
+    let ss = rig_control_state_space(&model)?;
     // the rig has no gear stage: every body at 1
-    let motion = Motion::physical(&vec![1.0; pt.dofs()], model.nstates());
-    Ok(Prediction { model, input_delays_s: pt.delay_s().to_vec(), notes, motion: Some(motion) })
+    let motion = Motion::physical(&vec![1.0; model.line.bodies.len()], ss.nstates());
+    Ok(Prediction { model: ss, input_delays_s: model.input_delays_s(), notes, motion: Some(motion) })
+}
+
+/// The paper rig's drive model `m` (`plant::DriveModel::paper_rig`) as its controller sees it:
+/// its [`DriveModel::control_state_space`] (in contact, friction and the dead time left out)
+/// with the rig's names, which its rig files' `[mpc]` sections and its controller FMU's
+/// variables use: inputs M_m2, M_drive, M_m3 (the drive torque acts on the motor when the drive
+/// is compliant), outputs w_m2, w_drive (the cage's), w_m3, T_short_side_shaft,
+/// T_long_side_shaft and, with a compliance, w_motor; a lag's state M_drive_lagged.
+pub fn rig_control_state_space(m: &DriveModel) -> Result<StateSpace> {
+    let ss = m.control_state_space()?;
+    let mut outputs = vec!["w_m2", "w_drive", "w_m3", "T_short_side_shaft", "T_long_side_shaft"];
+    if m.line.bodies.len() == 4 {
+        outputs.push("w_motor");
+    }
+    let rows = outputs
+        .iter()
+        .map(|o| {
+            ss.output_names.iter().position(|n| n == o).ok_or_else(|| {
+                MpcError::Numerical(format!(
+                    "the rig's model has no output {o} (it has {})",
+                    ss.output_names.join(", ")
+                ))
+            })
+        })
+        .collect::<Result<Vec<usize>>>()?;
+    let lag = 2 * m.line.bodies.len();
+    let mut state_names = ss.state_names;
+    if let Some(name) = state_names.get_mut(lag) {
+        *name = "M_drive_lagged".into();
+    }
+    Ok(StateSpace {
+        c: ss.c.select_rows(&rows),
+        d: ss.d.select_rows(&rows),
+        a: ss.a,
+        b: ss.b,
+        state_names,
+        input_names: ["M_m2", "M_drive", "M_m3"].map(String::from).into(),
+        output_names: outputs.into_iter().map(String::from).collect(),
+    })
 }
 
 /// The prediction model of a drive model for a controller sampling every `dt_s`: its
@@ -244,5 +282,44 @@ impl Design<'_> {
                 Ok((prediction_of(model, full, settings.dt_s)?, settings))
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use plant::Output;
+
+    /// What the MPC predicts the rig with is the open differential assembled by
+    /// `MechanicalModel` from the springs' elongation vectors (another path to the same
+    /// equations), its names included.
+    #[test]
+    fn the_rig_control_state_space_is_the_open_differential_with_its_names() {
+        let rig = plant::paper::damped_params();
+        let m = DriveModel::paper_rig(&rig, Variant::V2, &DriveEffects::default()).unwrap();
+        let ss = rig_control_state_space(&m).unwrap();
+        let reference =
+            rig.open_differential(Variant::V2).unwrap().state_space(&[Output::Speeds, Output::SpringTorques]).unwrap();
+        assert_eq!(ss.state_names, reference.state_names);
+        assert_eq!(ss.input_names, reference.input_names);
+        assert_eq!(ss.output_names, reference.output_names);
+        for (m, r) in [(&ss.a, &reference.a), (&ss.b, &reference.b), (&ss.c, &reference.c)] {
+            assert!((m - r).abs().max() < 1e-9 * r.abs().max(), "{m} vs {r}");
+        }
+    }
+
+    /// With a compliance and a lag the rig keeps its names: the drive torque is still M_drive
+    /// (on the motor), w_motor comes last, the lagged torque is M_drive_lagged.
+    #[test]
+    fn the_compliant_lagged_rig_keeps_its_signal_names() {
+        let effects =
+            DriveEffects { compliance_stiffness_nm_per_rad: 2000.0, actuator_lag_s: 0.004, ..Default::default() };
+        let m = DriveModel::paper_rig(&plant::paper::damped_params(), Variant::V1, &effects).unwrap();
+        let ss = rig_control_state_space(&m).unwrap();
+        assert_eq!(ss.input_names, ["M_m2", "M_drive", "M_m3"]);
+        assert_eq!(ss.output_names, ["w_m2", "w_drive", "w_m3", "T_short_side_shaft", "T_long_side_shaft", "w_motor"]);
+        assert_eq!(ss.state_names[8], "M_drive_lagged");
+        // w_motor reads the motor's speed state
+        assert_eq!(ss.c[(5, 7)], 1.0);
     }
 }

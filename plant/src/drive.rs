@@ -16,7 +16,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::error::{PlantError, Result};
 use crate::integrate::{
-    friction_band, PieceMaps, PiecewiseRk4, PiecewiseSmooth, AFFINE_MAX_STATES, RK4_STEP_TIMES_RATE,
+    friction_band, AffineStep, PieceMaps, PiecewiseRk4, PiecewiseSmooth, AFFINE_MAX_STATES, RK4_STEP_TIMES_RATE,
 };
 use crate::line::{Line, Quantity};
 use crate::statespace::zoh;
@@ -475,7 +475,7 @@ pub struct Dynamics {
 }
 
 /// Fine sub-steps per coarse step where a step crosses a coupling's play (as
-/// `plant::effects::BACKLASH_STEP_S` is an eighth of the rig's millisecond).
+/// `plant::preset::BACKLASH_STEP_S` is an eighth of the rig's millisecond).
 pub const FINE_PER_COARSE: f64 = 8.0;
 
 impl Dynamics {
@@ -805,6 +805,15 @@ impl Dynamics {
         self.inputs.get(j).map_or(0.0, |i| i.1)
     }
 
+    /// The same dynamics with every input acting at once: for inputs already delayed.
+    pub fn without_delays(&self) -> Dynamics {
+        let mut d = self.clone();
+        for input in &mut d.inputs {
+            input.1 = 0.0;
+        }
+        d
+    }
+
     /// True when friction or backlash make the right-hand side nonlinear.
     pub fn is_nonlinear(&self) -> bool {
         self.nonlinear
@@ -918,11 +927,37 @@ impl Dynamics {
         initial_speed: f64,
         outputs: &[(Quantity, usize)],
     ) -> Result<Vec<Vec<f64>>> {
+        // rigid motion at the initial speed; lagged inputs start at their first value
+        let first: Vec<f64> = inputs.iter().map(|u| u.first().copied().unwrap_or(0.0)).collect();
+        let x0 = self.initial_state(initial_speed, &first);
+        let signals: Vec<&[f64]> = inputs.iter().map(Vec::as_slice).collect();
+        self.simulate_from(x0, &signals, dt, outputs)
+    }
+
+    /// Simulates the model from state `x0` under the sampled `inputs` (one signal per input,
+    /// sample time `dt`, each held over a sample and shifted by its input's dead time, the
+    /// first value held before the start) and returns the `outputs` at the sample instants.
+    /// A linear model is stepped exactly (ZOH of each piece of a sample between the dead
+    /// times' fractions); a nonlinear one by [`PiecewiseRk4`] with [`Dynamics::rk4_steps_s`],
+    /// the pieces of a play that is its only nonlinearity exactly ([`Dynamics::play_maps`]).
+    pub fn simulate_from(
+        &self,
+        x0: Vec<f64>,
+        inputs: &[&[f64]],
+        dt: f64,
+        outputs: &[(Quantity, usize)],
+    ) -> Result<Vec<Vec<f64>>> {
         let (n, ns, m) = (self.n, self.nstates, self.inputs.len());
+        if x0.len() != ns {
+            return Err(PlantError::Invalid(format!(
+                "a start state of {} values for a model of {ns} states",
+                x0.len()
+            )));
+        }
         if inputs.len() != m {
             return Err(PlantError::Invalid(format!("{} input signals for a model of {m} inputs", inputs.len())));
         }
-        let len = inputs.first().map_or(0, Vec::len);
+        let len = inputs.first().map_or(0, |u| u.len());
         if inputs.iter().any(|u| u.len() != len) || !(dt.is_finite() && dt > 0.0) {
             return Err(PlantError::Invalid("inputs of different lengths or a bad sample time".into()));
         }
@@ -958,9 +993,7 @@ impl Dynamics {
         let pieces: Vec<(f64, f64)> =
             starts.iter().enumerate().map(|(p, &s)| (s, starts.get(p + 1).copied().unwrap_or(1.0) - s)).collect();
 
-        // rigid motion at the initial speed; lagged inputs start at their first value
-        let first: Vec<f64> = inputs.iter().map(|u| u.first().copied().unwrap_or(0.0)).collect();
-        let mut x = self.initial_state(initial_speed, &first);
+        let mut x = x0;
         let mut y: Vec<Vec<f64>> = outputs.iter().map(|_| Vec::with_capacity(len)).collect();
         let mut u = vec![0.0; m];
         let input_at = |u: &mut [f64], k: usize, phase: f64| {
@@ -971,27 +1004,22 @@ impl Dynamics {
         };
 
         if !self.nonlinear {
-            // exact ZOH of each piece length
+            // exact ZOH of each piece length, one pass over [Φ Γ]'s columns per piece
+            // (`AffineStep`) where the state fits it, else a row at a time
             let (a, b) = self.linear();
             let mut maps = Vec::with_capacity(pieces.len());
             for &(_, frac) in &pieces {
                 let (phi, gamma) = zoh(&a, &b, frac * dt)?;
-                // row-major: the transpose's column-major storage
-                maps.push((phi.transpose().as_slice().to_vec(), gamma.transpose().as_slice().to_vec()));
+                maps.push(Zoh::new(phi, gamma));
             }
             let mut next = vec![0.0; ns];
             for k in 0..len {
                 for (yo, &o) in y.iter_mut().zip(outputs) {
                     yo.push(self.output(&x, o));
                 }
-                for (&(phase, _), (phi, gamma)) in pieces.iter().zip(&maps) {
+                for (&(phase, _), map) in pieces.iter().zip(&maps) {
                     input_at(&mut u, k, phase);
-                    for r in 0..ns {
-                        let pr = &phi[r * ns..(r + 1) * ns];
-                        let gr = &gamma[r * m..(r + 1) * m];
-                        next[r] = pr.iter().zip(&x).map(|(a, b)| a * b).sum::<f64>()
-                            + gr.iter().zip(&u).map(|(a, b)| a * b).sum::<f64>();
-                    }
+                    map.apply(&x, &u, &mut next);
                     std::mem::swap(&mut x, &mut next);
                 }
                 if !x.iter().all(|v| v.is_finite()) {
@@ -1034,6 +1062,44 @@ impl Dynamics {
             }
         }
         Ok(y)
+    }
+}
+
+/// An exact step x⁺ = Φ x + Γ u of a linear model.
+enum Zoh {
+    /// Summed over columns (small models).
+    Columns(AffineStep),
+    /// Row by row: Φ and Γ row-major.
+    Rows { phi: Vec<f64>, gamma: Vec<f64>, ns: usize, m: usize },
+}
+
+impl Zoh {
+    fn new(phi: DMatrix<f64>, gamma: DMatrix<f64>) -> Zoh {
+        let (ns, m) = (phi.nrows(), gamma.ncols());
+        match AffineStep::new(phi.as_slice(), gamma.as_slice(), &vec![0.0; ns]) {
+            Some(step) => Zoh::Columns(step),
+            // row-major: the transpose's column-major storage
+            None => Zoh::Rows {
+                phi: phi.transpose().as_slice().to_vec(),
+                gamma: gamma.transpose().as_slice().to_vec(),
+                ns,
+                m,
+            },
+        }
+    }
+
+    fn apply(&self, x: &[f64], u: &[f64], out: &mut [f64]) {
+        match self {
+            Zoh::Columns(step) => step.apply(x, u, out),
+            Zoh::Rows { phi, gamma, ns, m } => {
+                for (r, o) in out.iter_mut().enumerate().take(*ns) {
+                    let pr = &phi[r * ns..(r + 1) * ns];
+                    let gr = &gamma[r * m..(r + 1) * m];
+                    *o = pr.iter().zip(x).map(|(a, b)| a * b).sum::<f64>()
+                        + gr.iter().zip(u).map(|(a, b)| a * b).sum::<f64>();
+                }
+            }
+        }
     }
 }
 

@@ -247,8 +247,8 @@ fn rk4(
 }
 
 /// The exact steps of the three pieces of a model whose only nonlinearity is a play (inside the
-/// play, beyond it, below it: pieces 0, 1, 2, as `effects::Powertrain::piece` and
-/// (`Dynamics::piece` in `drive`) key them) over `h` seconds.
+/// play, beyond it, below it: pieces 0, 1, 2, as `Dynamics::play_piece_key` keys them) over `h`
+/// seconds.
 #[derive(Debug, Clone)]
 pub struct PieceMaps {
     h: f64,

@@ -26,14 +26,15 @@
 pub mod bearing;
 pub mod bending;
 pub mod chain;
+pub mod delay_line;
 pub mod drive;
-pub mod effects;
 pub mod error;
 pub mod integrate;
 pub mod line;
 pub mod mechanical;
 pub mod modal;
 pub mod paper;
+pub mod preset;
 pub mod reduce;
 pub mod rig;
 pub mod segment;
@@ -45,6 +46,7 @@ pub mod zoh_step;
 pub use bearing::{BearingModel, CoefficientTable, Coefficients, Support};
 pub use bending::{Beam, BeamSegment, Deflection};
 pub use chain::{Body, Chain};
+pub use delay_line::DelayLine;
 pub use drive::{
     ActuatorLag, Backlash, CoulombFriction, Dimension, DriveModel, Dynamics, Effect, EffectModel, Element, Parameter,
     TimeDelay,
@@ -53,6 +55,7 @@ pub use error::{PlantError, Result};
 pub use line::{Coupling, Domain, Line, LineBody, Quantity, MAX_BODIES, MAX_COUPLINGS};
 pub use mechanical::{Layout, MechanicalModel, Output, Spring};
 pub use modal::{damp, modes, Modes, Pole};
+pub use preset::{record_speeds, record_start, simulate_record};
 pub use reduce::{reduce, Reduction, ReductionStep};
 pub use rig::{AdditionalSpring, Effective, Rig, RigChain, RigParams, Variant};
 pub use segment::{bodies_from_segments, step_length_correction_m, Segment};

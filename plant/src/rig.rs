@@ -1,7 +1,7 @@
 //! The rig: the three-mass model with its variants V1–V4 (eqs. (13)–(19), (44), (45)), the open
 //! differential (section 2.4, eqs. (27)–(34), (A1)), and the full chain with the additional
 //! spring inserted (Table A2); the rig's drive-path effects ([`DriveEffects`], as a rig file
-//! names them) and the rig as a drive model with them ([`DriveModel::paper_rig`]).
+//! names them), from which [`crate::preset`] builds the rig's drive model.
 
 use nalgebra::{DMatrix, DVector};
 use serde::{Deserialize, Serialize};
@@ -9,9 +9,8 @@ use std::fmt;
 use std::str::FromStr;
 
 use crate::chain::{Body, Chain};
-use crate::drive::{ActuatorLag, Backlash, CoulombFriction, DriveModel, Effect, TimeDelay};
+use crate::drive::DriveModel;
 use crate::error::{in_range, non_negative, positive, PlantError, Result};
-use crate::line::{Coupling, Domain, Line, LineBody};
 use crate::mechanical::{Layout, MechanicalModel, Spring};
 
 /// Rig variant (section 3, Figure 10): where the additional spring c_delta is mounted.
@@ -535,86 +534,9 @@ impl DriveEffects {
     }
 
     /// True when the right-hand side is nonlinear (backlash or friction): integrated by RK4
-    /// with steps of at most [`BACKLASH_STEP_S`], in the diagnosis and in the FMU alike.
+    /// ([`crate::Dynamics::paper_rig`]), in the diagnosis and in the FMU alike.
     pub fn is_nonlinear(&self) -> bool {
         self.backlash_rad > 0.0 || self.coulomb_friction_nm.iter().any(|&f| f > 0.0)
-    }
-}
-
-impl DriveModel {
-    /// The paper's rig in `variant` with `effects` as a drive model: bodies `m2`, `drive` (the
-    /// differential's cage), `m3` and, with a compliance, `motor` (the drive's inertia split,
-    /// `compliance_motor_fraction` of it on the motor); couplings `short_side_shaft` and
-    /// `long_side_shaft` on the open differential's twist s = 2φ_drive − φ_m2 − φ_m3, each on its
-    /// share of it (eq. (A1): c_r/(c_l + c_r) s and c_l/(c_l + c_r) s, so the pair's stiffness on
-    /// s is c_l c_r/(c_l + c_r)), and `drive_compliance` on φ_motor − φ_drive with the shafts'
-    /// stiffness-proportional damping; inputs M_m2, the drive torque (on the motor when
-    /// compliant), M_m3. The effects: the dead time and lag of the drive torque, the play on
-    /// both shafts so that they open together at |s| = `backlash_rad`, the machines' friction.
-    pub fn paper_rig(rig: &RigParams, variant: Variant, effects: &DriveEffects) -> Result<DriveModel> {
-        effects.validate()?;
-        let e = rig.effective(variant)?;
-        let (cl, cr) = (e.c_left, e.c_right);
-        let (share_l, share_r) = (cr / (cl + cr), cl / (cl + cr));
-        let compliant = effects.compliance_stiffness_nm_per_rad > 0.0;
-        let body = |name: &str, inertia: f64, drag: f64| LineBody { name: name.into(), inertia, drag };
-        let f = effects.compliance_motor_fraction;
-        let mut bodies = vec![
-            body("m2", e.j_m2, e.load_drag),
-            body("drive", if compliant { (1.0 - f) * e.j_drive } else { e.j_drive }, 0.0),
-            body("m3", e.j_m3, e.load_drag),
-        ];
-        let n = if compliant { 4 } else { 3 };
-        let shaft = |name: &str, share: f64, c: f64, d: f64| {
-            let mut el: Vec<f64> = [-1.0, 2.0, -1.0].iter().map(|a| a * share).collect();
-            el.resize(n, 0.0);
-            Coupling { name: Some(name.into()), elongation: Some(el), ..Coupling::new(c, d, 1.0) }
-        };
-        let mut couplings =
-            vec![shaft("short_side_shaft", share_l, cl, e.d_left), shaft("long_side_shaft", share_r, cr, e.d_right)];
-        if compliant {
-            bodies.push(body("motor", f * e.j_drive, 0.0));
-            // The compliance gets the side shafts' stiffness-proportional damping, d = (d_s/c_s) k
-            // (the generic damping of section 4.3): an undamped internal mode would be a
-            // resonance no measurement shows.
-            let c_s = cl * share_l;
-            let d_s = e.d_left * share_l.powi(2) + e.d_right * share_r.powi(2);
-            let k = effects.compliance_stiffness_nm_per_rad;
-            couplings.push(Coupling {
-                name: Some("drive_compliance".into()),
-                elongation: Some(vec![0.0, -1.0, 0.0, 1.0]),
-                ..Coupling::new(k, d_s / c_s * k, 1.0)
-            });
-        }
-        let drive = if compliant { 3 } else { 1 };
-        let mut list = Vec::new();
-        if effects.time_delay_s > 0.0 {
-            list.push(Effect::TimeDelay(TimeDelay { input: 1, delay_s: effects.time_delay_s }));
-        }
-        if effects.actuator_lag_s > 0.0 {
-            list.push(Effect::ActuatorLag(ActuatorLag { input: 1, time_constant_s: effects.actuator_lag_s }));
-        }
-        if effects.backlash_rad > 0.0 {
-            for (k, share) in [share_l, share_r].into_iter().enumerate() {
-                list.push(Effect::Backlash(Backlash { coupling: k, backlash: 2.0 * share * effects.backlash_rad }));
-            }
-        }
-        for (&b, &friction) in [0, drive, 2].iter().zip(&effects.coulomb_friction_nm) {
-            if friction > 0.0 {
-                list.push(Effect::CoulombFriction(CoulombFriction {
-                    body: b,
-                    friction,
-                    smoothing_speed: effects.friction_smoothing_radps,
-                }));
-            }
-        }
-        let m = DriveModel {
-            line: Line { domain: Domain::Rotational, bodies, couplings },
-            inputs: vec![0, drive, 2],
-            effects: list,
-        };
-        m.validate()?;
-        Ok(m)
     }
 }
 

@@ -16,8 +16,8 @@
 
 use nalgebra::{DMatrix, DVector};
 
+use crate::delay_line::DelayLine;
 use crate::drive::{HeldInputs, MAX_INPUTS};
-use crate::effects::{DelayLine, Powertrain};
 use crate::error::{PlantError, Result};
 use crate::integrate::{PieceMaps, PiecewiseRk4};
 use crate::line::MAX_BODIES;
@@ -172,23 +172,6 @@ impl Stepper {
             xs: DVector::zeros(nx),
             dynamics,
         })
-    }
-
-    /// The paper rig's powertrain `p` as its FMU steps it: the diagnosis's integrator and
-    /// steps ([`Powertrain::dynamics`]), its positions entering as the load machines' angles
-    /// φ_m2, φ_m3, the side shafts' generalised twist s = 2φ_drive − φ_m2 − φ_m3 in place of
-    /// φ_drive (eq. (A1)) and, with a compliance, its twist φ_motor − φ_drive in place of
-    /// φ_motor: the rig FMU's states, in [`Powertrain::state_names`]' order.
-    pub fn paper_rig(p: &Powertrain) -> Result<Stepper> {
-        let n = p.dofs();
-        let mut rows = DMatrix::identity(n, n);
-        rows[(1, 0)] = -1.0;
-        rows[(1, 1)] = 2.0;
-        rows[(1, 2)] = -1.0;
-        if n == 4 {
-            rows[(3, 1)] = -1.0;
-        }
-        Stepper::with_positions(p.model(), p.dynamics().clone(), &rows)
     }
 
     /// Number of states.

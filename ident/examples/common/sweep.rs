@@ -4,7 +4,6 @@
 //! never exact, and a noise-free one would keep the selection going on round-off).
 
 use ident::Sweep;
-use plant::effects::Powertrain;
 use plant::rig::DriveEffects;
 use plant::Variant;
 use rand::rngs::StdRng;
@@ -21,8 +20,8 @@ pub fn sweep(set_point: f64, effects: DriveEffects) -> Sweep {
             set_point + 8.0 * (2.0 * std::f64::consts::PI * (t + 0.5 * 29.0 / 60.0 * t * t)).sin()
         })
         .collect();
-    let truth = Powertrain::new(&rig, Variant::V1, &effects).expect("the paper rig with these effects");
-    let (mut w2, mut w3) = truth.simulate(&torque, dt, set_point).expect("the sweep simulates");
+    let (mut w2, mut w3) =
+        plant::record_speeds(&rig, Variant::V1, &effects, &torque, dt, set_point).expect("the sweep simulates");
     let mut rng = StdRng::seed_from_u64(1);
     let noise = Normal::new(0.0, 0.002).expect("a normal distribution");
     for w in w2.iter_mut().chain(w3.iter_mut()) {

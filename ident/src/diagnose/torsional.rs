@@ -1,14 +1,14 @@
 //! Diagnosis of a torsional record (a sweep, a multisine, steps, PRBS, a closed-loop record):
 //! the declared rig simulated with the recorded drive torque, its speed residual, and the
-//! effects of `plant::effects` added by forward selection — several at once where the data
+//! effects of the rig file's `[effects]` (`plant::rig::DriveEffects`) added by forward selection — several at once where the data
 //! lacks several — each kept effect checked by leaving it out. Offsets and drift are removed
 //! below a corner set by the record's length, not by its excitation.
 
 use std::collections::BTreeMap;
 
-use plant::effects::Powertrain;
 use plant::rig::DriveEffects;
 use plant::rig::{RigParams, Variant};
+use plant::{DriveModel, Dynamics, Quantity};
 use serde::Serialize;
 
 use super::verdict::{self, DeclaredSettings, Moves, Refitted};
@@ -52,11 +52,22 @@ impl TorsionalModel {
     /// Its highest natural frequency, Hz (a compliance's mode where it has one; NaN where the
     /// model cannot be built).
     fn upper_mode_hz(&self) -> f64 {
-        Powertrain::new(&self.rig, self.variant, &self.effects)
-            .ok()
-            .and_then(|p| p.frequencies_hz().last().copied())
-            .unwrap_or(f64::NAN)
+        self.drive_model().map_or(f64::NAN, |m| highest_mode_hz(&m))
     }
+
+    /// The rig's one drive model ([`DriveModel::paper_rig`]; `None` where it cannot be built).
+    fn drive_model(&self) -> Option<DriveModel> {
+        DriveModel::paper_rig(&self.rig, self.variant, &self.effects).ok()
+    }
+}
+
+/// The highest undamped natural frequency of `m`, Hz (NaN where it has none).
+fn highest_mode_hz(m: &DriveModel) -> f64 {
+    let Ok(line) = m.line.model() else { return f64::NAN };
+    let k = line.stiffness_matrix();
+    let j = line.inertia.diagonal();
+    let s = nalgebra::DMatrix::from_fn(k.nrows(), k.ncols(), |r, c| k[(r, c)] / (j[r] * j[c]).sqrt());
+    s.symmetric_eigenvalues().iter().map(|&l| l.max(0.0).sqrt() / (2.0 * std::f64::consts::PI)).fold(f64::NAN, f64::max)
 }
 
 /// The diagnosis of one record.
@@ -167,20 +178,22 @@ impl Problem<'_> {
         {
             return None;
         }
-        let p = Powertrain::new(&model.rig, model.variant, &model.effects).ok()?;
+        let m = model.drive_model()?;
+        let d = Dynamics::paper_rig(&m).ok()?;
         // a nonlinear model faster than the record resolves (a lag or an overdamped pole far
         // below the sample time) would need thousands of RK4 steps per sample: not a candidate
         if model.effects.is_nonlinear()
-            && p.integrator(0).counts(self.sweep.dt_s).is_none_or(|(coarse, _)| coarse > MAX_STEPS_PER_SAMPLE)
+            && d.integrator().counts(self.sweep.dt_s).is_none_or(|(coarse, _)| coarse > MAX_STEPS_PER_SAMPLE)
         {
             return None;
         }
-        if e.compliance_stiffness_nm_per_rad > 0.0
-            && p.frequencies_hz().last().copied().unwrap_or(0.0) > 0.1 / self.sweep.dt_s
-        {
+        if e.compliance_stiffness_nm_per_rad > 0.0 && highest_mode_hz(&m) > 0.1 / self.sweep.dt_s {
             return None;
         }
-        let (mut a, mut b) = p.simulate(&self.sweep.torque_nm, self.sweep.dt_s, self.speed0).ok()?;
+        let speeds = [(Quantity::Speed, 0), (Quantity::Speed, 2)];
+        let mut w =
+            plant::simulate_record(&m, &d, &self.sweep.torque_nm, self.sweep.dt_s, self.speed0, &speeds).ok()?;
+        let (mut b, mut a) = (w.pop()?, w.pop()?);
         if !a.iter().chain(&b).all(|v| v.is_finite()) {
             return None;
         }
@@ -601,8 +614,8 @@ pub const BACKLASH_REFINED: usize = 2;
 pub const BACKLASH_FINE_STEPS: usize = 10;
 
 /// Fastest rate the friction's slope T_c/(v_s J) may have, 1/s: what RK4 steps of 0.25 ms
-/// (`Powertrain::rk4_steps_s`: h·rate ≤ 0.5) resolve, four per millisecond.
-pub const MAX_FRICTION_RATE: f64 = 0.5 / (2.0 * plant::effects::BACKLASH_STEP_S);
+/// (`plant::Dynamics::paper_rig`: h·rate ≤ 0.5) resolve, four per millisecond.
+pub const MAX_FRICTION_RATE: f64 = 0.5 / (2.0 * plant::preset::BACKLASH_STEP_S);
 
 /// Most RK4 steps per sample within a smooth piece of a candidate with play or friction: a
 /// model needing more has a time scale below an eighth of the sample time (a lag, an overdamped
@@ -794,9 +807,9 @@ pub fn diagnose(
     let r0 = problem.residual_of(&sim0);
     let error_before = r0.iter().map(|v| v * v).sum::<f64>().sqrt();
     let evidence = evidence(&problem, &r0);
-    let declared_powertrain = Powertrain::new(rig, variant, &DriveEffects::default())
+    let declared_model = DriveModel::paper_rig(rig, variant, &DriveEffects::default())
         .map_err(|e| IdentError::Data(format!("the declared model: {e}")))?;
-    let shuffle_hz = declared_powertrain.frequencies_hz().last().copied().unwrap_or(10.0);
+    let shuffle_hz = Some(highest_mode_hz(&declared_model)).filter(|f| f.is_finite()).unwrap_or(10.0);
     // One effective count for all (the declared model's residual), so the scores compare.
     let nres = 2 * n;
     let n_eff = effective_count(nres, evidence.residual_lag1.max(lag1_autocorrelation(&r0)));
@@ -807,9 +820,12 @@ pub fn diagnose(
     // resonance that happens well away from zero drive torque — so the declared model's shaft
     // torque decides (with the measured torque's variation as margin for its error); friction
     // shows only where a machine's speed reverses.
-    let shaft = declared_powertrain
-        .simulate_shaft_torque(&sweep.torque_nm, dt, speed0)
-        .map_err(|e| IdentError::Data(format!("the declared model: {e}")))?;
+    let shaft = Dynamics::paper_rig(&declared_model)
+        .and_then(|d| {
+            plant::simulate_record(&declared_model, &d, &sweep.torque_nm, dt, speed0, &[(Quantity::CouplingForce, 0)])
+        })
+        .map_err(|e| IdentError::Data(format!("the declared model: {e}")))?
+        .swap_remove(0);
     let crosses = |v: &[f64]| v.iter().any(|&x| x > 0.0) && v.iter().any(|&x| x < 0.0);
     let backlash_excitable = crosses(&shaft);
     drop(shaft);
