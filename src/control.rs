@@ -394,34 +394,6 @@ fn run_on(
         .map_err(|e| anyhow::anyhow!(e))
 }
 
-/// The effects of a parameter set in words ("none" without).
-pub fn effects_in_words(p: &rigtwin_fmu::FmuParams) -> String {
-    let e = &p.effects;
-    let mut v = Vec::new();
-    if e.time_delay_s > 0.0 {
-        v.push(format!("time_delay {:.4} ms", e.time_delay_s * 1e3));
-    }
-    if e.actuator_lag_s > 0.0 {
-        v.push(format!("actuator_lag {:.4} ms", e.actuator_lag_s * 1e3));
-    }
-    if e.backlash_rad > 0.0 {
-        v.push(format!("backlash {:.4} mrad", e.backlash_rad * 1e3));
-    }
-    if e.compliance_stiffness_nm_per_rad > 0.0 {
-        v.push(format!("drive_compliance {:.1} Nm/rad", e.compliance_stiffness_nm_per_rad));
-    }
-    for (k, name) in ["m2", "drive", "m3"].iter().enumerate() {
-        if e.coulomb_friction_nm[k] > 0.0 {
-            v.push(format!("coulomb_friction at {name} {:.3} Nm", e.coulomb_friction_nm[k]));
-        }
-    }
-    if v.is_empty() {
-        "none".into()
-    } else {
-        v.join(", ")
-    }
-}
-
 /// Runs the closed loops and measures. `allocations` reads the process's allocation counter
 /// (the binary installs `mpc::alloc_counter::Counting`); `export` receives the QPs of the
 /// checked steps.
@@ -558,8 +530,8 @@ pub fn report(
         stopped: Compared { mpc: step.mpc.stopped.clone(), baseline: Some(step.baseline.stopped.clone()) },
         signals,
         prediction: prediction.notes.clone(),
-        plant_effects: effects_in_words(truth),
-        model_effects: effects_in_words(params),
+        plant_effects: truth.effects.in_words(),
+        model_effects: params.effects.in_words(),
         units: Units::of(plant::Domain::Rotational),
         sweep_peak_torque_deviation_nm: (kind == ScenarioKind::Sweep)
             .then(|| Compared { mpc: sweep_dev(&run.mpc), baseline: Some(sweep_dev(&run.baseline)) }),

@@ -533,6 +533,34 @@ impl DriveEffects {
             && self.coulomb_friction_nm == [0.0; 3]
     }
 
+    /// The effects in words, with their sizes ("none" without): what a report says a model
+    /// or a plant carries.
+    pub fn in_words(&self) -> String {
+        let mut v = Vec::new();
+        if self.time_delay_s > 0.0 {
+            v.push(format!("time_delay {:.4} ms", self.time_delay_s * 1e3));
+        }
+        if self.actuator_lag_s > 0.0 {
+            v.push(format!("actuator_lag {:.4} ms", self.actuator_lag_s * 1e3));
+        }
+        if self.backlash_rad > 0.0 {
+            v.push(format!("backlash {:.4} mrad", self.backlash_rad * 1e3));
+        }
+        if self.compliance_stiffness_nm_per_rad > 0.0 {
+            v.push(format!("drive_compliance {:.1} Nm/rad", self.compliance_stiffness_nm_per_rad));
+        }
+        for (k, name) in ["m2", "drive", "m3"].iter().enumerate() {
+            if self.coulomb_friction_nm[k] > 0.0 {
+                v.push(format!("coulomb_friction at {name} {:.3} Nm", self.coulomb_friction_nm[k]));
+            }
+        }
+        if v.is_empty() {
+            "none".into()
+        } else {
+            v.join(", ")
+        }
+    }
+
     /// True when the right-hand side is nonlinear (backlash or friction): integrated by RK4
     /// ([`crate::Dynamics::paper_rig`]), in the diagnosis and in the FMU alike.
     pub fn is_nonlinear(&self) -> bool {
