@@ -996,11 +996,38 @@ impl Dynamics {
         let mut x = x0;
         let mut y: Vec<Vec<f64>> = outputs.iter().map(|_| Vec::with_capacity(len)).collect();
         let mut u = vec![0.0; m];
-        let input_at = |u: &mut [f64], k: usize, phase: f64| {
-            for (j, ((whole, frac), sig)) in shifts.iter().zip(inputs).enumerate() {
-                let back = whole + usize::from(phase < *frac);
-                u[j] = sig[k.saturating_sub(back)];
+        // per piece, how many samples back each input's value lies
+        let backs: Vec<Vec<usize>> = pieces
+            .iter()
+            .map(|&(phase, _)| shifts.iter().map(|&(whole, frac)| whole + usize::from(phase < frac)).collect())
+            .collect();
+        let input_at = |u: &mut [f64], k: usize, p: usize| {
+            for ((uj, sig), &back) in u.iter_mut().zip(inputs).zip(&backs[p]) {
+                *uj = sig[k.saturating_sub(back)];
             }
+        };
+        // an output that is a state is read off it, a coupling's force computed
+        let sources: Vec<Option<usize>> = outputs
+            .iter()
+            .map(|&(q, i)| match q {
+                Quantity::Position => Some(i),
+                Quantity::Speed => Some(n + i),
+                Quantity::CouplingForce => None,
+            })
+            .collect();
+        let record = |y: &mut Vec<Vec<f64>>, x: &[f64]| {
+            for ((yo, &o), source) in y.iter_mut().zip(outputs).zip(&sources) {
+                yo.push(match *source {
+                    Some(i) => x[i],
+                    None => self.output(x, o),
+                });
+            }
+        };
+        // the state checked for divergence every this many samples and at the last
+        const CHECK_EVERY: usize = 64;
+        let diverged = |x: &[f64], k: usize| (k % CHECK_EVERY == 0 || k + 1 == len) && !x.iter().all(|v| v.is_finite());
+        let divergence = |k: usize| {
+            PlantError::Numerical(format!("the simulation diverged by sample {k} (within the last {CHECK_EVERY})"))
         };
 
         if !self.nonlinear {
@@ -1014,16 +1041,14 @@ impl Dynamics {
             }
             let mut next = vec![0.0; ns];
             for k in 0..len {
-                for (yo, &o) in y.iter_mut().zip(outputs) {
-                    yo.push(self.output(&x, o));
-                }
-                for (&(phase, _), map) in pieces.iter().zip(&maps) {
-                    input_at(&mut u, k, phase);
+                record(&mut y, &x);
+                for (p, map) in maps.iter().enumerate() {
+                    input_at(&mut u, k, p);
                     map.apply(&x, &u, &mut next);
                     std::mem::swap(&mut x, &mut next);
                 }
-                if !x.iter().all(|v| v.is_finite()) {
-                    return Err(PlantError::Numerical(format!("the simulation diverged at sample {k}")));
+                if diverged(&x, k) {
+                    return Err(divergence(k));
                 }
             }
             return Ok(y);
@@ -1049,16 +1074,14 @@ impl Dynamics {
         let exact = self.play_maps(&lengths);
         let mut piece = None;
         for k in 0..len {
-            for (yo, &o) in y.iter_mut().zip(outputs) {
-                yo.push(self.output(&x, o));
-            }
-            for (p, &(phase, frac)) in pieces.iter().enumerate() {
-                input_at(&mut u, k, phase);
+            record(&mut y, &x);
+            for (p, &(_, frac)) in pieces.iter().enumerate() {
+                input_at(&mut u, k, p);
                 let maps = exact.as_ref().and_then(|maps| maps.get(p));
                 piece = rk.advance_from(&mut HeldInputs { d: self, u: &u, maps }, &mut x, frac * dt, piece).1;
             }
-            if !x.iter().all(|v| v.is_finite()) {
-                return Err(PlantError::Numerical(format!("the simulation diverged at sample {k}")));
+            if diverged(&x, k) {
+                return Err(divergence(k));
             }
         }
         Ok(y)
