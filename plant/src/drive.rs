@@ -1025,7 +1025,8 @@ impl Dynamics {
         };
         // the state checked for divergence every this many samples and at the last
         const CHECK_EVERY: usize = 64;
-        let diverged = |x: &[f64], k: usize| (k % CHECK_EVERY == 0 || k + 1 == len) && !x.iter().all(|v| v.is_finite());
+        let diverged =
+            |x: &[f64], k: usize| (k.is_multiple_of(CHECK_EVERY) || k + 1 == len) && !x.iter().all(|v| v.is_finite());
         let divergence = |k: usize| {
             PlantError::Numerical(format!("the simulation diverged by sample {k} (within the last {CHECK_EVERY})"))
         };
