@@ -5,7 +5,7 @@
 //! record as the diagnosis simulates it (the drive torque the only input). No I/O.
 
 use crate::drive::{ActuatorLag, Backlash, CoulombFriction, DriveModel, Dynamics, Effect, TimeDelay};
-use crate::error::Result;
+use crate::error::{PlantError, Result};
 use crate::integrate::RK4_STEP_TIMES_RATE;
 use crate::line::{Coupling, Domain, Line, LineBody, Quantity};
 use crate::rig::{DriveEffects, RigParams, Variant};
@@ -108,7 +108,9 @@ impl Dynamics {
         if !m.is_nonlinear() {
             return Ok(dynamics);
         }
-        let coarse = (RK4_STEP_TIMES_RATE / dynamics.fastest_rate()).clamp(1e-9, RIG_SAMPLE_S);
+        // the general rule's step within a piece, h·rate ≤ RK4_STEP_TIMES_RATE (its springs
+        // give the rig a fastest rate), at most the sample
+        let coarse = dynamics.rk4_steps_s().0.clamp(1e-9, RIG_SAMPLE_S);
         let backlash = m.effects.iter().any(|e| matches!(e, Effect::Backlash(_)));
         let mut fine = if backlash { BACKLASH_STEP_S.min(coarse) } else { coarse };
         for e in &m.effects {
@@ -128,6 +130,14 @@ impl Stepper {
     /// − φ_m3 in place of φ_drive (eq. (A1)) and, with a compliance, its twist φ_motor −
     /// φ_drive in place of φ_motor: the rig FMU's states.
     pub fn paper_rig(m: &DriveModel) -> Result<Stepper> {
+        if !has_rig_layout(m) {
+            return Err(PlantError::Invalid(format!(
+                "not the paper rig's model (m2, drive, m3 and a motor with a compliance; two side shafts and the \
+                 compliance): {} bodies, {} couplings",
+                m.line.bodies.len(),
+                m.line.couplings.len()
+            )));
+        }
         let n = m.line.bodies.len();
         let mut rows = DMatrix::identity(n, n);
         rows[(1, 0)] = -1.0;
@@ -144,11 +154,15 @@ impl Stepper {
 /// `speed0` (the load machines hold the speed: the drag then needs a torque the drive's may not
 /// supply, but only the twist matters to the response), the side shafts carrying their static
 /// half of the drive torque `torque` (the cage passes it on, a·T = torque) beyond the play, the
-/// compliance its whole, a lag at its steady value.
+/// compliance its whole, a lag at its steady value. A model that is not the rig's starts
+/// untwisted.
 pub fn record_start(m: &DriveModel, torque: f64, speed0: f64) -> Vec<f64> {
     let n = m.line.bodies.len();
     let mut x = vec![0.0; m.nstates()];
     x[n..2 * n].fill(speed0);
+    if !has_rig_layout(m) {
+        return x;
+    }
     let (cl, cr) = (m.line.couplings[0].stiffness, m.line.couplings[1].stiffness);
     // the shafts in series on s (eq. (A1)); the play of the short one is its share of s's
     let c_s = cl * cr / (cl + cr);
@@ -172,6 +186,14 @@ pub fn record_start(m: &DriveModel, torque: f64, speed0: f64) -> Vec<f64> {
         x[2 * n] = torque;
     }
     x
+}
+
+/// Whether `m` is laid out as [`DriveModel::paper_rig`] builds the rig: bodies m2, drive, m3
+/// and, with a compliance, the motor; the two side shafts and, with a compliance, the
+/// compliance.
+fn has_rig_layout(m: &DriveModel) -> bool {
+    let (n, c) = (m.line.bodies.len(), m.line.couplings.len());
+    (n == 3 && c == 2) || (n == 4 && c == 3)
 }
 
 /// A torsional record of the paper rig's model `m`: the drive torque `torque` sampled every
@@ -239,12 +261,9 @@ pub fn record_speeds(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::error::PlantError;
     use crate::mechanical::Output;
     use crate::rig::RigParams;
     use crate::DelayLine;
-
-    const SPEEDS: [(Quantity, usize); 2] = [(Quantity::Speed, 0), (Quantity::Speed, 2)];
 
     /// The rig's model and dynamics with `effects`.
     fn rig_model(rig: &RigParams, variant: Variant, effects: &DriveEffects) -> (DriveModel, Dynamics) {
@@ -253,11 +272,25 @@ mod tests {
         (m, d)
     }
 
-    /// The load machines' speeds of a record.
-    fn speeds(m: &DriveModel, d: &Dynamics, torque: &[f64], dt: f64, speed0: f64) -> (Vec<f64>, Vec<f64>) {
-        let mut w = simulate_record(m, d, torque, dt, speed0, &SPEEDS).unwrap();
-        let w3 = w.pop().unwrap();
-        (w.pop().unwrap(), w3)
+    /// A model that is not the rig's (two bodies, one shaft) is refused by the rig's FMU
+    /// coordinates with the layout it has, and starts a record untwisted, not with a panic.
+    #[test]
+    fn a_model_that_is_not_the_rig_is_refused_not_indexed() {
+        let body = |name: &str| LineBody { name: name.into(), inertia: 0.1, drag: 0.0 };
+        let m = DriveModel {
+            line: Line {
+                domain: Domain::Rotational,
+                bodies: vec![body("a"), body("b")],
+                couplings: vec![Coupling::new(100.0, 0.1, 1.0)],
+            },
+            inputs: vec![0],
+            effects: vec![],
+        };
+        match Stepper::paper_rig(&m) {
+            Err(e) => assert!(e.to_string().contains("2 bodies, 1 couplings"), "{e}"),
+            Ok(_) => panic!("a two-body line is not the rig"),
+        }
+        assert_eq!(record_start(&m, 5.0, 3.0), [0.0, 0.0, 3.0, 3.0]);
     }
 
     fn rig() -> RigParams {
@@ -290,8 +323,8 @@ mod tests {
         let torque: Vec<f64> =
             (0..600).map(|k| 30.0 * (2.0 * std::f64::consts::PI * 3.0 * k as f64 * dt).sin()).collect();
         for effects in cases {
-            let (m, d) = rig_model(&rig(), Variant::V1, &effects);
-            let (w2, w3) = speeds(&m, &d, &torque, dt, 5.0);
+            let (m, _) = rig_model(&rig(), Variant::V1, &effects);
+            let (w2, w3) = record_speeds(&rig(), Variant::V1, &effects, &torque, dt, 5.0).unwrap();
             let mut stepper = Stepper::paper_rig(&m).unwrap();
             let n = m.line.bodies.len();
             let mut z = stepper.state_of(&record_start(&m, torque[0], 5.0));
@@ -472,11 +505,11 @@ mod tests {
         let rig = RigParams { load_drag: 0.0, ..rig() };
         let tc = 3.0;
         let effects = DriveEffects { coulomb_friction_nm: [0.0, tc, 0.0], ..Default::default() };
-        let (m, d) = rig_model(&rig, Variant::V1, &effects);
+        let (_, d) = rig_model(&rig, Variant::V1, &effects);
         let e = rig.effective(Variant::V1).unwrap();
         let j = [e.j_m2, e.j_drive, e.j_m3];
         let (w0, dt, n) = (20.0, 1e-3, 1000);
-        let (w2, w3) = speeds(&m, &d, &vec![0.0; n], dt, w0);
+        let (w2, w3) = record_speeds(&rig, Variant::V1, &effects, &vec![0.0; n], dt, w0).unwrap();
         // the drive's speed from momentum is not an output; check the momentum through the two
         // load machines and the twist-free mean: with the twist small, w_drive ≈ (w2 + w3)/2
         let momentum0 = (j[0] + j[1] + j[2]) * w0;
@@ -536,9 +569,8 @@ mod tests {
             actuator_lag_s: 1e-7,
             ..Default::default()
         };
-        let (m, d) = rig_model(&rig(), Variant::V1, &e);
         let t0 = std::time::Instant::now();
-        let r = simulate_record(&m, &d, &vec![1.0; 60_000], 1e-3, 0.0, &SPEEDS);
+        let r = record_speeds(&rig(), Variant::V1, &e, &vec![1.0; 60_000], 1e-3, 0.0);
         assert!(matches!(r, Err(PlantError::Invalid(ref m)) if m.contains("integration steps")), "{r:?}");
         assert!(t0.elapsed().as_secs_f64() < 1.0);
     }
@@ -561,7 +593,7 @@ mod tests {
                     8.0 * (2.0 * std::f64::consts::PI * (1.0 * t + 1.5 * t * t)).sin()
                 })
                 .collect();
-            let (w2, _) = speeds(&m, &d, &torque, dt, 0.0);
+            let (w2, _) = record_speeds(&rig(), Variant::V1, &effects, &torque, dt, 0.0).unwrap();
             let mut x = record_start(&m, torque[0], 0.0);
             let mut work: [Vec<f64>; 5] = std::array::from_fn(|_| vec![0.0; x.len()]);
             let mut reference = Vec::new();
