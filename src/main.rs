@@ -567,7 +567,13 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                 },
                 time_limit_s: time_limit_us * 1e-6,
             };
-            if let Some(model) = &p.drive {
+            let harness = mpc::closed_loop::HarnessSettings::DEFAULT;
+            let allocations = Some(mpc::alloc_counter::allocations as fn() -> u64);
+            let design = p.design();
+            let (prediction, mut settings) =
+                design.controller(&section, horizon).map_err(|e| anyhow::anyhow!("{model_name}: {e}"))?;
+            tuning.apply(&mut settings)?;
+            let report = if let Some(model) = &p.drive {
                 // a drive model: its [mpc] section, a reference step from rest
                 let truth = match &plant {
                     Some(f) => rigtwin::fmu_package::params_of_file(f)?.drive.ok_or_else(|| {
@@ -584,65 +590,59 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                         "--export-qp: the QP export compares the paper rig's QPs with OSQP and DAQP; {model_name} is a drive model"
                     );
                 }
-                let (rep, run) = rigtwin::control::drive_report(
-                    model,
-                    &truth,
-                    &section,
-                    horizon,
-                    &tuning,
-                    step,
-                    Some(mpc::alloc_counter::allocations),
-                )
-                .map_err(|e| anyhow::anyhow!("{model_name}: {e:#}"))?;
+                let (report, run) =
+                    mpc::evaluation::drive(model, &prediction, &truth, &settings, step, &harness, allocations)
+                        .map_err(|e| anyhow::anyhow!("{model_name}: {e:#}"))?;
                 if let Some(f) = &plot {
                     rigtwin::control::plot_drive(f, &run, model.line.domain)?;
                 }
-                emit(json.as_ref(), &rep.to_json(), &rep.human())?;
-                if let Some(why) = rep.invalid() {
-                    return Err(NotValid(format!("not valid: {why}")).into());
-                }
-                return Ok(());
-            }
-            let truth = match &plant {
-                Some(f) => {
-                    let t = rigtwin::fmu_package::params_of_file(f)?;
-                    if t.drive.is_some() {
-                        anyhow::bail!(
-                            "--plant {}: a drive model; --params is the paper rig (give a rig file)",
-                            f.display()
-                        );
+                report
+            } else {
+                let truth = match &plant {
+                    Some(f) => {
+                        let t = rigtwin::fmu_package::params_of_file(f)?;
+                        if t.drive.is_some() {
+                            anyhow::bail!(
+                                "--plant {}: a drive model; --params is the paper rig (give a rig file)",
+                                f.display()
+                            );
+                        }
+                        t
                     }
-                    t
+                    None => p.clone(),
+                };
+                let kind = match scenario {
+                    ScenarioArg::Step => mpc::closed_loop::ScenarioKind::Step,
+                    ScenarioArg::Sweep => mpc::closed_loop::ScenarioKind::Sweep,
+                };
+                let mut run = mpc::closed_loop::Scenario::new(kind);
+                if let Some(d) = duration {
+                    run = run.with_duration(d, &harness).map_err(|e| anyhow::anyhow!("--duration {d} s: {e}"))?;
                 }
-                None => p.clone(),
+                let mut qps = Vec::new();
+                let busy = rigtwin::progress::Progress::start("closing the loop (MPC and PI)");
+                let (report, loops) = mpc::evaluation::rig(
+                    &design,
+                    &prediction,
+                    &truth.design(),
+                    &settings,
+                    &run,
+                    &harness,
+                    allocations,
+                    export_qp.is_some().then_some(&mut qps),
+                )?;
+                drop(busy);
+                if let Some(f) = &export_qp {
+                    let text = serde_json::to_string(&serde_json::json!({ "qps": qps }))?;
+                    rigtwin::files::write(f, text.as_bytes())?;
+                }
+                if let Some(f) = &plot {
+                    rigtwin::control::plot(f, &p, &loops, kind)?;
+                }
+                report
             };
-            let mut settings = section.rig_settings(horizon).map_err(|e| anyhow::anyhow!("{model_name}: {e}"))?;
-            tuning.apply(&mut settings)?;
-            let kind = match scenario {
-                ScenarioArg::Step => mpc::closed_loop::ScenarioKind::Step,
-                ScenarioArg::Sweep => mpc::closed_loop::ScenarioKind::Sweep,
-            };
-            let mut qps = Vec::new();
-            let busy = rigtwin::progress::Progress::start("closing the loop (MPC and PI)");
-            let (rep, run) = rigtwin::control::report(
-                &p,
-                &truth,
-                &settings,
-                kind,
-                duration,
-                Some(mpc::alloc_counter::allocations),
-                export_qp.is_some().then_some(&mut qps),
-            )?;
-            drop(busy);
-            if let Some(f) = &export_qp {
-                let text = serde_json::to_string(&serde_json::json!({ "qps": qps }))?;
-                rigtwin::files::write(f, text.as_bytes())?;
-            }
-            if let Some(f) = &plot {
-                rigtwin::control::plot(f, &p, &run, kind)?;
-            }
-            emit(json.as_ref(), &rep.to_json(), &rep.human())?;
-            if let Some(why) = rep.invalid() {
+            emit(json.as_ref(), &report.to_json(), &rigtwin::control::human(&report))?;
+            if let Some(why) = report.invalid() {
                 return Err(NotValid(format!("not valid: {why}")).into());
             }
         }

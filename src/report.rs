@@ -193,13 +193,8 @@ pub fn modal_of_line(name: &str, m: &plant::DriveModel) -> anyhow::Result<LineMo
         frequencies_hz: modes.frequencies_hz,
         modes: modes.shapes.iter().map(|s| s.iter().copied().collect()).collect(),
         poles,
-        left_out: effects_at(m),
+        left_out: m.effects_at(),
     })
-}
-
-/// The effects of a drive model, each with where it acts (`time_delay at input 1`).
-pub fn effects_at(m: &plant::DriveModel) -> Vec<String> {
-    m.effects.iter().map(|e| format!("{} at {}", e.name(), e.element(m))).collect()
 }
 
 /// A mode in words: `rigid body` at 0 Hz, else the bodies that swing with the largest component

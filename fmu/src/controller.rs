@@ -12,7 +12,7 @@
 //! sample of computational delay.
 
 use crate::params::{ControllerSpec, FmuParams};
-use crate::variables::{unit_of, Constraint, Port, Ports};
+use crate::variables::{Constraint, Port, Ports};
 use mpc::{Design, MpcSection, MpcSettings, Prediction, RealTime, Status};
 use plant::drive::{Dimension, MAX_INPUTS};
 use plant::{Domain, DriveModel};
@@ -234,7 +234,7 @@ impl ControllerSpec {
 /// measured outputs and references as inputs, its inputs as outputs.
 fn drive_ports(m: &DriveModel, section: &MpcSection, prediction: &Prediction, s: &MpcSettings) -> Ports {
     let domain = m.line.domain;
-    let (speed, force) = (unit_of(Dimension::Speed, domain), unit_of(Dimension::Force, domain));
+    let (speed, force) = (Dimension::Speed.unit(domain), Dimension::Force.unit(domain));
     let unit_of_signal = |n: &str| if n.starts_with("w_") || n.starts_with("v_") { speed } else { force };
     let measured = mpc::realtime::measured_outputs(&prediction.model.output_names, s);
     let mut ports: Vec<Port> = measured
@@ -265,7 +265,7 @@ fn drive_ports(m: &DriveModel, section: &MpcSection, prediction: &Prediction, s:
 /// of [`ControllerSpec::values`].
 fn drive_parameters(m: &DriveModel, section: &MpcSection) -> Vec<Port> {
     let domain = m.line.domain;
-    let force = unit_of(Dimension::Force, domain);
+    let force = Dimension::Force.unit(domain);
     let (force_word, rate) = match domain {
         Domain::Rotational => ("torque", "N.m/s"),
         Domain::Translational => ("force", "N/s"),

@@ -69,6 +69,15 @@ impl Default for FmuParams {
 }
 
 impl FmuParams {
+    /// The model a controller of these parameters is designed on: the drive model, or the
+    /// paper rig in its variant with its effects.
+    pub fn design(&self) -> mpc::Design<'_> {
+        match &self.drive {
+            Some(m) => mpc::Design::Drive(m),
+            None => mpc::Design::Rig { rig: &self.powertrain, variant: self.variant, effects: &self.effects },
+        }
+    }
+
     /// The default rig with the squeeze-film damper identified from `sfd_shake` (KCM, full
     /// coupling, IVFM; `tests/bearing.rs` re-identifies it and compares) as its bearing block.
     pub fn with_sfd_bearing() -> Self {

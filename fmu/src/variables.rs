@@ -568,16 +568,13 @@ impl Table {
         };
         for (i, p) in m.parameter_list().into_iter().enumerate() {
             let constraint = if p.zero_allowed { Constraint::NonNegative } else { Constraint::Positive };
-            push(p.name, Causality::Parameter, Slot::Param(i), unit_of(p.dimension, domain), p.description, constraint);
+            push(p.name, Causality::Parameter, Slot::Param(i), p.dimension.unit(domain), p.description, constraint);
         }
         let names = m.state_names();
         let n = m.line.bodies.len();
         let nx = names.len();
-        let (q, w, f) = (
-            unit_of(Dimension::Coordinate, domain),
-            unit_of(Dimension::Speed, domain),
-            unit_of(Dimension::Force, domain),
-        );
+        let (q, w, f) =
+            (Dimension::Coordinate.unit(domain), Dimension::Speed.unit(domain), Dimension::Force.unit(domain));
         let (acc, rate, twist, what, twist_nominal) = match domain {
             Domain::Rotational => ("rad/s2", "N.m/s", "twist", "angle", 1e-3),
             Domain::Translational => ("m/s2", "N/s", "elongation", "position", 1e-5),
@@ -758,57 +755,6 @@ fn force_word(domain: Domain) -> &'static str {
     match domain {
         Domain::Rotational => "torque",
         Domain::Translational => "force",
-    }
-}
-
-/// The FMI unit of a drive-model quantity in its domain.
-pub fn unit_of(d: Dimension, domain: Domain) -> &'static str {
-    let rotational = domain == Domain::Rotational;
-    match d {
-        Dimension::Inertia => {
-            if rotational {
-                "kg.m2"
-            } else {
-                "kg"
-            }
-        }
-        Dimension::Stiffness => {
-            if rotational {
-                "N.m/rad"
-            } else {
-                "N/m"
-            }
-        }
-        Dimension::Damping => {
-            if rotational {
-                "N.m.s/rad"
-            } else {
-                "N.s/m"
-            }
-        }
-        Dimension::Force => {
-            if rotational {
-                "N.m"
-            } else {
-                "N"
-            }
-        }
-        Dimension::Coordinate => {
-            if rotational {
-                "rad"
-            } else {
-                "m"
-            }
-        }
-        Dimension::Speed => {
-            if rotational {
-                "rad/s"
-            } else {
-                "m/s"
-            }
-        }
-        Dimension::Time => "s",
-        Dimension::Ratio => "1",
     }
 }
 

@@ -13,6 +13,8 @@
 //! - [`estimator`]: steady-state Kalman filter with input disturbances (offset-free).
 //! - [`controller`]: one allocation-free step; the shifted previous plan when a solve fails.
 //! - [`closed_loop`]: simulation against a plant, the PI baseline, step figures.
+//! - [`evaluation`]: how `rigtwin mpc` judges a controller on any model: its closed loop, its
+//!   timing and allocations, its first input against the exact optimum; the report.
 //! - [`riccati`]: the discrete Riccati equation (`dare`).
 //! - [`prediction`]: any model (the paper rig with its effects, a drive model) as a
 //!   prediction model with its `[mpc]` section's settings.
@@ -25,6 +27,7 @@ pub mod controller;
 pub mod drive_plant;
 pub mod error;
 pub mod estimator;
+pub mod evaluation;
 pub mod model;
 pub mod prediction;
 pub mod qp;

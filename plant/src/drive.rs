@@ -74,6 +74,28 @@ impl Dimension {
             (Dimension::Ratio, _) => "1",
         }
     }
+
+    /// Its unit as FMI and the reports write it, in `domain`: `kg.m2`/`kg`, `N.m/rad`/`N/m`,
+    /// `N.m.s/rad`/`N.s/m`, `N.m`/`N`, `rad`/`m`, `rad/s`/`m/s`, `s`, `1`.
+    pub fn unit(self, domain: crate::line::Domain) -> &'static str {
+        let rotational = domain == crate::line::Domain::Rotational;
+        match (self, rotational) {
+            (Dimension::Inertia, true) => "kg.m2",
+            (Dimension::Inertia, false) => "kg",
+            (Dimension::Stiffness, true) => "N.m/rad",
+            (Dimension::Stiffness, false) => "N/m",
+            (Dimension::Damping, true) => "N.m.s/rad",
+            (Dimension::Damping, false) => "N.s/m",
+            (Dimension::Force, true) => "N.m",
+            (Dimension::Force, false) => "N",
+            (Dimension::Coordinate, true) => "rad",
+            (Dimension::Coordinate, false) => "m",
+            (Dimension::Speed, true) => "rad/s",
+            (Dimension::Speed, false) => "m/s",
+            (Dimension::Time, _) => "s",
+            (Dimension::Ratio, _) => "1",
+        }
+    }
 }
 
 /// One parameter of a [`DriveModel`]: what an FMU exposes and a fit moves.
@@ -208,6 +230,12 @@ impl DriveModel {
     /// Number of states: angles (positions), speeds and one per lagged input.
     pub fn nstates(&self) -> usize {
         2 * self.line.bodies.len() + self.effects.iter().map(|e| e.state_names(self).len()).sum::<usize>()
+    }
+
+    /// Its effects, each with where it acts (`time_delay at input 1`): what a report says a
+    /// model leaves out or carries.
+    pub fn effects_at(&self) -> Vec<String> {
+        self.effects.iter().map(|e| format!("{} at {}", e.name(), e.element(self))).collect()
     }
 
     /// The bodies' names as identifiers (letters, digits, `_`; not starting with a digit), the
