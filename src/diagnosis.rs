@@ -4,7 +4,7 @@
 use std::collections::BTreeMap;
 use std::path::Path;
 
-use ident::diagnose::{rms, CandidateScore};
+use ident::diagnose::CandidateScore;
 use serde::Serialize;
 
 use crate::bundle::{load_bearing, load_torsional};
@@ -244,33 +244,6 @@ fn frequency_response(u: &[f64], y: &[f64], dt: f64, f_max: f64) -> Vec<(f64, f6
     bands.values().map(|&(f, h, c)| (f / c as f64, h / c as f64)).collect()
 }
 
-/// The notes of a time-domain diagnosis: `none` chosen (nothing beats re-fitting `refitted`),
-/// a residual still far from white.
-fn fit_notes(effect: &str, refitted: &str, structured_residual: bool, error_after: f64) -> Vec<String> {
-    let mut notes = Vec::new();
-    if effect == "none" {
-        notes.push(format!("no candidate beats re-fitting {refitted}"));
-    }
-    if structured_residual {
-        notes.push(format!(
-            "the best model still leaves a structured residual (lag-1 autocorrelation above 0.5, error {error_after:.3})"
-        ));
-    }
-    notes
-}
-
-/// Why each implausible candidate was not chosen (how its re-fit moved the declared mechanics).
-fn implausible_notes(candidates: &[ident::diagnose::CandidateScore]) -> Vec<String> {
-    candidates
-        .iter()
-        .filter(|c| c.implausible)
-        .map(|c| {
-            let at = c.at.as_ref().map(|a| format!(" at {a}")).unwrap_or_default();
-            format!("{}{at} not chosen (error {:.4}): {}", c.effect, c.error_after, c.implausible_because.join("; "))
-        })
-        .collect()
-}
-
 /// Most points of a plotted time series.
 const PLOT_POINTS: usize = 6000;
 
@@ -278,40 +251,9 @@ fn torsional(file: &Path, progress: &(dyn Fn(&str) + Sync)) -> anyhow::Result<Di
     let b = load_torsional(file)?;
     let d = ident::diagnose::torsional::diagnose(&b.sweep, &b.model, b.variant, progress)
         .map_err(|e| anyhow::anyhow!("{}: {e}", file.display()))?;
-    let mut notes = fit_notes(&d.effect, "the declared parameters", d.structured_residual, d.error_after);
+    // the search is reported where it went elsewhere than the answer's path
     let same_steps =
         d.search.len() == d.path.len() && d.search.iter().zip(&d.path).all(|(a, b)| a.effects == b.effects);
-    if d.effects.len() > 1 {
-        let names: Vec<String> = d
-            .path
-            .iter()
-            .map(|p| {
-                let m = if p.effects.is_empty() { "declared".to_string() } else { p.effects.join(" + ") };
-                format!("{m} ({:.4})", p.error)
-            })
-            .collect();
-        notes.push(format!("{} effects found: {}", d.effects.len(), names.join(" → ")));
-        let needed: Vec<String> = d
-            .effects
-            .iter()
-            .map(|e| {
-                let at = e.at.as_ref().map(|a| format!(" at {a}")).unwrap_or_default();
-                if e.error_without.is_finite() {
-                    format!("{}{at} {:.4}", e.effect, e.error_without)
-                } else {
-                    format!("{}{at} (the model without it cannot be simulated)", e.effect)
-                }
-            })
-            .collect();
-        notes.push(format!("error with each effect left out (the others re-fitted): {}", needed.join(", ")));
-    }
-    notes.extend(implausible_notes(&d.candidates));
-    if d.model.effects.coulomb_friction_nm.iter().any(|&f| f > 0.0) {
-        notes.push(format!(
-            "Coulomb friction is smoothed as T_c·w/√(w² + v_s²) with v_s = {:.3e} rad/s (1 % of the load machines' RMS speed, or wider where the friction would be faster than the 0.125 ms integration step resolves)",
-            d.model.effects.friction_smoothing_radps
-        ));
-    }
     let model_toml = rig_toml(&d.model.rig, d.model.variant, &d.model.effects, None)?;
     let dt = b.sweep.dt_s;
     let t = &d.traces;
@@ -364,25 +306,10 @@ fn torsional(file: &Path, progress: &(dyn Fn(&str) + Sync)) -> anyhow::Result<Di
             ],
         },
     ];
-    let scales = ident::diagnose::verdict::RecordScales {
-        max_force: b.sweep.torque_nm.iter().fold(0.0, |a: f64, v| a.max(v.abs())),
-        rms_speed: rms(&b.sweep.speed_m2_radps).max(rms(&b.sweep.speed_m3_radps)),
-        duration_s: b.sweep.torque_nm.len() as f64 * dt,
-        sample_time_s: dt,
-    };
-    let judged = std::iter::once(&d.parameters).chain(d.effects.iter().map(|e| &e.parameters));
-    let (verdict, verdict_reasons) = ident::diagnose::verdict::judge(
-        &d.effect,
-        d.structured_residual,
-        judged,
-        &scales,
-        d.distorted.iter().chain(&d.unsupported),
-        &ident::diagnose::verdict::BoundSettings::default(),
-    );
     Ok(Diagnosis {
         report: DiagnosisReport {
-            verdict,
-            verdict_reasons,
+            verdict: d.verdict,
+            verdict_reasons: d.verdict_reasons,
             effect: d.effect,
             at: d.at,
             parameters: d.parameters,
@@ -402,7 +329,7 @@ fn torsional(file: &Path, progress: &(dyn Fn(&str) + Sync)) -> anyhow::Result<Di
             ),
             structured_residual: d.structured_residual,
             evidence: serde_json::to_value(&d.evidence)?,
-            notes,
+            notes: d.notes,
             conversions: b.conversions.clone(),
         },
         model_toml,
@@ -419,26 +346,8 @@ fn bearing(file: &Path, _progress: &(dyn Fn(&str) + Sync)) -> anyhow::Result<Dia
         .map_err(|e| anyhow::anyhow!("{}: {e}", file.display()))?;
     let d = ident::diagnose::bearing::diagnose(&imp, &b.support, b.structure, b.coupling)
         .map_err(|e| anyhow::anyhow!("{}: {e}", file.display()))?;
-    let mut notes = Vec::new();
-    if d.effect == "none" {
-        notes.push("no candidate beats re-fitting the declared structure".into());
-    }
-    if d.structured_residual {
-        notes.push(format!("the best model still misfits the impedances by {:.1} %", 100.0 * d.error_after));
-    }
     let f = &imp.frequencies_hz;
-    let w_ref = 2.0 * std::f64::consts::PI * 0.5 * (f[0] + f[f.len() - 1]);
-    if d.model.loss_factor > 0.0 {
-        notes.push(format!(
-            "the exported model carries the hysteretic damping as the viscous damping it equals at {:.1} Hz",
-            w_ref / (2.0 * std::f64::consts::PI)
-        ));
-    }
-    if d.model.sensor_delay_s > 0.0 {
-        notes.push(
-            "the sensor delay is the sensors', not the element's: the exported element is corrected for it".into(),
-        );
-    }
+    let w_ref = d.reference_radps;
     let bearing_model =
         plant::BearingModel { element: d.model.equivalent_element(w_ref), support: b.support, table: None };
     let fmu = rigtwin_fmu::FmuParams::default();
@@ -512,25 +421,10 @@ fn bearing(file: &Path, _progress: &(dyn Fn(&str) + Sync)) -> anyhow::Result<Dia
     let mut evidence = serde_json::to_value(&d.evidence)?;
     evidence["r2_before"] = serde_json::to_value(d.r2_before)?;
     evidence["r2_after"] = serde_json::to_value(d.r2_after)?;
-    let test = &b.tests[0];
-    let scales = ident::diagnose::verdict::RecordScales {
-        max_force: f64::INFINITY,
-        rms_speed: f64::INFINITY,
-        duration_s: test.force_x_n.len() as f64 * test.dt_s,
-        sample_time_s: 0.0,
-    };
-    let (verdict, verdict_reasons) = ident::diagnose::verdict::judge(
-        &d.effect,
-        d.structured_residual,
-        std::iter::once(&d.parameters),
-        &scales,
-        None,
-        &ident::diagnose::verdict::BoundSettings::default(),
-    );
     Ok(Diagnosis {
         report: DiagnosisReport {
-            verdict,
-            verdict_reasons,
+            verdict: d.verdict,
+            verdict_reasons: d.verdict_reasons,
             effect: d.effect,
             at: None,
             parameters: d.parameters,
@@ -547,7 +441,7 @@ fn bearing(file: &Path, _progress: &(dyn Fn(&str) + Sync)) -> anyhow::Result<Dia
             error_definition: "‖H_meas − H_model‖/‖H_meas‖ over the excited lines (Frobenius)".into(),
             structured_residual: d.structured_residual,
             evidence,
-            notes,
+            notes: d.notes,
             conversions: b.conversions.clone(),
         },
         model_toml,
@@ -704,18 +598,6 @@ fn drive(file: &Path, progress: &(dyn Fn(&str) + Sync)) -> anyhow::Result<Diagno
         dt_s: b.dt_s,
     };
     let d = ident::diagnose::drive::diagnose(rec, progress).map_err(|e| anyhow::anyhow!("{}: {e}", file.display()))?;
-    let mut notes = fit_notes(&d.effect, "the declared inertias and stiffnesses", d.structured_residual, d.error_after);
-    if !d.moved_declared.is_empty() {
-        notes.push(format!("the answer's re-fit moved the declared mechanics: {}", d.moved_declared.join("; ")));
-    }
-    notes.extend(d.search_notes.iter().cloned());
-    for e in &d.model.effects {
-        if let plant::Effect::CoulombFriction(plant::CoulombFriction { smoothing_speed, .. }) = e {
-            notes.push(format!(
-                "Coulomb friction is smoothed as F_c·v/√(v² + v_s²) with v_s = {smoothing_speed:.3e} (1 % of the body's RMS speed in the declared model, or wider where the friction would be faster than the mechanics)"
-            ));
-        }
-    }
     let model_toml = drive_model_toml(&d.model, &b)?;
     // each output with its SI unit (the record's own units were converted on reading)
     let domain = b.line.domain;
@@ -793,37 +675,10 @@ fn drive(file: &Path, progress: &(dyn Fn(&str) + Sync)) -> anyhow::Result<Diagno
             (label, spectrum(&res(&t.after[0]), b.dt_s, f_max)),
         ],
     });
-    // the largest force the inputs apply, through the gear stages at most (the product of the
-    // ratios above 1 along the line)
-    let gearing: f64 = b.line.couplings.iter().map(|c| c.ratio.abs().max(1.0)).product();
-    let speeds = b
-        .outputs
-        .iter()
-        .zip(&b.output_data)
-        .filter(|(s, _)| s.quantity.unwrap_or(plant::Quantity::Speed) == plant::Quantity::Speed);
-    let scales = ident::diagnose::verdict::RecordScales {
-        max_force: gearing * b.input_data.iter().flatten().fold(0.0, |a: f64, v| a.max(v.abs())),
-        rms_speed: speeds.map(|(_, y)| rms(y)).fold(f64::NAN, f64::max),
-        duration_s: b.input_data[0].len() as f64 * b.dt_s,
-        sample_time_s: b.dt_s,
-    };
-    let scales = ident::diagnose::verdict::RecordScales {
-        // no speed measured: the smoothing speed is not judged
-        rms_speed: if scales.rms_speed.is_nan() { f64::INFINITY } else { scales.rms_speed },
-        ..scales
-    };
-    let (verdict, verdict_reasons) = ident::diagnose::verdict::judge(
-        &d.effect,
-        d.structured_residual,
-        std::iter::once(&d.parameters),
-        &scales,
-        d.distorted.iter().chain(&d.unsupported).chain(&d.unplaced),
-        &ident::diagnose::verdict::BoundSettings::default(),
-    );
     Ok(Diagnosis {
         report: DiagnosisReport {
-            verdict,
-            verdict_reasons,
+            verdict: d.verdict,
+            verdict_reasons: d.verdict_reasons.clone(),
             effect: d.effect.clone(),
             at: d.at.clone(),
             parameters: d.parameters.clone(),
@@ -843,7 +698,7 @@ fn drive(file: &Path, progress: &(dyn Fn(&str) + Sync)) -> anyhow::Result<Diagno
             ),
             structured_residual: d.structured_residual,
             evidence: serde_json::json!({ "high_pass_hz": d.high_pass_hz }),
-            notes,
+            notes: d.notes.clone(),
             conversions: b.conversions.clone(),
         },
         model_toml,

@@ -92,6 +92,61 @@ pub struct BearingDiagnosis {
     pub model: BearingModelFit,
     /// The declared structure's fit.
     pub declared_fit: BearingModelFit,
+    /// Where a hysteretic damping is exported as the viscous damping it equals: the middle of
+    /// the excited band, rad/s.
+    pub reference_radps: f64,
+    /// The answer in one word ([`super::verdict::judge`]; stiffnesses, dampings and masses have
+    /// no bound the record sets, so it follows the effect and the misfit).
+    pub verdict: super::verdict::Verdict,
+    /// Why the verdict is what it is (a *not explained* always has a reason).
+    pub verdict_reasons: Vec<String>,
+    /// What a reader needs beside the numbers, in words.
+    pub notes: Vec<String>,
+}
+
+impl BearingDiagnosis {
+    /// What a reader needs beside the numbers: `none` chosen, a misfit left, how a hysteretic
+    /// damping and a sensor delay are exported.
+    fn notes_in_words(&self) -> Vec<String> {
+        let mut notes = Vec::new();
+        if self.effect == "none" {
+            notes.push("no candidate beats re-fitting the declared structure".into());
+        }
+        if self.structured_residual {
+            notes.push(format!("the best model still misfits the impedances by {:.1} %", 100.0 * self.error_after));
+        }
+        if self.model.loss_factor > 0.0 {
+            notes.push(format!(
+                "the exported model carries the hysteretic damping as the viscous damping it equals at {:.1} Hz",
+                self.reference_radps / (2.0 * PI)
+            ));
+        }
+        if self.model.sensor_delay_s > 0.0 {
+            notes.push(
+                "the sensor delay is the sensors', not the element's: the exported element is corrected for it".into(),
+            );
+        }
+        notes
+    }
+
+    /// The verdict: no parameter of a bearing has a bound the record sets (the scales are
+    /// unbounded), so it is the effect against the misfit.
+    fn judged(&self) -> (super::verdict::Verdict, Vec<String>) {
+        let scales = super::verdict::RecordScales {
+            max_force: f64::INFINITY,
+            rms_speed: f64::INFINITY,
+            duration_s: f64::INFINITY,
+            sample_time_s: 0.0,
+        };
+        super::verdict::judge(
+            &self.effect,
+            self.structured_residual,
+            std::iter::once(&self.parameters),
+            &scales,
+            None,
+            &super::verdict::BoundSettings::default(),
+        )
+    }
 }
 
 type Unknown = (usize, usize, usize);
@@ -294,7 +349,8 @@ pub fn diagnose(
     let model = results[best].1.clone();
     let mut candidates = scored.clone();
     candidates.sort_by(|a, b| a.score.total_cmp(&b.score));
-    Ok(BearingDiagnosis {
+    let f = &imp.frequencies_hz;
+    let mut d = BearingDiagnosis {
         effect: scored[best].effect.clone(),
         parameters: scored[best].parameters.clone(),
         error_before,
@@ -306,5 +362,12 @@ pub fn diagnose(
         structured_residual: scored[best].error_after > 0.05,
         model,
         declared_fit: fit0,
-    })
+        reference_radps: 2.0 * PI * 0.5 * (f[0] + f[f.len() - 1]),
+        verdict: super::verdict::Verdict::NotExplained,
+        verdict_reasons: Vec::new(),
+        notes: Vec::new(),
+    };
+    d.notes = d.notes_in_words();
+    (d.verdict, d.verdict_reasons) = d.judged();
+    Ok(d)
 }

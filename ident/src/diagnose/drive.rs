@@ -186,9 +186,68 @@ pub struct DriveDiagnosis {
     pub high_pass_hz: f64,
     /// The extended model.
     pub model: DriveModel,
+    /// The answer in one word ([`super::verdict::judge`]: its parameters against the record's
+    /// bounds, beside `distorted`, `unsupported` and `unplaced`).
+    pub verdict: super::verdict::Verdict,
+    /// Why the verdict is what it is (a *not explained* always has a reason).
+    pub verdict_reasons: Vec<String>,
+    /// What a reader needs beside the numbers, in words.
+    pub notes: Vec<String>,
     /// Signals for plots.
     #[serde(skip)]
     pub traces: DriveTraces,
+}
+
+impl DriveDiagnosis {
+    /// What a reader needs beside the numbers: the fit's notes
+    /// ([`super::verdict::fit_notes`]), how the answer's re-fit moved the declared mechanics,
+    /// where the search was narrower than the vocabulary, and how a found friction is smoothed.
+    fn notes_in_words(&self) -> Vec<String> {
+        let refitted = "the declared inertias and stiffnesses";
+        let mut notes = super::verdict::fit_notes(&self.effect, refitted, self.structured_residual, self.error_after);
+        if !self.moved_declared.is_empty() {
+            notes.push(format!("the answer's re-fit moved the declared mechanics: {}", self.moved_declared.join("; ")));
+        }
+        notes.extend(self.search_notes.iter().cloned());
+        for e in &self.model.effects {
+            if let Effect::CoulombFriction(plant::CoulombFriction { smoothing_speed, .. }) = e {
+                notes.push(format!(
+                    "Coulomb friction is smoothed as F_c·v/√(v² + v_s²) with v_s = {smoothing_speed:.3e} (1 % of the body's RMS speed in the declared model, or wider where the friction would be faster than the mechanics)"
+                ));
+            }
+        }
+        notes
+    }
+
+    /// The verdict on `rec`: the answer's parameters against the record's bounds — its largest
+    /// input force through the gear stages at most (the product of the ratios above 1 along the
+    /// line), its largest RMS measured speed (none measured: not judged), its length and sample
+    /// time; [`super::verdict::BoundSettings`]' defaults — beside `distorted`, `unsupported` and
+    /// `unplaced`.
+    fn judged(&self, rec: &DriveRecord) -> (super::verdict::Verdict, Vec<String>) {
+        let gearing: f64 = rec.model.line.couplings.iter().map(|c| c.ratio.abs().max(1.0)).product();
+        let rms_speed = rec
+            .outputs
+            .iter()
+            .zip(rec.measured)
+            .filter(|((q, _), _)| *q == Quantity::Speed)
+            .map(|(_, y)| rms(y))
+            .fold(f64::NAN, f64::max);
+        let scales = super::verdict::RecordScales {
+            max_force: gearing * rec.inputs.iter().flatten().fold(0.0, |a: f64, v| a.max(v.abs())),
+            rms_speed: if rms_speed.is_nan() { f64::INFINITY } else { rms_speed },
+            duration_s: rec.inputs[0].len() as f64 * rec.dt_s,
+            sample_time_s: rec.dt_s,
+        };
+        super::verdict::judge(
+            &self.effect,
+            self.structured_residual,
+            std::iter::once(&self.parameters),
+            &scales,
+            self.distorted.iter().chain(&self.unsupported).chain(&self.unplaced),
+            &super::verdict::BoundSettings::default(),
+        )
+    }
 }
 
 struct Problem<'a> {
@@ -874,7 +933,7 @@ pub fn diagnose(rec: DriveRecord, progress: &(dyn Fn(&str) + Sync)) -> Result<Dr
     let mut candidates: Vec<CandidateScore> = scored.into_iter().map(|s| s.0).collect();
     candidates.sort_by(|a, b| a.score.total_cmp(&b.score));
     let unplaced = super::verdict::place_undetermined(&chosen, &candidates, &PlaceSettings::default());
-    Ok(DriveDiagnosis {
+    let mut d = DriveDiagnosis {
         effect: chosen_candidate.name().to_string(),
         at: effects.first().and_then(|e| e.at.clone()),
         effects,
@@ -892,6 +951,12 @@ pub fn diagnose(rec: DriveRecord, progress: &(dyn Fn(&str) + Sync)) -> Result<Dr
         distorted,
         high_pass_hz,
         model,
+        verdict: super::verdict::Verdict::NotExplained,
+        verdict_reasons: Vec::new(),
+        notes: Vec::new(),
         traces,
-    })
+    };
+    d.notes = d.notes_in_words();
+    (d.verdict, d.verdict_reasons) = d.judged(&rec);
+    Ok(d)
 }

@@ -120,9 +120,80 @@ pub struct TorsionalDiagnosis {
     pub high_pass_hz: f64,
     /// The extended model.
     pub model: TorsionalModel,
+    /// The answer in one word ([`verdict::judge`]: its parameters against the record's bounds,
+    /// beside `distorted` and `unsupported`).
+    pub verdict: verdict::Verdict,
+    /// Why the verdict is what it is (a *not explained* always has a reason).
+    pub verdict_reasons: Vec<String>,
+    /// What a reader needs beside the numbers, in words.
+    pub notes: Vec<String>,
     /// Time, measured speeds and model speeds before and after (high-passed), for plots.
     #[serde(skip)]
     pub traces: Traces,
+}
+
+impl TorsionalDiagnosis {
+    /// What a reader needs beside the numbers: the fit's notes ([`verdict::fit_notes`]), the
+    /// path and each effect's need when several were found, why implausible candidates were not
+    /// chosen, and how a found friction is smoothed.
+    fn notes_in_words(&self) -> Vec<String> {
+        let mut notes =
+            verdict::fit_notes(&self.effect, "the declared parameters", self.structured_residual, self.error_after);
+        if self.effects.len() > 1 {
+            let names: Vec<String> = self
+                .path
+                .iter()
+                .map(|p| {
+                    let m = if p.effects.is_empty() { "declared".to_string() } else { p.effects.join(" + ") };
+                    format!("{m} ({:.4})", p.error)
+                })
+                .collect();
+            notes.push(format!("{} effects found: {}", self.effects.len(), names.join(" → ")));
+            let needed: Vec<String> = self
+                .effects
+                .iter()
+                .map(|e| {
+                    let at = e.at.as_ref().map(|a| format!(" at {a}")).unwrap_or_default();
+                    if e.error_without.is_finite() {
+                        format!("{}{at} {:.4}", e.effect, e.error_without)
+                    } else {
+                        format!("{}{at} (the model without it cannot be simulated)", e.effect)
+                    }
+                })
+                .collect();
+            notes.push(format!("error with each effect left out (the others re-fitted): {}", needed.join(", ")));
+        }
+        notes.extend(verdict::implausible_notes(&self.candidates));
+        if self.model.effects.coulomb_friction_nm.iter().any(|&f| f > 0.0) {
+            notes.push(format!(
+                "Coulomb friction is smoothed as T_c·w/√(w² + v_s²) with v_s = {:.3e} rad/s (1 % of the load machines' RMS speed, or wider where the friction would be faster than the {} ms integration step resolves)",
+                self.model.effects.friction_smoothing_radps,
+                plant::preset::BACKLASH_STEP_S * 1e3
+            ));
+        }
+        notes
+    }
+
+    /// The verdict on `sweep`: every found effect's parameters against the record's bounds
+    /// (its largest drive torque, the load machines' larger RMS speed, its length and sample
+    /// time; [`verdict::BoundSettings`]' defaults), beside `distorted` and `unsupported`.
+    fn judged(&self, sweep: &Sweep) -> (verdict::Verdict, Vec<String>) {
+        let scales = verdict::RecordScales {
+            max_force: sweep.torque_nm.iter().fold(0.0, |a: f64, v| a.max(v.abs())),
+            rms_speed: rms(&sweep.speed_m2_radps).max(rms(&sweep.speed_m3_radps)),
+            duration_s: sweep.torque_nm.len() as f64 * sweep.dt_s,
+            sample_time_s: sweep.dt_s,
+        };
+        let judged = std::iter::once(&self.parameters).chain(self.effects.iter().map(|e| &e.parameters));
+        verdict::judge(
+            &self.effect,
+            self.structured_residual,
+            judged,
+            &scales,
+            self.distorted.iter().chain(&self.unsupported),
+            &verdict::BoundSettings::default(),
+        )
+    }
 }
 
 /// Signals for plots.
@@ -1459,7 +1530,7 @@ pub fn diagnose(
             p
         })
         .collect();
-    Ok(TorsionalDiagnosis {
+    let mut d = TorsionalDiagnosis {
         distorted,
         equivalents,
         effect: effects.first().map_or_else(|| "none".to_string(), |e| e.effect.clone()),
@@ -1478,8 +1549,14 @@ pub fn diagnose(
         structured_residual,
         high_pass_hz: high_pass,
         model,
+        verdict: verdict::Verdict::NotExplained,
+        verdict_reasons: Vec::new(),
+        notes: Vec::new(),
         traces,
-    })
+    };
+    d.notes = d.notes_in_words();
+    (d.verdict, d.verdict_reasons) = d.judged(sweep);
+    Ok(d)
 }
 
 /// What a run of the selection ends at.

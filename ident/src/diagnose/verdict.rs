@@ -218,6 +218,33 @@ pub fn place_undetermined(answer: &CandidateScore, rivals: &[CandidateScore], s:
     })
 }
 
+/// The notes of a time-domain diagnosis that chose `effect`: `none` chosen (nothing beats
+/// re-fitting `refitted`), a residual still far from white.
+pub fn fit_notes(effect: &str, refitted: &str, structured_residual: bool, error_after: f64) -> Vec<String> {
+    let mut notes = Vec::new();
+    if effect == "none" {
+        notes.push(format!("no candidate beats re-fitting {refitted}"));
+    }
+    if structured_residual {
+        notes.push(format!(
+            "the best model still leaves a structured residual (lag-1 autocorrelation above 0.5, error {error_after:.3})"
+        ));
+    }
+    notes
+}
+
+/// Why each implausible candidate was not chosen (how its re-fit moved the declared mechanics).
+pub fn implausible_notes(candidates: &[CandidateScore]) -> Vec<String> {
+    candidates
+        .iter()
+        .filter(|c| c.implausible)
+        .map(|c| {
+            let at = c.at.as_ref().map(|a| format!(" at {a}")).unwrap_or_default();
+            format!("{}{at} not chosen (error {:.4}): {}", c.effect, c.error_after, c.implausible_because.join("; "))
+        })
+        .collect()
+}
+
 /// The verdict of a diagnosis that chose `effect` ("none" for the declared model), left a
 /// structured residual or not, with `violations` from [`out_of_bounds`].
 pub fn verdict(effect: &str, structured_residual: bool, violations: &[String]) -> Verdict {
