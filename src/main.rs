@@ -641,7 +641,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                 }
                 report
             };
-            emit(json.as_ref(), &report.to_json(), &rigtwin::control::human(&report))?;
+            emit(json.as_ref(), &report, &rigtwin::control::human(&report))?;
             if let Some(why) = report.invalid() {
                 return Err(NotValid(format!("not valid: {why}")).into());
             }

@@ -187,24 +187,24 @@ pub struct MpcReport {
     /// How the loops were judged (the baseline's bandwidth, the settling band).
     #[serde(skip)]
     pub harness: HarnessSettings,
+    /// `valid`, or `not_valid` when the figures do not describe the MPC.
+    pub verdict: &'static str,
+    /// Why they do not ([`crate::closed_loop::fallback_verdict`]), if they do not.
+    pub not_valid_because: Option<String>,
 }
 
 impl MpcReport {
-    /// JSON with the verdict keys every `rigtwin mpc` document carries.
-    pub fn to_json(&self) -> serde_json::Value {
-        let mut v = serde_json::to_value(self).expect("report serialises");
-        if let Some(o) = v.as_object_mut() {
-            let why = self.invalid();
-            o.insert("verdict".into(), (if why.is_some() { "not_valid" } else { "valid" }).into());
-            o.insert("not_valid_because".into(), why.into());
-        }
-        v
-    }
-
     /// Why the figures do not describe the MPC, if they do not
     /// ([`crate::closed_loop::fallback_verdict`]).
     pub fn invalid(&self) -> Option<String> {
-        crate::closed_loop::fallback_verdict(self.fallbacks, self.steps)
+        self.not_valid_because.clone()
+    }
+
+    /// The report with its verdict ([`crate::closed_loop::fallback_verdict`] of its steps).
+    fn judged(mut self) -> Self {
+        self.not_valid_because = crate::closed_loop::fallback_verdict(self.fallbacks, self.steps);
+        self.verdict = if self.not_valid_because.is_some() { "not_valid" } else { "valid" };
+        self
     }
 }
 
@@ -428,7 +428,10 @@ pub fn rig(
         sweep_peak_torque_deviation_nm: (scenario.kind == ScenarioKind::Sweep)
             .then(|| Compared { mpc: sweep_dev(&run.mpc), baseline: Some(sweep_dev(&run.baseline)) }),
         harness: *harness,
-    };
+        verdict: "",
+        not_valid_because: None,
+    }
+    .judged();
     Ok((report, run))
 }
 
@@ -551,7 +554,10 @@ pub fn drive(
         units: Units::of(model.line.domain),
         sweep_peak_torque_deviation_nm: None,
         harness: *harness,
-    };
+        verdict: "",
+        not_valid_because: None,
+    }
+    .judged();
     let run = DriveRun {
         time_s: (0..trace.len()).map(|k| k as f64 * dt).collect(),
         output_names: ss.output_names.clone(),
