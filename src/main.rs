@@ -581,17 +581,13 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                     })?,
                     None => model.clone(),
                 };
-                let step = match model.line.domain {
-                    plant::Domain::Rotational => 10.0,
-                    plant::Domain::Translational => 0.1,
-                };
                 if export_qp.is_some() {
                     anyhow::bail!(
                         "--export-qp: the QP export compares the paper rig's QPs with OSQP and DAQP; {model_name} is a drive model"
                     );
                 }
                 let (report, run) =
-                    mpc::evaluation::drive(model, &prediction, &truth, &settings, step, &harness, allocations)
+                    mpc::evaluation::drive(model, &prediction, &truth, &settings, &harness, allocations)
                         .map_err(|e| anyhow::anyhow!("{model_name}: {e:#}"))?;
                 if let Some(f) = &plot {
                     rigtwin::control::plot_drive(f, &run, model.line.domain)?;

@@ -27,12 +27,38 @@ pub struct HarnessSettings {
     /// Default 25: the exact solve costs tens of real-time steps, so checking one step in 25
     /// keeps a 60 s run within seconds while still sampling every phase of the scenario.
     pub check_every: usize,
+    /// A drive model's run: the step of every tracked speed's reference in a rotational line,
+    /// rad/s. Default 10 rad/s (≈ 100 rpm: a speed step a test bench makes, small against its
+    /// machines' rated speeds).
+    pub reference_step_radps: f64,
+    /// The same in a translational line, m/s. Default 0.1 m/s (a positioning axis's jog).
+    pub reference_step_mps: f64,
+    /// When a drive model's reference steps, s. Default 0.05 s (the paper rig's step time).
+    pub reference_step_at_s: f64,
+    /// Length of a drive model's run, s. Default 1 s (the paper rig's step run).
+    pub drive_run_s: f64,
 }
 
 impl HarnessSettings {
     /// The documented defaults.
-    pub const DEFAULT: HarnessSettings =
-        HarnessSettings { pi_bandwidth_hz: 5.0, settling_band: 0.02, max_duration_s: 120.0, check_every: 25 };
+    pub const DEFAULT: HarnessSettings = HarnessSettings {
+        pi_bandwidth_hz: 5.0,
+        settling_band: 0.02,
+        max_duration_s: 120.0,
+        check_every: 25,
+        reference_step_radps: 10.0,
+        reference_step_mps: 0.1,
+        reference_step_at_s: 0.05,
+        drive_run_s: 1.0,
+    };
+
+    /// The reference step of a drive model's run in `domain` (rad/s or m/s).
+    pub fn reference_step(&self, domain: plant::Domain) -> f64 {
+        match domain {
+            plant::Domain::Rotational => self.reference_step_radps,
+            plant::Domain::Translational => self.reference_step_mps,
+        }
+    }
 }
 
 impl Default for HarnessSettings {

@@ -437,18 +437,18 @@ pub fn rig(
 
 /// The MPC of the drive model `model` (predicting with `prediction`, with `settings`) in closed
 /// loop on `truth` as its FMU steps it, from rest: every tracked speed's reference steps by
-/// `step` (rad/s or m/s) at 0.05 s (tracked inputs' references stay 0), for 1 s. The first
-/// input is checked against the exact optimum every `harness.check_every` steps and the
-/// allocations counted (`allocations`), as on the paper rig.
+/// `harness`' reference step at its time (tracked inputs' references stay 0), for its run's
+/// length. The first input is checked against the exact optimum every `harness.check_every`
+/// steps and the allocations counted (`allocations`), as on the paper rig.
 pub fn drive(
     model: &DriveModel,
     prediction: &Prediction,
     truth: &DriveModel,
     settings: &MpcSettings,
-    step: f64,
     harness: &HarnessSettings,
     allocations: Option<fn() -> u64>,
 ) -> Result<(MpcReport, DriveRun)> {
+    let step = harness.reference_step(model.line.domain);
     if truth.input_names() != model.input_names() || truth.coupling_force_names() != model.coupling_force_names() {
         return Err(setting("plant", "its bodies and inputs differ from the model's"));
     }
@@ -458,8 +458,8 @@ pub fn drive(
     controller.reset(&DVector::zeros(ss.nstates()), &vec![0.0; ss.input_names.len()]);
     let mut plant = DrivePlant::new(truth, settings.dt_s, &ss.output_names)?;
     let dt = settings.dt_s;
-    let samples = (1.0 / dt).round() as usize;
-    let k_step = (0.05 / dt).round() as usize;
+    let samples = (harness.drive_run_s / dt).round() as usize;
+    let k_step = (harness.reference_step_at_s / dt).round() as usize;
     let tracked = positions(&names, &ss.output_names);
     let signals = Signals::of(settings, &model.coupling_force_names());
     let penalised = positions(&signals.penalised, &ss.output_names);
