@@ -375,20 +375,13 @@ pub fn load_torsional(file: &Path) -> Result<TorsionalBundle, BundleError> {
     // the TOML is a rig description too: [model] and variant, validated with named keys
     let rig = parse_rig(&text, file).map_err(|e| error(file, None, e.message))?;
     let csv_path = data_path(file, "data", &data)?;
-    // the declared model's modes must be resolved: 8 samples per period of its highest
-    // natural frequency, a record of 10 periods of its lowest
-    let f = rig
+    // the declared model's modes must be resolved (`SamplingNeeds::torsional_sweep`)
+    let modes = rig
         .model
         .open_differential(rig.variant)
         .and_then(|m| m.modes())
-        .map(|m| m.frequencies_hz.into_iter().filter(|f| *f > 0.01).collect::<Vec<f64>>())
         .map_err(|e| error(file, None, e.to_string()))?;
-    let (lo, hi) = (f.iter().copied().fold(f64::INFINITY, f64::min), f.iter().copied().fold(0.0, f64::max));
-    let needs = (hi > 0.0).then_some(ident::signal::SamplingNeeds {
-        max_frequency_hz: hi,
-        samples_per_period: 8.0,
-        min_duration_s: 10.0 / lo,
-    });
+    let needs = ident::signal::SamplingNeeds::torsional_sweep(&modes.frequencies_hz);
     let mut specs = fixed_columns(file, header.columns.as_ref(), &SWEEP_SIGNALS)?;
     let time = time_base(file, header.time.as_deref(), header.sample_rate_hz, header.resample, &mut specs)?;
     let (sweep, note) = read_sweep_csv(file, &csv_path, &mut specs, &time, needs.as_ref())?;
@@ -682,13 +675,8 @@ pub fn load_bearing(file: &Path) -> Result<BearingBundle, BundleError> {
             ));
         }
     }
-    // the band must be resolved: 2.5 samples per period at f_max (Nyquist is 2), and five
-    // periods of its lower end (a tenth of f_max at least)
-    let needs = ident::signal::SamplingNeeds {
-        max_frequency_hz: raw.f_max_hz,
-        samples_per_period: 2.5,
-        min_duration_s: 5.0 / raw.f_min_hz.max(0.1 * raw.f_max_hz),
-    };
+    // the band must be resolved (`SamplingNeeds::bearing_shake`)
+    let needs = ident::signal::SamplingNeeds::bearing_shake(raw.f_min_hz, raw.f_max_hz);
     let mut specs = fixed_columns(file, raw.columns.as_ref(), &SHAKE_SIGNALS)?;
     let time = time_base(file, raw.time.as_deref(), raw.sample_rate_hz, raw.resample, &mut specs)?;
     let mut notes = Vec::new();
@@ -949,11 +937,9 @@ pub fn load_drive_test(file: &Path) -> Result<DriveTestBundle, BundleError> {
     let names: Vec<&str> = specs.iter().map(|s| s.channel.as_str()).collect();
     let dt_s = uniform_sample_time(&csv_path, &cols[0])?;
     check_glitches(&csv_path, &names, &cols)?;
-    // the line's slowest flexible mode must be resolved and seen for ten periods
+    // the line's slowest flexible mode must be resolved (`SamplingNeeds::drive_test`)
     let modes = line.model().and_then(|m| m.modes()).map_err(|e| error(file, None, e.to_string()))?;
-    if let Some(lo) = modes.frequencies_hz.iter().copied().filter(|f| *f > 0.01).reduce(f64::min) {
-        let needs =
-            ident::signal::SamplingNeeds { max_frequency_hz: lo, samples_per_period: 4.0, min_duration_s: 10.0 / lo };
+    if let Some(needs) = ident::signal::SamplingNeeds::drive_test(&modes.frequencies_hz) {
         check_sampling(&csv_path, &cols[0], dt_s, &needs)?;
     }
     let output_data = cols.split_off(1 + inputs.len());

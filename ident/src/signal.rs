@@ -160,7 +160,53 @@ pub struct SamplingNeeds {
     pub min_duration_s: f64,
 }
 
+/// Natural frequencies below this are rigid-body motion, not a mode a record must resolve, Hz.
+pub const RIGID_BODY_HZ: f64 = 0.01;
+
+/// The flexible modes among `frequencies_hz` (above [`RIGID_BODY_HZ`]): (slowest, fastest), or
+/// `None` without one.
+fn flexible_range(frequencies_hz: &[f64]) -> Option<(f64, f64)> {
+    let flexible = frequencies_hz.iter().copied().filter(|f| *f > RIGID_BODY_HZ);
+    let (lo, hi) = flexible.fold((f64::INFINITY, 0.0f64), |(lo, hi), f| (lo.min(f), hi.max(f)));
+    (hi > 0.0).then_some((lo, hi))
+}
+
 impl SamplingNeeds {
+    /// What the torsional diagnosis of a rig with natural frequencies `frequencies_hz` needs:
+    /// 8 samples per period of its highest mode (the paper's sweep resolves the shuffle and
+    /// the differential's modes sample by sample), a record of 10 periods of its slowest.
+    /// `None` without a flexible mode.
+    pub fn torsional_sweep(frequencies_hz: &[f64]) -> Option<SamplingNeeds> {
+        flexible_range(frequencies_hz).map(|(lo, hi)| SamplingNeeds {
+            max_frequency_hz: hi,
+            samples_per_period: 8.0,
+            min_duration_s: 10.0 / lo,
+        })
+    }
+
+    /// What the diagnosis of a drive line with natural frequencies `frequencies_hz` needs: its
+    /// slowest flexible mode resolved (4 samples per period) and seen for 10 periods; faster
+    /// modes of stiff couplings may lie beyond the record's Nyquist frequency, where the fit
+    /// sees them as the quasi-static springs they are. `None` without a flexible mode.
+    pub fn drive_test(frequencies_hz: &[f64]) -> Option<SamplingNeeds> {
+        flexible_range(frequencies_hz).map(|(lo, _)| SamplingNeeds {
+            max_frequency_hz: lo,
+            samples_per_period: 4.0,
+            min_duration_s: 10.0 / lo,
+        })
+    }
+
+    /// What a bearing shake test over the band `f_min_hz`..`f_max_hz` needs: 2.5 samples per
+    /// period at `f_max_hz` (Nyquist is 2) and five periods of the band's lower end (a tenth of
+    /// `f_max_hz` at least).
+    pub fn bearing_shake(f_min_hz: f64, f_max_hz: f64) -> SamplingNeeds {
+        SamplingNeeds {
+            max_frequency_hz: f_max_hz,
+            samples_per_period: 2.5,
+            min_duration_s: 5.0 / f_min_hz.max(0.1 * f_max_hz),
+        }
+    }
+
     /// Why a record of `n` samples every `dt_s` cannot serve, if it cannot.
     pub fn problem(&self, dt_s: f64, n: usize) -> Option<String> {
         let have = 1.0 / (dt_s * self.max_frequency_hz);
