@@ -8,7 +8,7 @@ use ident::Sweep;
 use plant::{RigParams, Variant};
 
 use crate::units::{Calibration, Dimension};
-use modelfile::drive::{BodyRef, DriveModelFile};
+use modelfile::drive::BodyRef;
 use modelfile::rig::parse_rig;
 
 /// A bundle that cannot be used: which file, which line if known, and what is wrong.
@@ -730,8 +730,11 @@ pub struct DriveSignal {
 pub struct DriveTestBundle {
     /// The TOML file.
     pub file: PathBuf,
-    /// The declared model.
-    pub line: plant::Line,
+    /// The declared model: its line and the bodies its inputs act on (`modelfile`'s reading of
+    /// the same text, no effects).
+    pub model: plant::DriveModel,
+    /// Its `[mpc]` section (empty when it has none).
+    pub mpc: mpc::MpcSection,
     /// Free text of the bundle.
     pub description: Option<String>,
     /// Forces (torques) on bodies.
@@ -757,7 +760,9 @@ struct DriveFile {
     data: String,
     domain: plant::Domain,
     description: Option<String>,
-    model: DriveModelFile,
+    /// The declared model, read by `modelfile::parse`.
+    #[allow(dead_code)]
+    model: toml::Value,
     time: Option<String>,
     sample_rate_hz: Option<f64>,
     resample: Option<bool>,
@@ -765,7 +770,7 @@ struct DriveFile {
     inputs: Vec<DriveInputFile>,
     #[serde(default)]
     outputs: Vec<DriveOutputFile>,
-    /// The controller's section, read by `modelfile::read`.
+    /// The controller's section, read by `modelfile::parse`.
     #[allow(dead_code)]
     mpc: Option<toml::Value>,
 }
@@ -774,7 +779,9 @@ struct DriveFile {
 #[serde(deny_unknown_fields)]
 struct DriveInputFile {
     column: String,
-    body: BodyRef,
+    /// The body it acts on, read by `modelfile::parse`.
+    #[allow(dead_code)]
+    body: toml::Value,
     unit: Option<String>,
     #[serde(default = "unit_gain")]
     gain: f64,
@@ -803,14 +810,23 @@ pub const MAX_OUTPUTS: usize = 2 * plant::MAX_BODIES;
 /// Reads a `drive_test` bundle and its CSV: the line validated with named keys, every input and
 /// output resolved to its body or coupling, the columns read and checked as for the other kinds.
 pub fn load_drive_test(file: &Path) -> Result<DriveTestBundle, BundleError> {
-    let text = read_toml(file)?;
+    drive_test_of(&read_toml(file)?, file)
+}
+
+/// The `drive_test` bundle whose TOML `file` holds `text` (see [`load_drive_test`]).
+pub fn drive_test_of(text: &str, file: &Path) -> Result<DriveTestBundle, BundleError> {
+    let text = text.to_string();
     let header: Header = toml::from_str(&text).map_err(|e| error(file, None, e.to_string().trim_end().to_string()))?;
     if header.kind != "drive_test" {
         return Err(error(file, None, format!("`kind` = \"{}\": expected \"drive_test\"", header.kind)));
     }
     let raw: DriveFile = toml::from_str(&text).map_err(|e| error(file, None, e.to_string().trim_end().to_string()))?;
-    let line = plant::Line { domain: raw.domain, bodies: raw.model.bodies, couplings: raw.model.couplings };
-    let line = line.resolved().map_err(|e| error(file, None, e.to_string()))?;
+    // the declared model and its [mpc] section as every model file is read
+    let (model, mpc) = match modelfile::parse(&text, file).map_err(|e| error(file, None, e.message))? {
+        modelfile::ModelFile { model: modelfile::Model::Drive(m), mpc, .. } => (m, mpc),
+        _ => return Err(error(file, None, "expected a drive line's [model]")),
+    };
+    let line = &model.line;
     let n = line.bodies.len();
     let nc = line.couplings.len();
     let body = |r: &BodyRef, key: &str| -> Result<usize, BundleError> {
@@ -840,14 +856,12 @@ pub fn load_drive_test(file: &Path) -> Result<DriveTestBundle, BundleError> {
             ),
         ));
     }
-    let mut inputs = Vec::new();
-    for (k, i) in raw.inputs.iter().enumerate() {
-        inputs.push(DriveSignal {
-            column: i.column.clone(),
-            at: body(&i.body, &format!("inputs[{}].body", k + 1))?,
-            quantity: None,
-        });
-    }
+    let inputs: Vec<DriveSignal> = raw
+        .inputs
+        .iter()
+        .zip(&model.inputs)
+        .map(|(i, &at)| DriveSignal { column: i.column.clone(), at, quantity: None })
+        .collect();
     let mut outputs = Vec::new();
     for (k, o) in raw.outputs.iter().enumerate() {
         let key = |f: &str| format!("outputs[{}].{f}", k + 1);
@@ -949,7 +963,8 @@ pub fn load_drive_test(file: &Path) -> Result<DriveTestBundle, BundleError> {
     }
     Ok(DriveTestBundle {
         file: file.to_path_buf(),
-        line,
+        model,
+        mpc,
         description: raw.description,
         inputs,
         outputs,
@@ -1295,7 +1310,7 @@ pub fn summary(file: &Path) -> anyhow::Result<String> {
                 let names = b
                     .inputs
                     .iter()
-                    .map(|s| format!("input {} on body {}", s.column, b.line.bodies[s.at].name))
+                    .map(|s| format!("input {} on body {}", s.column, b.model.line.bodies[s.at].name))
                     .chain(b.outputs.iter().map(|s| {
                         format!(
                             "output {} ({} at {})",
@@ -1303,7 +1318,7 @@ pub fn summary(file: &Path) -> anyhow::Result<String> {
                             crate::report::words(&s.quantity.unwrap_or(plant::Quantity::Speed)),
                             match s.quantity {
                                 Some(plant::Quantity::CouplingForce) => format!("coupling {}", s.at + 1),
-                                _ => format!("body {}", b.line.bodies[s.at].name),
+                                _ => format!("body {}", b.model.line.bodies[s.at].name),
                             }
                         )
                     }))

@@ -262,27 +262,24 @@ pub fn plot_drive(target: &crate::files::Target, run: &DriveRun, domain: plant::
     lines(target, "rigtwin mpc: reference step on the drive model", &panels)
 }
 
-/// The `[mpc]` section the controller of `file` (read as `model`) is designed with: the file's
-/// own; for a `drive_test` bundle without `input_max`, the record's peak |input| as the bounds
-/// (`mpc::MpcSection::bound_by_record`), with a note saying so.
-pub fn section_of(
-    file: &std::path::Path,
-    model: &modelfile::ModelFile,
-) -> anyhow::Result<(mpc::MpcSection, Option<String>)> {
-    let mut section = model.mpc.clone();
-    if model.kind.as_deref() != Some("drive_test") || section.input_max.is_some() {
-        return Ok((section, None));
+/// The model file `file`, read once, with the `[mpc]` section its controller is designed with:
+/// the file's own; for a `drive_test` bundle without `input_max`, the record's peak |input| as
+/// the bounds (`mpc::MpcSection::bound_by_record`), with a note saying so.
+pub fn read_model(file: &std::path::Path) -> anyhow::Result<(modelfile::ModelFile, Option<String>)> {
+    let text = crate::files::read_text(file).map_err(|e| anyhow::anyhow!("{e}"))?;
+    let parsed = modelfile::parse(&text, file)?;
+    if parsed.kind.as_deref() != Some("drive_test") || parsed.mpc.input_max.is_some() {
+        return Ok((parsed, None));
     }
-    let b = crate::bundle::load_drive_test(file)?;
-    section.bound_by_record(&b.input_data);
+    let b = crate::bundle::drive_test_of(&text, file)?;
+    let mut mpc = b.mpc;
+    mpc.bound_by_record(&b.input_data);
     let bounds: Vec<String> =
-        b.inputs.iter().zip(section.input_max.iter().flatten()).map(|(s, v)| format!("{} {v:.4}", s.column)).collect();
-    Ok((
-        section,
-        Some(format!(
+        b.inputs.iter().zip(mpc.input_max.iter().flatten()).map(|(s, v)| format!("{} {v:.4}", s.column)).collect();
+    let note = format!(
             "note: {} has no [mpc] input_max: the inputs are bounded by the record's peaks ({}); give the actuators' limits in [mpc] input_max",
             file.display(),
-            bounds.join(", ")
-        )),
-    ))
+        bounds.join(", ")
+    );
+    Ok((modelfile::ModelFile { model: modelfile::Model::Drive(b.model), mpc, kind: parsed.kind }, Some(note)))
 }

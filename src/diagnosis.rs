@@ -586,12 +586,11 @@ pub fn effect_name(effect: &str) -> &str {
 
 fn drive(file: &Path, progress: &(dyn Fn(&str) + Sync)) -> anyhow::Result<Diagnosis> {
     let b = crate::bundle::load_drive_test(file)?;
-    let model =
-        plant::DriveModel { line: b.line.clone(), inputs: b.inputs.iter().map(|s| s.at).collect(), effects: vec![] };
+    let model = &b.model;
     let outputs: Vec<(plant::Quantity, usize)> =
         b.outputs.iter().map(|s| (s.quantity.unwrap_or(plant::Quantity::Speed), s.at)).collect();
     let rec = ident::diagnose::drive::DriveRecord {
-        model: &model,
+        model,
         inputs: &b.input_data,
         outputs: &outputs,
         measured: &b.output_data,
@@ -600,7 +599,7 @@ fn drive(file: &Path, progress: &(dyn Fn(&str) + Sync)) -> anyhow::Result<Diagno
     let d = ident::diagnose::drive::diagnose(rec, progress).map_err(|e| anyhow::anyhow!("{}: {e}", file.display()))?;
     let model_toml = drive_model_toml(&d.model, &b)?;
     // each output with its SI unit (the record's own units were converted on reading)
-    let domain = b.line.domain;
+    let domain = b.model.line.domain;
     let unit = |q: Option<plant::Quantity>| crate::units::quantity_unit(q.unwrap_or(plant::Quantity::Speed), domain);
     let names: Vec<String> = b.outputs.iter().map(|s| s.column.clone()).collect();
     let axes: Vec<String> = b.outputs.iter().map(|s| format!("{} [{}]", s.column, unit(s.quantity))).collect();
@@ -733,7 +732,7 @@ pub fn drive_model_toml(m: &plant::DriveModel, b: &crate::bundle::DriveTestBundl
     // the controller's input bounds: the bundle's own [mpc] section, else the record's peak
     // |input| (what the actuators reached), so that `rigtwin mpc --params` takes the model as
     // written; the file says which
-    let mut section = modelfile::read(&b.file)?.mpc;
+    let mut section = b.mpc.clone();
     let derived = section.bound_by_record(&b.input_data);
     // 1-based positions, as in the bundle
     let effects = m.effects.iter().map(|e| e.at_index(e.element_index().0 + 1)).collect();

@@ -476,12 +476,11 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Fmu { params, out, descriptions, controller, horizon, blocks, plant } => {
             let (mut p, section) = match &params {
                 Some(f) => {
-                    let file = modelfile::read(f)?;
-                    let (section, note) = rigtwin::control::section_of(f, &file)?;
+                    let (file, note) = rigtwin::control::read_model(f)?;
                     if let (Some(note), true) = (note, controller) {
                         eprintln!("{note}");
                     }
-                    (rigtwin::fmu_package::params_of_model(&file.model)?, section)
+                    (rigtwin::fmu_package::params_of_model(&file.model)?, file.mpc)
                 }
                 None => (rigtwin_fmu::FmuParams::default(), mpc::MpcSection::default()),
             };
@@ -550,12 +549,11 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             let model_name = params.as_ref().map_or("the embedded rig".to_string(), |f| f.display().to_string());
             let (p, section) = match &params {
                 Some(f) => {
-                    let file = modelfile::read(f)?;
-                    let (section, note) = rigtwin::control::section_of(f, &file)?;
+                    let (file, note) = rigtwin::control::read_model(f)?;
                     if let Some(note) = note {
                         eprintln!("{note}");
                     }
-                    (rigtwin::fmu_package::params_of_model(&file.model)?, section)
+                    (rigtwin::fmu_package::params_of_model(&file.model)?, file.mpc)
                 }
                 None => (rigtwin_fmu::FmuParams::default(), mpc::MpcSection::default()),
             };

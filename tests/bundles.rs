@@ -163,8 +163,8 @@ fn bad_bundles_name_file_line_and_expectation() {
 #[test]
 fn drive_test_bundles_load_with_their_signals_resolved() {
     let g = rigtwin::bundle::load_drive_test(Path::new(&data("bench_gear.toml"))).unwrap();
-    assert_eq!(g.line.bodies.len(), 3);
-    assert_eq!(g.line.couplings[1].ratio, 4.0);
+    assert_eq!(g.model.line.bodies.len(), 3);
+    assert_eq!(g.model.line.couplings[1].ratio, 4.0);
     assert_eq!((g.inputs.len(), g.outputs.len()), (1, 3));
     assert_eq!(g.outputs[2].quantity, Some(plant::Quantity::CouplingForce));
     assert_eq!(g.outputs[2].at, 1);
@@ -172,7 +172,7 @@ fn drive_test_bundles_load_with_their_signals_resolved() {
     assert_eq!(g.input_data[0].len(), g.output_data[2].len());
     // static check of the model: no drag, a constant 1 Nm on the motor accelerates the line as
     // one body; the gear output's torque is then the load's share, ratio · J_load/(J_total,motor side)
-    let mut line = g.line.clone();
+    let mut line = g.model.line.clone();
     for b in &mut line.bodies {
         b.drag = 0.0;
     }
@@ -186,7 +186,7 @@ fn drive_test_bundles_load_with_their_signals_resolved() {
     let want = r * (jl / (r * r)) / j_motor_side;
     assert!((y[(20000, 0)] - want).abs() < 1e-3 * want, "{} vs {want}", y[(20000, 0)]);
     let a = rigtwin::bundle::load_drive_test(Path::new(&data("axis_linear.toml"))).unwrap();
-    assert_eq!(a.line.domain, plant::Domain::Translational);
+    assert_eq!(a.model.line.domain, plant::Domain::Translational);
     assert_eq!(a.outputs[0].quantity, Some(plant::Quantity::Position));
 }
 

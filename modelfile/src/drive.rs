@@ -86,7 +86,15 @@ pub fn parse_drive_model(text: &str, file: &Path) -> Result<plant::DriveModel, M
             BodyRef::Position(p) => usize::try_from(*p).ok().filter(|&p| (1..=n).contains(&p)).map(|p| p - 1),
         };
         inputs.push(at.ok_or_else(|| {
-            error(file, format!("`inputs[{}].body`: expected a body's name or its position 1..={n}", k + 1))
+            let names: Vec<&str> = line.bodies.iter().map(|b| b.name.as_str()).collect();
+            error(
+                file,
+                format!(
+                    "`inputs[{}].body`: expected a body's name or its position 1..={n} (the bodies are {})",
+                    k + 1,
+                    names.join(", ")
+                ),
+            )
         })?);
     }
     let mut effects = Vec::with_capacity(raw.effects.len());
