@@ -8,6 +8,7 @@ use crate::drive::{ActuatorLag, Backlash, CoulombFriction, DriveModel, Dynamics,
 use crate::error::{PlantError, Result};
 use crate::integrate::RK4_STEP_TIMES_RATE;
 use crate::line::{Coupling, Domain, Line, LineBody, Quantity};
+use crate::mechanical::{Layout, MechanicalModel};
 use crate::rig::{DriveEffects, RigParams, Variant};
 use crate::stepper::Stepper;
 use nalgebra::DMatrix;
@@ -256,6 +257,25 @@ pub fn record_speeds(
     let mut w = simulate_record(&m, &d, torque, dt_s, speed0, &[(Quantity::Speed, 0), (Quantity::Speed, 2)])?;
     let w3 = w.pop().unwrap_or_default();
     Ok((w.pop().unwrap_or_default(), w3))
+}
+
+impl RigParams {
+    /// The open differential (section 2.4): side gears massless (J_d2 = J_d3 = 0), cage angle
+    /// φ_drive = (φ_d2 + φ_d3)/2 (eq. (27)). Eliminating φ_d3 with eq. (30) leaves the two side
+    /// shafts in series between the generalised angle 2φ_drive − φ_m2 − φ_m3 and ground: with
+    /// a = [−1, 2, −1], the short shaft twists by c_r/(c_l + c_r) aᵀq and the long one by
+    /// c_l/(c_l + c_r) aᵀq, so C = c_l c_r/(c_l + c_r) a aᵀ — eq. (A1) — and the damping matrix
+    /// follows the same way. Modes: rigid body and the outputs' antiphase motion at 0 Hz, and
+    /// the shuffle at ω² = c_l c_r/(c_l + c_r) (1/J_m2 + 4/J_drive + 1/J_m3).
+    ///
+    /// Built from the rig's one drive model ([`DriveModel::paper_rig`], no effects),
+    /// the model the diagnosis, the FMU and the MPC integrate.
+    pub fn open_differential(&self, variant: Variant) -> Result<MechanicalModel> {
+        let model = DriveModel::paper_rig(self, variant, &DriveEffects::default())?;
+        let mut m = model.line.model()?;
+        m.layout = Some(Layout { m2: 0, drive: Some(1), m3: 2, short_shaft: (0, 1), long_shaft: (1, 2) });
+        Ok(m)
+    }
 }
 
 #[cfg(test)]

@@ -1,7 +1,9 @@
 //! The rig: the three-mass model with its variants V1–V4 (eqs. (13)–(19), (44), (45)), the open
-//! differential (section 2.4, eqs. (27)–(34), (A1)), and the full chain with the additional
-//! spring inserted (Table A2); the rig's drive-path effects ([`DriveEffects`], as a rig file
-//! names them), from which [`crate::preset`] builds the rig's drive model.
+//! differential with its side gears (section 2.4, eqs. (27)–(34); the massless one, eq. (A1),
+//! is the preset's: `RigParams::open_differential` in [`crate::preset`]), and the full chain
+//! with the additional spring inserted (Table A2); the rig's drive-path effects
+//! ([`DriveEffects`], as a rig file names them), from which [`crate::preset`] builds the rig's
+//! drive model.
 
 use nalgebra::{DMatrix, DVector};
 use serde::{Deserialize, Serialize};
@@ -9,7 +11,6 @@ use std::fmt;
 use std::str::FromStr;
 
 use crate::chain::{Body, Chain};
-use crate::drive::DriveModel;
 use crate::error::{in_range, non_negative, positive, PlantError, Result};
 use crate::mechanical::{Layout, MechanicalModel, Spring};
 
@@ -211,23 +212,6 @@ impl RigParams {
             spring("long side shaft", [0.0, 1.0, -1.0], e.c_right, e.d_right),
         ];
         Ok(three_dof(&e, springs))
-    }
-
-    /// The open differential (section 2.4): side gears massless (J_d2 = J_d3 = 0), cage angle
-    /// φ_drive = (φ_d2 + φ_d3)/2 (eq. (27)). Eliminating φ_d3 with eq. (30) leaves the two side
-    /// shafts in series between the generalised angle 2φ_drive − φ_m2 − φ_m3 and ground: with
-    /// a = [−1, 2, −1], the short shaft twists by c_r/(c_l + c_r) aᵀq and the long one by
-    /// c_l/(c_l + c_r) aᵀq, so C = c_l c_r/(c_l + c_r) a aᵀ — eq. (A1) — and the damping matrix
-    /// follows the same way. Modes: rigid body and the outputs' antiphase motion at 0 Hz, and
-    /// the shuffle at ω² = c_l c_r/(c_l + c_r) (1/J_m2 + 4/J_drive + 1/J_m3).
-    ///
-    /// Built from the rig's one drive model ([`crate::drive::DriveModel::paper_rig`], no effects),
-    /// the model the diagnosis, the FMU and the MPC integrate.
-    pub fn open_differential(&self, variant: Variant) -> Result<MechanicalModel> {
-        let model = DriveModel::paper_rig(self, variant, &DriveEffects::default())?;
-        let mut m = model.line.model()?;
-        m.layout = Some(Layout { m2: 0, drive: Some(1), m3: 2, short_shaft: (0, 1), long_shaft: (1, 2) });
-        Ok(m)
     }
 
     /// The open differential with its side gears' inertia `j_side` each: eq. (28) with
