@@ -584,6 +584,15 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                         "--export-qp: the QP export compares the paper rig's QPs with OSQP and DAQP; {model_name} is a drive model"
                     );
                 }
+                if duration.is_some() || matches!(scenario, ScenarioArg::Sweep) {
+                    anyhow::bail!(
+                        "--scenario sweep and --duration are the paper rig's runs; {model_name} is a drive model, whose run is a step of its tracked speeds' references ({} rad/s or {} m/s at {} s, {} s long)",
+                        harness.reference_step_radps,
+                        harness.reference_step_mps,
+                        harness.reference_step_at_s,
+                        harness.drive_run_s
+                    );
+                }
                 let (report, run) =
                     mpc::evaluation::drive(model, &prediction, &truth, &settings, &harness, allocations)
                         .map_err(|e| anyhow::anyhow!("{model_name}: {e:#}"))?;

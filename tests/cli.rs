@@ -572,3 +572,20 @@ fn a_controller_fmu_that_cannot_be_made_is_refused_by_name() {
     assert!(err.contains("--plant") && err.contains("`w_motor`"), "{err}");
     assert_eq!(std::fs::read_dir(&out_dir).unwrap().count(), 0, "nothing written");
 }
+
+/// The paper rig's runs (`--scenario sweep`, `--duration`) asked of a drive model are refused
+/// by name, not silently replaced by the drive model's reference step; nothing is written.
+#[test]
+fn a_rig_run_asked_of_a_drive_model_is_refused() {
+    let d = common::scratch("cli", "drive_run");
+    let json = d.join("mpc.json");
+    for extra in [&["--duration", "2"][..], &["--scenario", "sweep"]] {
+        let mut args = vec!["mpc", "--params", "examples/gear_bench/bench.toml", "--json", json.to_str().unwrap()];
+        args.extend_from_slice(extra);
+        let out = rigtwin(&args);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(1), "{extra:?}: {err}");
+        assert!(err.contains("--scenario sweep and --duration") && err.contains("drive model"), "{extra:?}: {err}");
+        assert!(!json.exists(), "{extra:?}: nothing written");
+    }
+}
