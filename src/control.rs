@@ -6,16 +6,6 @@ use mpc::closed_loop::{Comparison, RigSignals, ScenarioKind, StepFigures};
 use mpc::evaluation::{DriveRun, MpcReport};
 use mpc::MpcSettings;
 
-pub use mpc::Prediction;
-
-/// The prediction model of `params` (see [`Prediction`]); a drive model is refused.
-pub fn prediction(params: &rigtwin_fmu::FmuParams) -> anyhow::Result<Prediction> {
-    if params.drive.is_some() {
-        anyhow::bail!("a drive model: the MPC runs on the paper rig's powertrain only (give a rig file)");
-    }
-    Ok(mpc::prediction::prediction(&params.powertrain, params.variant, &params.effects, 1e-3)?)
-}
-
 /// Move blocks as a person reads them: `1, 2, 4, 43` or `200 × 1` (runs of one length folded).
 fn blocks_in_words(blocks: &[usize]) -> String {
     let mut runs: Vec<(usize, usize)> = Vec::new();
@@ -155,13 +145,12 @@ pub fn human(report: &MpcReport) -> String {
 /// SVG: side-shaft torque, load speed and the MPC's inputs over time.
 pub fn plot(
     target: &crate::files::Target,
-    params: &rigtwin_fmu::FmuParams,
+    prediction: &mpc::Prediction,
     run: &Comparison,
     kind: ScenarioKind,
 ) -> anyhow::Result<()> {
     use crate::plot::{lines, Panel};
-    let ss = prediction(params)?.model;
-    let sig = RigSignals::of(&ss)?;
+    let sig = RigSignals::of(&prediction.model)?;
     let series = |t: &mpc::closed_loop::Trace, j: usize| {
         t.time_s.iter().zip(&t.outputs).map(|(&x, y)| (x, y[j])).collect::<Vec<_>>()
     };

@@ -640,7 +640,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                     rigtwin::files::write(f, text.as_bytes())?;
                 }
                 if let Some(f) = &plot {
-                    rigtwin::control::plot(f, &p, &loops, kind)?;
+                    rigtwin::control::plot(f, &prediction, &loops, kind)?;
                 }
                 report
             };

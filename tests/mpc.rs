@@ -136,7 +136,7 @@ impl Plant for FmuPlant {
 #[test]
 fn closed_loop_with_the_fmu_matches_the_plant() {
     let params = FmuParams::default();
-    let ss = rigtwin::control::prediction(&params).unwrap().model;
+    let ss = mpc::prediction::prediction(&params.powertrain, params.variant, &params.effects, 1e-3).unwrap().model;
     let sig = RigSignals::of(&ss).unwrap();
     let mut settings = MpcSettings::powertrain(50);
     settings.solver.time_limit_s = 1.0; // identical solves in both runs, whatever the clock
@@ -203,7 +203,7 @@ fn controller_fmu_closes_the_loop_in_fmpy() {
     // the in-process loop: the command of each point applied at once (`delayed` false), or
     // from the next point on (a Jacobi master's sample of computational delay)
     let params = rigtwin::fmu_package::params_of_file(&rig).unwrap();
-    let p = rigtwin::control::prediction(&params).unwrap();
+    let p = mpc::prediction::prediction(&params.powertrain, params.variant, &params.effects, 1e-3).unwrap();
     let mut settings = MpcSettings::powertrain(50);
     settings.solver.time_limit_s = 1.0;
     let speed = 10.0;
