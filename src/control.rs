@@ -71,7 +71,7 @@ pub fn human(report: &MpcReport) -> String {
     }
     let alloc = report.allocations_per_step.map_or("not counted".to_string(), |a| a.to_string());
     s += &format!(
-        "  controller step ({} run): median {:.1} µs, p99 {:.1} µs, max {:.1} µs; {:.1} QP iterations; allocations per step: {alloc}; {} fallback(s) in {} steps\n",
+        "  controller step ({} run): median {:.1} µs, p99 {:.1} µs, max {:.1} µs; {:.1} QP iterations; allocations per step: {alloc} (first step and first solve aside); {} fallback(s) in {} steps\n",
         crate::report::words(&report.scenario),
         report.step_time_us.median,
         report.step_time_us.p99,
