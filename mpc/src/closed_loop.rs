@@ -491,33 +491,7 @@ pub fn compare(
     };
 
     let mut p = make_plant(&x0)?;
-    let mut trace = Trace::default();
-    let (mut times, mut allocs, mut iters) = (Vec::new(), Vec::new(), Vec::new());
-    let mut y = vec![0.0; p.outputs().len()];
-    let mut r = vec![0.0; names.len()];
-    let mut u = u0.clone();
-    for k in 0..samples {
-        y.copy_from_slice(p.outputs());
-        r.copy_from_slice(&refs(k));
-        let before = probes.allocations.map_or(0, |f| f());
-        let (v, info) = controller.step(&y, &r);
-        let after = probes.allocations.map_or(0, |f| f());
-        u.copy_from_slice(v);
-        times.push(info.elapsed_s);
-        allocs.push(after - before);
-        iters.push(info.solve.iterations);
-        if let Some(hook) = probes.after_step.as_mut() {
-            hook(k, &controller, &info);
-        }
-        trace.time_s.push(k as f64 * dt);
-        trace.outputs.push(y.clone());
-        trace.inputs.push(u.clone());
-        trace.references.push(r.clone());
-        if let Err(e) = advance(p.as_mut(), &u) {
-            trace.stopped = Some(format!("at {:.4} s: {e}", k as f64 * dt));
-            break;
-        }
-    }
+    let run = run_mpc(&mut controller, p.as_mut(), samples, dt, &refs, &mut probes);
 
     let ref_speed = |name: &str| order.iter().position(|&i| want[i] == name);
     let (i2, i3, id) = (ref_speed("w_m2"), ref_speed("w_m3"), ref_speed("M_drive"));
@@ -536,14 +510,65 @@ pub fn compare(
     let mut p = make_plant(&x0)?;
     let baseline = simulate(p.as_mut(), &mut pi, samples, dt, &u0, &refs)?;
     Ok(Comparison {
-        mpc: trace,
+        mpc: run.trace,
         baseline,
-        step_times_s: times,
-        step_allocations: allocs,
-        iterations: iters,
+        step_times_s: run.step_times_s,
+        step_allocations: run.step_allocations,
+        iterations: run.iterations,
         fallbacks: controller.fallbacks(),
         qp_size: (controller.qp().nvars(), controller.qp().nrows()),
     })
+}
+
+/// The MPC's run: its trace and what each of its steps took.
+#[derive(Debug, Clone, Default)]
+pub struct MpcRun {
+    /// Outputs, inputs and references per sample; where it stopped.
+    pub trace: Trace,
+    /// Wall-clock time of every controller step, s.
+    pub step_times_s: Vec<f64>,
+    /// Heap allocations of every controller step (zeros when no counter was given).
+    pub step_allocations: Vec<u64>,
+    /// QP iterations of every step.
+    pub iterations: Vec<u32>,
+}
+
+/// Runs `controller` against `plant` for `samples` steps of `dt_s` with the references
+/// `reference(k)` (sample k), recording everything; `probes` are called around each step. A
+/// run whose plant diverges stops there ([`Trace::stopped`]).
+pub fn run_mpc(
+    controller: &mut Controller,
+    plant: &mut dyn Plant,
+    samples: usize,
+    dt_s: f64,
+    reference: &dyn Fn(usize) -> Vec<f64>,
+    probes: &mut Probes<'_>,
+) -> MpcRun {
+    let mut run = MpcRun::default();
+    let mut y = vec![0.0; plant.outputs().len()];
+    for k in 0..samples {
+        y.copy_from_slice(plant.outputs());
+        let r = reference(k);
+        let before = probes.allocations.map_or(0, |f| f());
+        let (v, info) = controller.step(&y, &r);
+        let after = probes.allocations.map_or(0, |f| f());
+        let u = v.to_vec();
+        run.step_times_s.push(info.elapsed_s);
+        run.step_allocations.push(after - before);
+        run.iterations.push(info.solve.iterations);
+        if let Some(hook) = probes.after_step.as_mut() {
+            hook(k, controller, &info);
+        }
+        run.trace.time_s.push(k as f64 * dt_s);
+        run.trace.outputs.push(y.clone());
+        run.trace.inputs.push(u.clone());
+        run.trace.references.push(r);
+        if let Err(e) = advance(plant, &u) {
+            run.trace.stopped = Some(format!("at {:.4} s: {e}", k as f64 * dt_s));
+            break;
+        }
+    }
+    run
 }
 
 /// Share of the samples `inputs` (plant input order, names `input_names`) with an input at a

@@ -9,7 +9,7 @@ use plant::DriveModel;
 use serde::Serialize;
 
 use crate::closed_loop::{
-    advance, compare, median_p99, share_at_bounds, step_figures, Comparison, HarnessSettings, Plant, Probes,
+    compare, median_p99, run_mpc, share_at_bounds, step_figures, Comparison, HarnessSettings, Plant, Probes,
     RigSignals, Scenario, ScenarioKind, StepFigures, Trace,
 };
 use crate::error::{setting, MpcError, Result};
@@ -189,24 +189,32 @@ pub struct MpcReport {
     /// How the loops were judged (the baseline's bandwidth, the settling band).
     #[serde(skip)]
     pub harness: HarnessSettings,
+    /// Whether the figures describe the MPC.
+    #[serde(flatten)]
+    pub validity: Validity,
+}
+
+/// Whether a run's figures describe the MPC ([`crate::closed_loop::fallback_verdict`]).
+#[derive(Debug, Clone, Serialize)]
+pub struct Validity {
     /// `valid`, or `not_valid` when the figures do not describe the MPC.
     pub verdict: &'static str,
-    /// Why they do not ([`crate::closed_loop::fallback_verdict`]), if they do not.
+    /// Why they do not, if they do not.
     pub not_valid_because: Option<String>,
 }
 
-impl MpcReport {
-    /// Why the figures do not describe the MPC, if they do not
-    /// ([`crate::closed_loop::fallback_verdict`]).
-    pub fn invalid(&self) -> Option<String> {
-        self.not_valid_because.clone()
+impl Validity {
+    /// The validity of a run of `steps` controller steps, `fallbacks` of them on the fallback plan.
+    fn of(fallbacks: usize, steps: usize) -> Validity {
+        let why = crate::closed_loop::fallback_verdict(fallbacks, steps);
+        Validity { verdict: if why.is_some() { "not_valid" } else { "valid" }, not_valid_because: why }
     }
+}
 
-    /// The report with its verdict ([`crate::closed_loop::fallback_verdict`] of its steps).
-    fn judged(mut self) -> Self {
-        self.not_valid_because = crate::closed_loop::fallback_verdict(self.fallbacks, self.steps);
-        self.verdict = if self.not_valid_because.is_some() { "not_valid" } else { "valid" };
-        self
+impl MpcReport {
+    /// Why the figures do not describe the MPC, if they do not.
+    pub fn invalid(&self) -> Option<String> {
+        self.validity.not_valid_because.clone()
     }
 }
 
@@ -255,6 +263,36 @@ fn first_input_error(c: &Controller) -> Result<(f64, Vec<f64>)> {
     Ok((e, rt))
 }
 
+/// The real-time first input against the exact optimum, at every `every`-th step that did not
+/// fall back.
+struct FirstInputCheck {
+    every: usize,
+    largest: f64,
+    checked: usize,
+}
+
+impl FirstInputCheck {
+    fn new(every: usize) -> Self {
+        FirstInputCheck { every, largest: 0.0, checked: 0 }
+    }
+
+    /// Checks step `k` of controller `c` when it is due: the step's real-time first input then.
+    fn at(&mut self, k: usize, c: &Controller, info: &StepInfo) -> Result<Option<Vec<f64>>> {
+        if k % self.every != 0 || info.fallback {
+            return Ok(None);
+        }
+        let (e, rt) = first_input_error(c)?;
+        self.largest = self.largest.max(e);
+        self.checked += 1;
+        Ok(Some(rt))
+    }
+
+    /// The largest |u₀ − u₀*| over the checked steps (none when no step was checked).
+    fn error(&self) -> Option<f64> {
+        (self.checked > 0).then_some(self.largest)
+    }
+}
+
 fn exact_solve_failed(e: impl std::fmt::Display) -> MpcError {
     MpcError::Numerical(format!("reference solve of the exact optimum failed: {e}"))
 }
@@ -276,16 +314,15 @@ fn final_mean(values: impl ExactSizeIterator<Item = f64>, stopped: bool) -> f64 
 
 /// Largest of the steps' `allocations`, leaving out the first step and the first whose QP ran
 /// interior-point `iterations` (each path's set-up).
-fn steady_allocations(allocations: &[u64], iterations: &[f64]) -> u64 {
-    let first_solve = iterations.iter().position(|&i| i > 0.0);
+fn steady_allocations(allocations: &[u64], iterations: &[u32]) -> u64 {
+    let first_solve = iterations.iter().position(|&i| i > 0);
     let steady = allocations.iter().enumerate().filter(|&(k, _)| k > 0 && Some(k) != first_solve);
     steady.map(|(_, &a)| a).max().unwrap_or(0)
 }
 
 /// Mean of `counts` (0 for none).
-fn mean(counts: impl ExactSizeIterator<Item = f64>) -> f64 {
-    let n = counts.len().max(1) as f64;
-    counts.sum::<f64>() / n
+fn mean(counts: &[u32]) -> f64 {
+    counts.iter().map(|&c| f64::from(c)).sum::<f64>() / counts.len().max(1) as f64
 }
 
 /// Indices of `names` among `all`.
@@ -342,29 +379,23 @@ pub fn rig(
         compare(ss, &prediction.input_delays_s, &mut make, settings, scenario, j_load, pi_hz, probes)
             .map_err(MpcError::Numerical)
     };
-    let (mut u0_error, mut checked, mut failure) = (0.0f64, 0, None);
-    let mut hook = |k: usize, c: &Controller, info: &StepInfo| {
-        if k % harness.check_every != 0 || info.fallback {
-            return;
-        }
-        match first_input_error(c) {
-            Ok((e, rt)) => {
-                u0_error = u0_error.max(e);
-                checked += 1;
-                if let Some(list) = export.as_deref_mut() {
-                    list.push(ExportedQp {
-                        qp: c.snapshot(),
-                        clarabel_u0_nm: rt,
-                        clarabel_solve_time_us: info.elapsed_s * 1e6,
-                    });
-                }
+    let (mut check, mut failure) = (FirstInputCheck::new(harness.check_every), None);
+    let mut hook = |k: usize, c: &Controller, info: &StepInfo| match check.at(k, c, info) {
+        Ok(Some(rt)) => {
+            if let Some(list) = export.as_deref_mut() {
+                list.push(ExportedQp {
+                    qp: c.snapshot(),
+                    clarabel_u0_nm: rt,
+                    clarabel_solve_time_us: info.elapsed_s * 1e6,
+                });
             }
-            Err(e) => failure = Some(e.to_string()),
         }
+        Ok(None) => {}
+        Err(e) => failure = Some(e),
     };
     let run = run_on(scenario, Probes { allocations, after_step: Some(&mut hook) })?;
-    if let Some(f) = failure {
-        return Err(exact_solve_failed(f));
+    if let Some(e) = failure {
+        return Err(exact_solve_failed(e));
     }
     let step_scenario = Scenario::new(ScenarioKind::Step);
     let step = if *scenario == step_scenario { run.clone() } else { run_on(&step_scenario, Probes::default())? };
@@ -410,16 +441,14 @@ pub fn rig(
         qp_constraints: run.qp_size.1,
         scenario: scenario.kind,
         step_time_us: Timing::of(&times_us),
-        qp_iterations_mean: mean(run.iterations.iter().map(|&i| i as f64)),
-        allocations_per_step: allocations.map(|_| {
-            let iterations: Vec<f64> = run.iterations.iter().map(|&i| f64::from(i)).collect();
-            steady_allocations(&run.step_allocations, &iterations)
-        }),
+        qp_iterations_mean: mean(&run.iterations),
+        allocations_per_step: allocations.map(|_| steady_allocations(&run.step_allocations, &run.iterations)),
         allocations_first_step: allocations.map(|_| run.step_allocations.first().copied().unwrap_or(0)),
         fallbacks: run.fallbacks,
         steps: run.step_times_s.len(),
-        u0_error: (checked > 0).then_some(u0_error),
-        u0_checked_steps: checked,
+        validity: Validity::of(run.fallbacks, run.step_times_s.len()),
+        u0_error: check.error(),
+        u0_checked_steps: check.checked,
         step_response: StepResponse {
             stepped: ss.input_names[sig.inputs[1]].clone(),
             step: step_scenario.torque_nm,
@@ -441,10 +470,7 @@ pub fn rig(
         sweep_peak_torque_deviation_nm: (scenario.kind == ScenarioKind::Sweep)
             .then(|| Compared { mpc: sweep_dev(&run.mpc), baseline: Some(sweep_dev(&run.baseline)) }),
         harness: *harness,
-        verdict: "",
-        not_valid_because: None,
-    }
-    .judged();
+    };
     Ok((report, run))
 }
 
@@ -476,36 +502,24 @@ pub fn drive(
     let tracked = positions(&names, &ss.output_names);
     let signals = Signals::of(settings, &model.coupling_force_names());
     let penalised = positions(&signals.penalised, &ss.output_names);
-    let (mut trace, mut inputs) = (Vec::with_capacity(samples), Vec::with_capacity(samples));
-    let (mut times, mut iterations, mut allocs) =
-        (Vec::with_capacity(samples), Vec::with_capacity(samples), Vec::with_capacity(samples));
-    let (mut stopped, mut u0_error, mut checked) = (None, 0.0f64, 0);
-    let mut r = vec![0.0; names.len()];
-    for k in 0..samples {
-        let y = plant.outputs().to_vec();
-        for (i, n) in names.iter().enumerate() {
-            r[i] = if k >= k_step && ss.output_names.contains(n) { step } else { 0.0 };
-        }
-        let before = allocations.map(|f| f());
-        let (u, info) = controller.step(&y, &r);
-        if let (Some(f), Some(b)) = (allocations, before) {
-            allocs.push(f() - b);
-        }
-        let u = u.to_vec();
-        times.push(info.elapsed_s * 1e6);
-        iterations.push(info.solve.iterations as f64);
-        if k % harness.check_every == 0 && !info.fallback {
-            let (e, _) = first_input_error(&controller).map_err(exact_solve_failed)?;
-            u0_error = u0_error.max(e);
-            checked += 1;
-        }
-        trace.push(y);
-        inputs.push(u.clone());
-        if let Err(e) = advance(&mut plant, &u) {
-            stopped = Some(format!("at {:.4} s: {e}", k as f64 * dt));
-            break;
-        }
+    let reference = |k: usize| -> Vec<f64> {
+        names.iter().map(|n| if k >= k_step && ss.output_names.contains(n) { step } else { 0.0 }).collect()
+    };
+    let (mut check, mut failure) = (FirstInputCheck::new(harness.check_every), None);
+    let run = {
+        let mut hook = |k: usize, c: &Controller, info: &StepInfo| {
+            if let Err(e) = check.at(k, c, info) {
+                failure.get_or_insert(e);
+            }
+        };
+        let mut probes = Probes { allocations, after_step: Some(&mut hook) };
+        run_mpc(&mut controller, &mut plant, samples, dt, &reference, &mut probes)
+    };
+    if let Some(e) = failure {
+        return Err(exact_solve_failed(e));
     }
+    let times_us: Vec<f64> = run.step_times_s.iter().map(|t| t * 1e6).collect();
+    let Trace { time_s, outputs: trace, inputs, stopped, .. } = run.trace;
     let response = match (tracked.first(), &stopped) {
         (Some(&j), None) => {
             step_figures(&trace.iter().map(|y| y[j]).collect::<Vec<_>>(), k_step, dt, harness.settling_band)
@@ -537,14 +551,15 @@ pub fn drive(
         qp_variables: controller.qp().nvars(),
         qp_constraints: controller.qp().nrows(),
         scenario: ScenarioKind::Step,
-        step_time_us: Timing::of(&times),
-        qp_iterations_mean: mean(iterations.iter().copied()),
-        allocations_per_step: allocations.map(|_| steady_allocations(&allocs, &iterations)),
-        allocations_first_step: allocations.map(|_| allocs.first().copied().unwrap_or(0)),
+        step_time_us: Timing::of(&times_us),
+        qp_iterations_mean: mean(&run.iterations),
+        allocations_per_step: allocations.map(|_| steady_allocations(&run.step_allocations, &run.iterations)),
+        allocations_first_step: allocations.map(|_| run.step_allocations.first().copied().unwrap_or(0)),
         fallbacks: controller.fallbacks(),
-        steps: times.len(),
-        u0_error: (checked > 0).then_some(u0_error),
-        u0_checked_steps: checked,
+        steps: times_us.len(),
+        validity: Validity::of(controller.fallbacks(), times_us.len()),
+        u0_error: check.error(),
+        u0_checked_steps: check.checked,
         step_response: StepResponse {
             stepped: "reference".into(),
             step,
@@ -567,12 +582,9 @@ pub fn drive(
         units: Units::of(model.line.domain),
         sweep_peak_torque_deviation_nm: None,
         harness: *harness,
-        verdict: "",
-        not_valid_because: None,
-    }
-    .judged();
+    };
     let run = DriveRun {
-        time_s: (0..trace.len()).map(|k| k as f64 * dt).collect(),
+        time_s,
         output_names: ss.output_names.clone(),
         input_names: ss.input_names.clone(),
         tracked,
@@ -593,8 +605,8 @@ mod tests {
     /// the per-step allocations; without any solve only the first step is.
     #[test]
     fn set_up_steps_are_left_out_of_the_allocations_per_step() {
-        assert_eq!(steady_allocations(&[5, 0, 0, 2, 1, 1], &[0.0, 0.0, 0.0, 9.0, 10.0, 8.0]), 1);
-        assert_eq!(steady_allocations(&[5, 0, 3], &[0.0, 0.0, 0.0]), 3);
-        assert_eq!(steady_allocations(&[5], &[7.0]), 0);
+        assert_eq!(steady_allocations(&[5, 0, 0, 2, 1, 1], &[0, 0, 0, 9, 10, 8]), 1);
+        assert_eq!(steady_allocations(&[5, 0, 3], &[0, 0, 0]), 3);
+        assert_eq!(steady_allocations(&[5], &[7]), 0);
     }
 }
