@@ -815,14 +815,13 @@ pub fn load_drive_test(file: &Path) -> Result<DriveTestBundle, BundleError> {
 
 /// The `drive_test` bundle whose TOML `file` holds `text` (see [`load_drive_test`]).
 pub fn drive_test_of(text: &str, file: &Path) -> Result<DriveTestBundle, BundleError> {
-    let text = text.to_string();
-    let header: Header = toml::from_str(&text).map_err(|e| error(file, None, e.to_string().trim_end().to_string()))?;
+    let header: Header = toml::from_str(text).map_err(|e| error(file, None, e.to_string().trim_end().to_string()))?;
     if header.kind != "drive_test" {
         return Err(error(file, None, format!("`kind` = \"{}\": expected \"drive_test\"", header.kind)));
     }
-    let raw: DriveFile = toml::from_str(&text).map_err(|e| error(file, None, e.to_string().trim_end().to_string()))?;
+    let raw: DriveFile = toml::from_str(text).map_err(|e| error(file, None, e.to_string().trim_end().to_string()))?;
     // the declared model and its [mpc] section as every model file is read
-    let (model, mpc) = match modelfile::parse(&text, file).map_err(|e| error(file, None, e.message))? {
+    let (model, mpc) = match modelfile::parse(text, file).map_err(|e| error(file, None, e.message))? {
         modelfile::ModelFile { model: modelfile::Model::Drive(m), mpc, .. } => (m, mpc),
         _ => return Err(error(file, None, "expected a drive line's [model]")),
     };

@@ -266,9 +266,9 @@ pub fn read_model(file: &std::path::Path) -> anyhow::Result<(modelfile::ModelFil
     let bounds: Vec<String> =
         b.inputs.iter().zip(mpc.input_max.iter().flatten()).map(|(s, v)| format!("{} {v:.4}", s.column)).collect();
     let note = format!(
-            "note: {} has no [mpc] input_max: the inputs are bounded by the record's peaks ({}); give the actuators' limits in [mpc] input_max",
-            file.display(),
+        "note: {} has no [mpc] input_max: the inputs are bounded by the record's peaks ({}); give the actuators' limits in [mpc] input_max",
+        file.display(),
         bounds.join(", ")
     );
-    Ok((modelfile::ModelFile { model: modelfile::Model::Drive(b.model), mpc, kind: parsed.kind }, Some(note)))
+    Ok((modelfile::ModelFile { mpc, ..parsed }, Some(note)))
 }
