@@ -1,8 +1,9 @@
 //! The dense algebra of one Levenberg–Marquardt iteration of a 60 s, 1 kHz diagnosis (issue 15,
 //! item 6): a Jacobian of 120 000 residuals (two speeds) × p parameters (p = 5: j_drive, c_short
 //! and two effects' three parameters) and the step from it. Four ways, side by side:
-//! - `loops_f32`: what `ident::diagnose::lm` does — columns kept in f32 (half the memory),
-//!   JᵀJ and Jᵀr summed in f64 by plain loops, the p × p system by nalgebra's LU;
+//! - `columns_i16`: what `ident::diagnose::lm` does — columns kept in 16 bits an entry
+//!   (`lm::Column`, a quarter of the memory), JᵀJ and Jᵀr summed in f64 row by row
+//!   (`lm::normal_sums`), the p × p system by nalgebra's LU;
 //! - `nalgebra_normal`: an f64 DMatrix J, `J.tr_mul(&J)`, `J.tr_mul(&r)`, LU;
 //! - `faer_normal`: a faer Mat J, `Jᵀ * J`, `Jᵀ * r`, LU of the small system;
 //! - `faer_qr` / `nalgebra_qr`: least squares by QR of the tall J (no normal equations).
@@ -13,6 +14,7 @@ use std::hint::black_box;
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use faer::linalg::solvers::{Solve, SolveLstsqCore};
+use ident::diagnose::lm;
 use nalgebra::{DMatrix, DVector};
 
 const ROWS: usize = 120_000;
@@ -27,24 +29,16 @@ fn column(j: usize) -> Vec<f64> {
 fn bench(c: &mut Criterion) {
     let cols: Vec<Vec<f64>> = (0..P).map(column).collect();
     let r: Vec<f64> = (0..ROWS).map(|k| (k as f64 * 0.0037).cos()).collect();
-    let cols32: Vec<Vec<f32>> = cols.iter().map(|c| c.iter().map(|&v| v as f32).collect()).collect();
+    let zeros = vec![0.0; ROWS];
+    let cols16: Vec<lm::Column> = cols.iter().map(|c| lm::Column::of(c, &zeros, 1.0)).collect();
     let jn = DMatrix::from_fn(ROWS, P, |i, j| cols[j][i]);
     let rn = DVector::from_column_slice(&r);
     let jf = faer::Mat::<f64>::from_fn(ROWS, P, |i, j| cols[j][i]);
     let rf = faer::Mat::<f64>::from_fn(ROWS, 1, |i, _| r[i]);
     let mut g = c.benchmark_group("lm_step_120000x5");
-    g.bench_function("loops_f32", |b| {
+    g.bench_function("columns_i16", |b| {
         b.iter(|| {
-            let mut jtj = DMatrix::<f64>::zeros(P, P);
-            let mut grad = DVector::<f64>::zeros(P);
-            for j in 0..P {
-                grad[j] = cols32[j].iter().zip(&r).map(|(a, b)| *a as f64 * b).sum::<f64>();
-                for k in 0..=j {
-                    let v = cols32[j].iter().zip(&cols32[k]).map(|(a, b)| *a as f64 * *b as f64).sum::<f64>();
-                    jtj[(j, k)] = v;
-                    jtj[(k, j)] = v;
-                }
-            }
+            let (jtj, grad) = lm::normal_sums(&cols16, &r, 1, &|_| 0).pop().expect("one group");
             black_box(jtj.lu().solve(&grad))
         })
     });

@@ -4,6 +4,8 @@
 
 #[path = "common/line_record.rs"]
 mod common;
+#[path = "common/memory.rs"]
+mod memory;
 
 use ident::diagnose::drive::{diagnose, DriveRecord};
 
@@ -11,6 +13,7 @@ fn main() {
     let model = common::declared();
     let (inputs, y) = common::record();
     let rec = DriveRecord { model: &model, inputs: &inputs, outputs: &common::OUTPUTS, measured: &y, dt_s: 1e-3 };
+    let rss_before = memory::status_kb("VmRSS");
     let start = std::time::Instant::now();
     let d = diagnose(rec, &|c| eprintln!("  {c} at {:.2} s", start.elapsed().as_secs_f64())).expect("diagnosed");
     println!(
@@ -30,4 +33,7 @@ fn main() {
     for c in &d.candidates {
         println!("  {} {:?} {:.4}", c.effect, c.at, c.error_after);
     }
+    // memory: the process's peak above its size once the record was made (Linux), per sample
+    // and channel (2 inputs, 7 outputs)
+    memory::print_peak_above(rss_before, inputs[0].len(), inputs.len() + y.len());
 }

@@ -4,6 +4,8 @@
 
 #[path = "common/drive_record.rs"]
 mod common;
+#[path = "common/memory.rs"]
+mod memory;
 use std::time::Instant;
 
 use ident::diagnose::drive::{diagnose, DriveRecord};
@@ -13,7 +15,7 @@ fn main() {
     let (u, y) = common::record(0.3);
     let inputs = [u];
     let rec = DriveRecord { model: &model, inputs: &inputs, outputs: &common::OUTPUTS, measured: &y, dt_s: 1e-3 };
-    let rss_before = status_kb("VmRSS");
+    let rss_before = memory::status_kb("VmRSS");
     let t0 = Instant::now();
     let d = diagnose(rec, &|_| {}).unwrap();
     println!(
@@ -27,20 +29,5 @@ fn main() {
     );
     // memory: the process's peak above its size once the record was made (Linux), per sample
     // and channel (the input and the three outputs)
-    if let (Some(before), Some(peak)) = (rss_before, status_kb("VmHWM")) {
-        let channels = (inputs.len() + y.len()) as f64;
-        let per = (peak.saturating_sub(before) as f64 * 1024.0) / (inputs[0].len() as f64 * channels);
-        println!(
-            "memory: peak {:.1} MB, {:.1} MB above the record, {per:.0} bytes per sample per channel",
-            peak as f64 / 1024.0,
-            peak.saturating_sub(before) as f64 / 1024.0
-        );
-    }
-}
-
-/// A field of /proc/self/status in kB, where there is one.
-fn status_kb(field: &str) -> Option<u64> {
-    let s = std::fs::read_to_string("/proc/self/status").ok()?;
-    let line = s.lines().find(|l| l.starts_with(field))?;
-    line.split_whitespace().nth(1)?.parse().ok()
+    memory::print_peak_above(rss_before, inputs[0].len(), inputs.len() + y.len());
 }

@@ -50,21 +50,10 @@ fn minimise(
     let mut cost: f64 = r.iter().map(|v| v * v).sum();
     let mut lambda = 1e-3;
     for _ in 0..max_iter {
-        let Some(columns) = jacobian_columns(f, &x, &r) else { break };
-        let mut jtj = DMatrix::zeros(p, p);
-        let mut g = DVector::zeros(p);
-        for j in 0..p {
-            g[j] = columns[j].iter().zip(&r).map(|(a, b)| *a as f64 * b).sum::<f64>();
-            for k in 0..=j {
-                let v = columns[j].iter().zip(&columns[k]).map(|(a, b)| *a as f64 * *b as f64).sum::<f64>();
-                jtj[(j, k)] = v;
-                jtj[(k, j)] = v;
-            }
-        }
+        let Some((jtj, g)) = normal_equations(f, &x, &r, 1, &|_| 0).and_then(|mut n| n.pop()) else { break };
         if jtj.iter().chain(g.iter()).any(|v: &f64| !v.is_finite()) {
             break;
         }
-        drop(columns);
         let mut improved = false;
         let mut tried = 0;
         while tried < raises && lambda <= LAMBDA_MAX {
@@ -102,30 +91,139 @@ fn minimise(
     (x, cost)
 }
 
-/// The Jacobian of `f` at `x` (where `f(x)` = `r`) by forward differences, column by column,
-/// kept in single precision (half the memory of a long record; a forward difference is good to
-/// a few digits anyway); `None` where `f` cannot be evaluated beside `x`.
-pub fn jacobian_columns(
+/// JᵀJ and Jᵀr of `f`'s Jacobian J at `x` (where `f(x)` = `r`), summed over each of `groups`
+/// groups of rows (`group_of(row)` < `groups`): the normal equations of a Gauss–Newton step on
+/// all rows or on some. `None` where `f` cannot be evaluated beside `x`.
+///
+/// The columns are forward differences ([`jacobian_columns`]) in 16 bits ([`Column`]), held
+/// only while the sums are formed.
+pub fn normal_equations(
     f: &(dyn Fn(&[f64]) -> Option<Vec<f64>> + Sync),
     x: &[f64],
     r: &[f64],
-) -> Option<Vec<Vec<f32>>> {
-    let p = x.len();
-    let column = |j: usize| -> Option<Vec<f32>> {
+    groups: usize,
+    group_of: &dyn Fn(usize) -> usize,
+) -> Option<Vec<(DMatrix<f64>, DVector<f64>)>> {
+    let columns = jacobian_columns(f, x, r)?;
+    Some(normal_sums(&columns, r, groups, group_of))
+}
+
+/// JᵀJ and Jᵀr of the Jacobian whose columns are `columns`, summed over each of `groups` groups
+/// of rows ([`normal_equations`]): each entry summed over the rows in order, column pair by
+/// column pair, over runs of rows that share a group and a scale.
+pub fn normal_sums(
+    columns: &[Column],
+    r: &[f64],
+    groups: usize,
+    group_of: &dyn Fn(usize) -> usize,
+) -> Vec<(DMatrix<f64>, DVector<f64>)> {
+    let p = columns.len();
+    let runs = runs(r.len(), groups, group_of);
+    let mut sums: Vec<(DMatrix<f64>, DVector<f64>)> =
+        (0..groups).map(|_| (DMatrix::zeros(p, p), DVector::zeros(p))).collect();
+    for (a, ca) in columns.iter().enumerate() {
+        for &(start, end, k) in &runs {
+            let sa = ca.scale[start >> Column::BLOCK_BITS];
+            let acc = &mut sums[k].1[a];
+            for (q, ri) in ca.q[start..end].iter().zip(&r[start..end]) {
+                *acc += *q as f64 * sa * ri;
+            }
+        }
+        for (b, cb) in columns[..=a].iter().enumerate() {
+            for &(start, end, k) in &runs {
+                let (sa, sb) = (ca.scale[start >> Column::BLOCK_BITS], cb.scale[start >> Column::BLOCK_BITS]);
+                let acc = &mut sums[k].0[(a, b)];
+                for (qa, qb) in ca.q[start..end].iter().zip(&cb.q[start..end]) {
+                    *acc += *qa as f64 * sa * (*qb as f64 * sb);
+                }
+            }
+        }
+    }
+    for (m, _) in &mut sums {
+        m.fill_upper_triangle_with_lower_triangle();
+    }
+    sums
+}
+
+/// The rows 0..n as runs (start, end, group) of one group ([`normal_sums`]) and one scale block
+/// of the columns ([`Column::BLOCK_BITS`]).
+fn runs(n: usize, groups: usize, group_of: &dyn Fn(usize) -> usize) -> Vec<(usize, usize, usize)> {
+    let block = 1 << Column::BLOCK_BITS;
+    let mut runs = Vec::new();
+    let mut start = 0;
+    let mut group = if groups > 1 && n > 0 { group_of(0) } else { 0 };
+    for i in 1..=n {
+        let next = if groups > 1 && i < n { group_of(i) } else { 0 };
+        if i == n || i % block == 0 || next != group {
+            runs.push((start, i, group));
+            start = i;
+            group = next;
+        }
+    }
+    runs
+}
+
+/// The Jacobian of `f` at `x` (where `f(x)` = `r`) by forward differences, column by column
+/// ([`Column`]); `None` where `f` cannot be evaluated beside `x`.
+fn jacobian_columns(f: &(dyn Fn(&[f64]) -> Option<Vec<f64>> + Sync), x: &[f64], r: &[f64]) -> Option<Vec<Column>> {
+    let column = |j: usize| -> Option<Column> {
         // 0.1 % steps (log parameters): large enough to step over the roughness that contact
         // switching in the backlash model puts into the cost.
         let h = 1e-3 * x[j].abs().max(1.0);
         let mut xp = x.to_vec();
         xp[j] += h;
         let rp = f(&xp)?;
-        Some(rp.iter().zip(r).map(|(a, b)| ((a - b) / h) as f32).collect())
+        Some(Column::of(&rp, r, h))
     };
     // on both cores where one is idle (this fit the only work, or the other worker out of
     // jobs): the same columns, sooner
-    if p >= 2 && super::spare_core() {
-        super::on_two_workers(p, &column).into_iter().collect()
+    if x.len() >= 2 && super::spare_core() {
+        super::on_two_workers(x.len(), &column).into_iter().collect()
     } else {
-        (0..p).map(column).collect()
+        (0..x.len()).map(column).collect()
+    }
+}
+
+/// A Jacobian column in 16 bits an entry, each block of 2^[`Column::BLOCK_BITS`] rows scaled by
+/// its largest magnitude: within 1.5e-5 of that (half a step of 1/32767), below the forward
+/// difference's own error (its step is 1e-3 of the parameter, and its truncation error of that
+/// order relative to the column), in a quarter of a double's memory. A long record's Jacobian is
+/// the largest thing a diagnosis holds (a 13 s record of 7 outputs, 27 parameters: 4.9 MB so).
+pub struct Column {
+    scale: Vec<f64>,
+    q: Vec<i16>,
+}
+
+impl Column {
+    /// Rows sharing one scale: 2^10.
+    const BLOCK_BITS: u32 = 10;
+
+    /// The forward difference (`rp` − `r`) / `h`.
+    pub fn of(rp: &[f64], r: &[f64], h: f64) -> Column {
+        let rows = 1 << Self::BLOCK_BITS;
+        let mut scale = Vec::with_capacity(rp.len() / rows + 1);
+        let mut q = Vec::with_capacity(rp.len());
+        for (bp, b) in rp.chunks(rows).zip(r.chunks(rows)) {
+            let value = |k: usize| (bp[k] - b[k]) / h;
+            let (largest, finite) =
+                (0..bp.len()).map(value).fold((0.0f64, true), |(m, f), v| (m.max(v.abs()), f && v.is_finite()));
+            // a non-finite entry makes its block's scale NaN: the normal equations then are
+            // not finite, and the fit stops, as for a column of doubles
+            let s = if finite { largest / i16::MAX as f64 } else { f64::NAN };
+            scale.push(s);
+            // to the nearest step, half away from zero (`f64::round` without its library call;
+            // the cast saturates)
+            q.extend((0..bp.len()).map(|k| {
+                let y = if s > 0.0 { value(k) / s } else { 0.0 };
+                (y + 0.5f64.copysign(y)) as i16
+            }));
+        }
+        Column { scale, q }
+    }
+
+    /// Entry `i`.
+    pub fn get(&self, i: usize) -> f64 {
+        self.q[i] as f64 * self.scale[i >> Self::BLOCK_BITS]
     }
 }
 
@@ -154,5 +252,82 @@ pub fn golden(f: &dyn Fn(f64) -> f64, mut a: f64, mut b: f64, iters: usize) -> f
         c
     } else {
         d
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Values whose magnitude changes by decades from block to block, with a sign change.
+    fn values(n: usize, j: usize) -> Vec<f64> {
+        (0..n).map(|k| 10f64.powi((k / 1500) as i32 - 2) * ((k as f64 * 0.013 * (j + 1) as f64).sin() - 0.3)).collect()
+    }
+
+    /// Half a quantisation step of the block holding row `k` of `v`: the largest error a 16-bit
+    /// entry may have.
+    fn half_step(v: &[f64], k: usize) -> f64 {
+        let rows = 1 << Column::BLOCK_BITS;
+        let block = &v[(k / rows) * rows..((k / rows + 1) * rows).min(v.len())];
+        block.iter().fold(0.0f64, |m, x| m.max(x.abs())) / i16::MAX as f64 / 2.0
+    }
+
+    #[test]
+    fn a_column_keeps_each_entry_within_half_a_step_of_its_block() {
+        let v = values(5000, 0);
+        let base: Vec<f64> = (0..v.len()).map(|k| k as f64 * 1e-3).collect();
+        let h = 1e-3;
+        let rp: Vec<f64> = v.iter().zip(&base).map(|(d, b)| b + d * h).collect();
+        let c = Column::of(&rp, &base, h);
+        for (k, &x) in v.iter().enumerate() {
+            // the difference itself is formed in doubles: 1e-12 beside the step's bound
+            assert!((c.get(k) - x).abs() <= half_step(&v, k) * (1.0 + 1e-6) + 1e-12, "row {k}: {} for {x}", c.get(k));
+        }
+    }
+
+    #[test]
+    fn a_non_finite_entry_makes_the_normal_sums_non_finite() {
+        let mut v = values(3000, 1);
+        v[2100] = f64::NAN;
+        let c = Column::of(&v, &vec![0.0; v.len()], 1.0);
+        let sums = normal_sums(&[c], &vec![1.0; v.len()], 1, &|_| 0);
+        assert!(!sums[0].0[(0, 0)].is_finite() && !sums[0].1[0].is_finite());
+    }
+
+    #[test]
+    fn normal_sums_match_the_sums_of_the_doubles_within_the_quantisation_bound() {
+        let (n, p) = (6000, 3);
+        let cols: Vec<Vec<f64>> = (0..p).map(|j| values(n, j)).collect();
+        let r: Vec<f64> = (0..n).map(|k| (k as f64 * 0.0037).cos()).collect();
+        let zeros = vec![0.0; n];
+        let quantised: Vec<Column> = cols.iter().map(|c| Column::of(c, &zeros, 1.0)).collect();
+        let group_of = |k: usize| (k / 700) % 2;
+        let sums = normal_sums(&quantised, &r, 2, &group_of);
+        for (g, (jtj, grad)) in sums.iter().enumerate() {
+            let rows: Vec<usize> = (0..n).filter(|&k| group_of(k) == g).collect();
+            for a in 0..p {
+                // |Σ (x + δx) r − Σ x r| ≤ Σ |δx| |r|, |δx| at most half a step
+                let exact: f64 = rows.iter().map(|&k| cols[a][k] * r[k]).sum();
+                let bound: f64 = rows.iter().map(|&k| half_step(&cols[a], k) * r[k].abs()).sum();
+                assert!((grad[a] - exact).abs() <= bound * 1.001 + 1e-12, "g[{a}] {} for {exact}", grad[a]);
+                for b in 0..p {
+                    // |Σ (x + δx)(y + δy) − Σ x y| ≤ Σ |x||δy| + |y||δx| + |δx||δy|
+                    let exact: f64 = rows.iter().map(|&k| cols[a][k] * cols[b][k]).sum();
+                    let bound: f64 = rows
+                        .iter()
+                        .map(|&k| {
+                            let (da, db) = (half_step(&cols[a], k), half_step(&cols[b], k));
+                            cols[a][k].abs() * db + cols[b][k].abs() * da + da * db
+                        })
+                        .sum();
+                    assert!(
+                        (jtj[(a, b)] - exact).abs() <= bound * 1.001 + 1e-12,
+                        "JᵀJ[{a},{b}] {} for {exact}",
+                        jtj[(a, b)]
+                    );
+                    assert_eq!(jtj[(a, b)], jtj[(b, a)]);
+                }
+            }
+        }
     }
 }

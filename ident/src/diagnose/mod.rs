@@ -5,7 +5,7 @@
 
 pub mod bearing;
 pub mod drive;
-mod lm;
+pub mod lm;
 pub mod torsional;
 pub mod verdict;
 
@@ -259,8 +259,7 @@ fn refit_without_folds(folds: &Folds, fits: &[(ResidualFn, &[f64])]) -> Vec<Vec<
         .iter()
         .map(|&(residual, x0)| {
             let r = residual(x0)?;
-            let columns = lm::jacobian_columns(residual, x0, &r)?;
-            let steps = fold_steps(folds, &columns, &r);
+            let steps = fold_steps(folds, residual, x0, &r)?;
             Some((r, steps))
         })
         .collect();
@@ -299,41 +298,27 @@ type Prepared = (Vec<f64>, Vec<Vec<f64>>);
 pub const STEP_HALVINGS: usize = 3;
 
 /// The Gauss–Newton step Δ_j = −(J_jᵀJ_j)⁻¹ J_jᵀ r_j of each fold j, J_j and r_j the rows of
-/// Jacobian `columns` and residual `r` outside fold j (a singular normal matrix regularised by
-/// 1e-9 of its diagonal). NaN steps where it cannot be solved.
-fn fold_steps(folds: &Folds, columns: &[Vec<f32>], r: &[f64]) -> Vec<Vec<f64>> {
-    let (p, k) = (columns.len(), folds.count());
-    // each fold's share of JᵀJ and Jᵀr, in one pass over the rows
-    let mut jtj = vec![nalgebra::DMatrix::<f64>::zeros(p, p); k];
-    let mut g = vec![nalgebra::DVector::<f64>::zeros(p); k];
-    let mut row = vec![0.0; p];
-    for (i, &ri) in r.iter().enumerate() {
-        let f = folds.fold_of(i);
-        for (v, c) in row.iter_mut().zip(columns) {
-            *v = c[i] as f64;
-        }
-        for a in 0..p {
-            g[f][a] += row[a] * ri;
-            for b in 0..=a {
-                jtj[f][(a, b)] += row[a] * row[b];
-            }
-        }
-    }
-    let total_jtj: nalgebra::DMatrix<f64> = jtj.iter().sum();
-    let total_g: nalgebra::DVector<f64> = g.iter().sum();
-    (0..k)
-        .map(|j| {
-            let mut a = &total_jtj - &jtj[j];
+/// the Jacobian of `residual` at `x0` and of its residual `r` there outside fold j (a singular
+/// normal matrix regularised by 1e-9 of its diagonal). NaN steps where it cannot be solved;
+/// `None` where the Jacobian cannot be formed.
+fn fold_steps(folds: &Folds, residual: ResidualFn, x0: &[f64], r: &[f64]) -> Option<Vec<Vec<f64>>> {
+    let (p, k) = (x0.len(), folds.count());
+    // each fold's share of JᵀJ and Jᵀr
+    let shares = lm::normal_equations(residual, x0, r, k, &|i| folds.fold_of(i))?;
+    let total_jtj: nalgebra::DMatrix<f64> = shares.iter().map(|s| &s.0).sum();
+    let total_g: nalgebra::DVector<f64> = shares.iter().map(|s| &s.1).sum();
+    let steps = shares
+        .iter()
+        .map(|(jtj, g)| {
+            let mut a = &total_jtj - jtj;
             for x in 0..p {
-                for y in 0..x {
-                    a[(y, x)] = a[(x, y)];
-                }
                 a[(x, x)] *= 1.0 + 1e-9;
             }
-            let b = &total_g - &g[j];
+            let b = &total_g - g;
             a.lu().solve(&(-b)).map_or(vec![f64::NAN; p], |d| d.iter().copied().collect())
         })
-        .collect()
+        .collect();
+    Some(steps)
 }
 
 /// The normalised error over all folds of fold fits `f`, each fold predicted by the fit that

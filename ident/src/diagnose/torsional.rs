@@ -1055,31 +1055,32 @@ pub fn diagnose(
         }
     };
 
-    // the accepted model polished: its fit continued, and one restarted from the declared
-    // j_drive and c_short (those of the model before may have been bent to imitate the effect
-    // just found); the lowest plausible kept (the lowest if none is)
+    // with play, a fit continued from a fit to the short-time spectra (the phase-free fit,
+    // [`PHASE_FREE_WINDOW_S`]): where the speeds' error is a train of notches, theirs leads
+    // into the right one
+    let phase_free = |effects: &[Candidate]| effects.contains(&Candidate::Backlash) && problem.spectra_norm > 0.0;
+    let phase_free_fit = |effects: &[Candidate], x0: &[f64]| -> Fit {
+        let spectral = |x: &[f64]| problem.spectral_residual(&problem.build(effects, x));
+        let (located, cost) = lm::minimise_to(&spectral, x0, LM_ITERATIONS, LM_REL_TOL);
+        if cost.is_finite() {
+            fit_with(effects.to_vec(), located, LM_ITERATIONS)
+        } else {
+            Fit { effects: effects.to_vec(), x: located, cost: f64::INFINITY, score: f64::INFINITY }
+        }
+    };
+    // the accepted model polished: its fit continued, one restarted from the declared j_drive
+    // and c_short (those of the model before may have been bent to imitate the effect just
+    // found), and the phase-free fit; the lowest plausible kept (the lowest if none is)
     let polish = |b: Fit| -> Fit {
         let mut restart = b.x.clone();
         restart[..2].fill(0.0);
         // a fit already at the declared values (a pinned one) is only continued: the restart
         // would repeat it
         let starts = if restart == b.x { vec![restart] } else { vec![b.x.clone(), restart] };
-        // with play, the fit also continued from a fit to the short-time spectra (the
-        // phase-free fit, [`PHASE_FREE_WINDOW_S`]): where the speeds' error is a train of
-        // notches, theirs leads into the right one
-        let phase_free = b.effects.contains(&Candidate::Backlash) && problem.spectra_norm > 0.0;
-        let jobs = starts.len() + usize::from(phase_free);
-        let polished = super::on_two_workers(jobs, &|i| {
-            if i < starts.len() {
-                return fit_with(b.effects.clone(), starts[i].clone(), LM_ITERATIONS);
-            }
-            let spectral = |x: &[f64]| problem.spectral_residual(&problem.build(&b.effects, x));
-            let (located, cost) = lm::minimise_to(&spectral, &b.x, LM_ITERATIONS, LM_REL_TOL);
-            if cost.is_finite() {
-                fit_with(b.effects.clone(), located, LM_ITERATIONS)
-            } else {
-                Fit { effects: b.effects.clone(), x: located, cost: f64::INFINITY, score: f64::INFINITY }
-            }
+        let jobs = starts.len() + usize::from(phase_free(&b.effects));
+        let polished = super::on_two_workers(jobs, &|i| match starts.get(i) {
+            Some(start) => fit_with(b.effects.clone(), start.clone(), LM_ITERATIONS),
+            None => phase_free_fit(&b.effects, &b.x),
         });
         let fits: Vec<Fit> = polished.into_iter().filter(|f| f.cost.is_finite()).chain(std::iter::once(b)).collect();
         let lowest = |plausible: bool| {
@@ -1338,7 +1339,13 @@ pub fn diagnose(
             let costs = super::on_two_workers(points.len(), &|k| cost_at(&points[k]));
             seeds.extend(best_per_share(&costs).into_iter().map(|k| points[k].clone()));
         }
-        let fits = super::on_two_workers(seeds.len(), &|k| fit_with(effects.clone(), seeds[k].clone(), LM_ITERATIONS));
+        // each seed fitted directly and, with play, also by the phase-free fit (the notch the
+        // answer's play sits in need not be the one of another basin)
+        let routes = 1 + usize::from(phase_free(&effects));
+        let fits = super::on_two_workers(seeds.len() * routes, &|k| match k % routes {
+            0 => fit_with(effects.clone(), seeds[k / routes].clone(), LM_ITERATIONS),
+            _ => phase_free_fit(&effects, &seeds[k / routes]),
+        });
         let apart = |a: &Fit, b: &Fit| {
             (a.x[at] - b.x[at]).abs() > EQUIVALENT_APART_LN
                 || (logistic(a.x[at + 1]) - logistic(b.x[at + 1])).abs() > EQUIVALENT_APART_SHARE
