@@ -172,7 +172,8 @@ fn jacobian_columns(f: &(dyn Fn(&[f64]) -> Option<Vec<f64>> + Sync), x: &[f64], 
         let h = 1e-3 * x[j].abs().max(1.0);
         let mut xp = x.to_vec();
         xp[j] += h;
-        let rp = f(&xp)?;
+        // a residual of another length than `r` cannot be differenced: no column
+        let rp = f(&xp).filter(|rp| rp.len() == r.len())?;
         Some(Column::of(&rp, r, h))
     };
     // on both cores where one is idle (this fit the only work, or the other worker out of
@@ -188,7 +189,8 @@ fn jacobian_columns(f: &(dyn Fn(&[f64]) -> Option<Vec<f64>> + Sync), x: &[f64], 
 /// its largest magnitude: within 1.5e-5 of that (half a step of 1/32767), below the forward
 /// difference's own error (its step is 1e-3 of the parameter, and its truncation error of that
 /// order relative to the column), in a quarter of a double's memory. A long record's Jacobian is
-/// the largest thing a diagnosis holds (a 13 s record of 7 outputs, 27 parameters: 4.9 MB so).
+/// the largest thing a diagnosis holds (a 13 s record of 7 outputs: 182 kB a column so, 728 kB
+/// in doubles).
 pub struct Column {
     scale: Vec<f64>,
     q: Vec<i16>,
