@@ -97,6 +97,23 @@ fn a_damped_geared_chain_has_opentorsions_modes_and_damping() {
     );
 }
 
+/// The damped geared chain with a compliance inside its motor, declared as the effect a model
+/// file names (`effect = "compliance"`): rigtwin splits the motor into its rotor and the rest
+/// with the spring between them; openTorsion is given the five disks, spring and damper by hand.
+#[test]
+fn a_compliance_inside_the_motor_has_opentorsions_modes_and_damping() {
+    let hub = 0.001 + 0.002 / 9.0;
+    compare(
+        "compliant_motor",
+        &format!(
+            "[model]\nbodies = [\n  {{ name = \"motor\", inertia = 0.004, drag = 0.02 }},\n  {{ name = \"pinion\", inertia = {hub:?} }},\n  \
+             {{ name = \"load\", inertia = 0.06, drag = 0.3 }},\n]\ncouplings = [\n  {{ stiffness = 800.0, damping = 0.5 }},\n  \
+             {{ stiffness = 15000.0, damping = 2.0, ratio = 3.0 }},\n]\n\
+             [[effects]]\neffect = \"compliance\"\nbody = 1\nstiffness = 300.0\nmotor_share = 0.4\n"
+        ),
+    );
+}
+
 #[test]
 fn a_branched_gearbox_has_opentorsions_modes() {
     // the two wheels (ratio 2 and 4) reflected onto the pinion; each wheel's shaft twists by

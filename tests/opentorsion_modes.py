@@ -36,7 +36,20 @@ def branched():
     return ot.Assembly(shafts, disk_elements=disks, gear_elements=[pinion, wheel_a, wheel_b])
 
 
-assembly = {"chain5": chain5, "geared_damped": geared_damped, "branched": branched}[sys.argv[1]]()
+def compliant_motor():
+    # geared_damped with a compliance inside the motor: its rotor (0.4 of its 0.004 kg m², where
+    # the torque acts) on a 300 N m/rad spring to the rest of it (0.6, with the motor's drag); the
+    # spring damped as the motor's shaft is, c/k = 0.5/800
+    shafts = [ot.Shaft(0, 1, k=300.0, c=300.0 * 0.5 / 800.0), ot.Shaft(1, 2, k=800.0, c=0.5),
+              ot.Shaft(3, 4, k=15000.0, c=2.0)]
+    disks = [ot.Disk(0, I=0.4 * 0.004), ot.Disk(1, I=0.6 * 0.004, c=0.02), ot.Disk(4, I=0.06, c=0.3)]
+    pinion = ot.Gear(2, I=0.001, R=10)
+    wheel = ot.Gear(3, I=0.002, R=30, parent=pinion)
+    return ot.Assembly(shafts, disk_elements=disks, gear_elements=[pinion, wheel])
+
+
+assembly = {"chain5": chain5, "geared_damped": geared_damped, "branched": branched,
+            "compliant_motor": compliant_motor}[sys.argv[1]]()
 M, K = np.asarray(assembly.M), np.asarray(assembly.K)
 w2 = np.linalg.eigvals(np.linalg.solve(M, K)).real
 scale = np.abs(w2).max()

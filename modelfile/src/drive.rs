@@ -107,5 +107,7 @@ pub fn parse_drive_model(text: &str, file: &Path) -> Result<plant::DriveModel, M
     }
     let m = plant::DriveModel { line, inputs, effects };
     m.validate().map_err(|e| error(file, e.to_string()))?;
+    // a compliance is written into the line as it is read: every consumer sees its two bodies
+    let m = m.resolved().map_err(|e| error(file, e.to_string()))?.into_owned();
     Ok(m)
 }

@@ -23,8 +23,8 @@ use crate::statespace::zoh;
 
 mod effect;
 pub use effect::{
-    ActuatorLag, Backlash, CoulombFriction, Effect, EffectModel, EffectParameter, Element, Limit, Moves, Scale, Search,
-    Shows, SizeContext, TimeDelay, INPUT_TIME_FLOOR_SAMPLES,
+    ActuatorLag, Backlash, Compliance, CoulombFriction, Effect, EffectModel, EffectParameter, Element, Limit, Moves,
+    Scale, Search, Shows, SizeContext, TimeDelay, INPUT_TIME_FLOOR_SAMPLES,
 };
 
 /// Most RK4 steps per sample within a smooth piece (the fine sub-steps across pieces may be
@@ -225,6 +225,25 @@ impl DriveModel {
     /// True when friction or backlash make the right-hand side nonlinear.
     pub fn is_nonlinear(&self) -> bool {
         self.effects.iter().any(Effect::is_nonlinear)
+    }
+
+    /// The model with every structural effect written into its line ([`Compliance`]: a body
+    /// split in two, [`EffectModel::into_structure`]) and left out of its effects; borrowed
+    /// when it has none. What the dynamics, the FMU, the controller and the modal analysis
+    /// take: a model file's and the paper rig's models are resolved as they are read or built.
+    pub fn resolved(&self) -> Result<std::borrow::Cow<'_, DriveModel>> {
+        use std::borrow::Cow;
+        if !self.effects.iter().any(Effect::is_structural) {
+            return Ok(Cow::Borrowed(self));
+        }
+        self.validate()?;
+        let effects = self.effects.iter().filter(|e| !e.is_structural()).copied().collect();
+        let mut m = DriveModel { effects, ..self.clone() };
+        for e in self.effects.iter().filter(|e| e.is_structural()) {
+            e.into_structure(&mut m)?;
+        }
+        m.validate()?;
+        Ok(Cow::Owned(m))
     }
 
     /// Number of states: angles (positions), speeds and one per lagged input.
@@ -507,9 +526,10 @@ pub struct Dynamics {
 pub const FINE_PER_COARSE: f64 = 8.0;
 
 impl Dynamics {
-    /// The dynamics of a validated model.
+    /// The dynamics of a validated model (resolved first: [`DriveModel::resolved`]).
     pub fn new(m: &DriveModel) -> Result<Dynamics> {
         m.validate()?;
+        let m = &*m.resolved()?;
         let n = m.line.bodies.len();
         let mut terms = Vec::new();
         let couplings: Vec<Spring> = m
@@ -919,11 +939,25 @@ impl Dynamics {
         let n = self.n;
         let mut x = vec![0.0; self.nstates];
         x[n..2 * n].fill(speed);
-        // through the gear stages between neighbours; a coupling with an elongation leaves its
-        // bodies at the common speed
-        for (i, s) in self.couplings.iter().enumerate() {
-            if let Some(inv_r) = s.gear {
-                x[n + i + 1] = x[n + i] * inv_r;
+        // outwards from the first body through every coupling that joins two bodies (a gear
+        // stage between neighbours, a gear mesh or shaft given by the bodies it joins, a
+        // compliance): the second body turns so that the twist does not change, e_a v_a + e_b v_b
+        // = 0. A body that no such coupling reaches (an open differential's) keeps the speed.
+        let mut known = vec![false; n];
+        known[0] = true;
+        let mut changed = true;
+        while changed {
+            changed = false;
+            for s in &self.couplings {
+                let &[(a, ea), (b, eb)] = &self.terms[s.terms.0..s.terms.1] else { continue };
+                let (from, to, ratio) = match (known[a], known[b]) {
+                    (true, false) => (a, b, -ea / eb),
+                    (false, true) => (b, a, -eb / ea),
+                    _ => continue,
+                };
+                x[n + to] = x[n + from] * ratio;
+                known[to] = true;
+                changed = true;
             }
         }
         for (k, &(_, _, tau, z)) in self.inputs.iter().enumerate() {

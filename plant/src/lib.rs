@@ -48,8 +48,8 @@ pub use bending::{Beam, BeamSegment, Deflection};
 pub use chain::{Body, Chain};
 pub use delay_line::DelayLine;
 pub use drive::{
-    ActuatorLag, Backlash, CoulombFriction, Dimension, DriveModel, Dynamics, Effect, EffectModel, Element, Parameter,
-    TimeDelay,
+    ActuatorLag, Backlash, Compliance, CoulombFriction, Dimension, DriveModel, Dynamics, Effect, EffectModel, Element,
+    Parameter, TimeDelay,
 };
 pub use error::{PlantError, Result};
 pub use line::{Coupling, Domain, Line, LineBody, Quantity, MAX_BODIES, MAX_COUPLINGS};

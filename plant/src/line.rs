@@ -282,6 +282,22 @@ impl Line {
         self.bodies.iter().position(|b| b.name == name)
     }
 
+    /// Body `b`'s diagonal entries of the stiffness and damping matrices, (K_bb, D_bb) =
+    /// (Σ c e_b², Σ d e_b²) over the couplings' twist coefficients e: the stiffness and damping
+    /// that hold it when every other body stands still.
+    pub fn diagonal(&self, b: usize) -> (f64, f64) {
+        let (mut k, mut d) = (0.0, 0.0);
+        for (i, c) in self.couplings.iter().enumerate() {
+            for (j, e) in c.terms(i) {
+                if j == b {
+                    k += c.stiffness * e * e;
+                    d += c.damping * e * e;
+                }
+            }
+        }
+        (k, d)
+    }
+
     /// The line as a mechanical model: diagonal inertia, one spring per coupling with its
     /// elongation (q_i / r − q_{i+1} between neighbours), drag on each body.
     pub fn model(&self) -> Result<MechanicalModel> {

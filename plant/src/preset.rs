@@ -4,7 +4,7 @@
 //! the FMU's twist coordinates; [`record_start`] and [`simulate_record`] are the torsional
 //! record as the diagnosis simulates it (the drive torque the only input). No I/O.
 
-use crate::drive::{ActuatorLag, Backlash, CoulombFriction, DriveModel, Dynamics, Effect, TimeDelay};
+use crate::drive::{ActuatorLag, Backlash, Compliance, CoulombFriction, DriveModel, Dynamics, Effect, TimeDelay};
 use crate::error::{PlantError, Result};
 use crate::integrate::RK4_STEP_TIMES_RATE;
 use crate::line::{Coupling, Domain, Line, LineBody, Quantity};
@@ -36,37 +36,15 @@ impl DriveModel {
         let e = rig.effective(variant)?;
         let (cl, cr) = (e.c_left, e.c_right);
         let (share_l, share_r) = (cr / (cl + cr), cl / (cl + cr));
-        let compliant = effects.compliance_stiffness_nm_per_rad > 0.0;
         let body = |name: &str, inertia: f64, drag: f64| LineBody { name: name.into(), inertia, drag };
-        let f = effects.compliance_motor_fraction;
-        let mut bodies = vec![
-            body("m2", e.j_m2, e.load_drag),
-            body("drive", if compliant { (1.0 - f) * e.j_drive } else { e.j_drive }, 0.0),
-            body("m3", e.j_m3, e.load_drag),
-        ];
-        let n = if compliant { 4 } else { 3 };
+        let bodies =
+            vec![body("m2", e.j_m2, e.load_drag), body("drive", e.j_drive, 0.0), body("m3", e.j_m3, e.load_drag)];
         let shaft = |name: &str, share: f64, c: f64, d: f64| {
-            let mut el: Vec<f64> = [-1.0, 2.0, -1.0].iter().map(|a| a * share).collect();
-            el.resize(n, 0.0);
+            let el: Vec<f64> = [-1.0, 2.0, -1.0].iter().map(|a| a * share).collect();
             Coupling { name: Some(name.into()), elongation: Some(el), ..Coupling::new(c, d, 1.0) }
         };
-        let mut couplings =
+        let couplings =
             vec![shaft("short_side_shaft", share_l, cl, e.d_left), shaft("long_side_shaft", share_r, cr, e.d_right)];
-        if compliant {
-            bodies.push(body("motor", f * e.j_drive, 0.0));
-            // The compliance gets the side shafts' stiffness-proportional damping, d = (d_s/c_s) k
-            // (the generic damping of section 4.3): an undamped internal mode would be a
-            // resonance no measurement shows.
-            let c_s = cl * share_l;
-            let d_s = e.d_left * share_l.powi(2) + e.d_right * share_r.powi(2);
-            let k = effects.compliance_stiffness_nm_per_rad;
-            couplings.push(Coupling {
-                name: Some("drive_compliance".into()),
-                elongation: Some(vec![0.0, -1.0, 0.0, 1.0]),
-                ..Coupling::new(k, d_s / c_s * k, 1.0)
-            });
-        }
-        let drive = if compliant { 3 } else { 1 };
         let mut list = Vec::new();
         if effects.time_delay_s > 0.0 {
             list.push(Effect::TimeDelay(TimeDelay { input: 1, delay_s: effects.time_delay_s }));
@@ -79,7 +57,7 @@ impl DriveModel {
                 list.push(Effect::Backlash(Backlash { coupling: k, backlash: 2.0 * share * effects.backlash_rad }));
             }
         }
-        for (&b, &friction) in [0, drive, 2].iter().zip(&effects.coulomb_friction_nm) {
+        for (b, &friction) in effects.coulomb_friction_nm.iter().enumerate() {
             if friction > 0.0 {
                 list.push(Effect::CoulombFriction(CoulombFriction {
                     body: b,
@@ -88,11 +66,25 @@ impl DriveModel {
                 }));
             }
         }
-        let m = DriveModel {
+        // the drive's compliance splits the drive (its torque and friction go to the motor part)
+        let compliant = effects.compliance_stiffness_nm_per_rad > 0.0;
+        if compliant {
+            list.push(Effect::Compliance(Compliance {
+                body: 1,
+                stiffness: effects.compliance_stiffness_nm_per_rad,
+                motor_share: effects.compliance_motor_fraction,
+            }));
+        }
+        let declared = DriveModel {
             line: Line { domain: Domain::Rotational, bodies, couplings },
-            inputs: vec![0, drive, 2],
+            inputs: vec![0, 1, 2],
             effects: list,
         };
+        let mut m = declared.resolved()?.into_owned();
+        if compliant {
+            // the rig's signal names: the motor part is `motor` (w_motor)
+            m.line.bodies[3].name = "motor".into();
+        }
         m.validate()?;
         Ok(m)
     }

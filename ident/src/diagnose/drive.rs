@@ -319,6 +319,7 @@ impl Problem<'_> {
         let scale = match search.scale {
             Scale::BodyForce => self.body_force[i],
             Scale::CouplingTwist => self.twist_rms[i],
+            Scale::BodyStiffness => self.rec.model.line.diagonal(i).0,
             Scale::SampleTime => dt,
         };
         let size = scale * log_size.exp();

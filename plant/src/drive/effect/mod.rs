@@ -8,17 +8,20 @@
 
 mod actuator_lag;
 mod backlash;
+mod compliance;
 mod coulomb_friction;
 mod time_delay;
 
 pub use actuator_lag::ActuatorLag;
 pub use backlash::Backlash;
+pub use compliance::Compliance;
 pub use coulomb_friction::CoulombFriction;
 pub use time_delay::TimeDelay;
 
 use serde::{Deserialize, Serialize};
 
 use super::{Dimension, DriveModel, Dynamics};
+use crate::error::Result;
 
 /// The element an effect acts on (0-based).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -161,6 +164,9 @@ pub enum Scale {
     CouplingTwist,
     /// The record's sample time.
     SampleTime,
+    /// The stiffness the body's couplings give it, K_bb = Σ c e_b² (its diagonal entry of the
+    /// line's stiffness matrix).
+    BodyStiffness,
 }
 
 /// The largest size of an effect that is still an answer.
@@ -217,6 +223,10 @@ pub trait EffectModel: Copy + Into<Effect> {
     const NONLINEAR: bool = false;
     /// What it may change of the declared mechanics (the diagnosis's plausibility).
     const MOVES: Moves = Moves::Nothing;
+    /// Whether it changes the line's structure (a compliance splits a body): it is then written
+    /// into the line before the dynamics are built ([`EffectModel::into_structure`]), not into a
+    /// slot of the right-hand side.
+    const STRUCTURAL: bool = false;
     /// How the diagnosis searches a record for it.
     const SEARCH: Search;
 
@@ -241,6 +251,12 @@ pub trait EffectModel: Copy + Into<Effect> {
     /// Its part of the linearisation of the piece where every play is in contact (`contact`)
     /// or open: nothing for a linear effect.
     fn linearise(&self, _d: &mut Dynamics, _contact: bool) {}
+    /// A structural effect ([`EffectModel::STRUCTURAL`]) writes itself into `m`'s bodies,
+    /// couplings, inputs and other effects ([`DriveModel::resolved`], which has left it out of
+    /// `m`'s effects).
+    fn into_structure(&self, _m: &mut DriveModel) -> Result<()> {
+        Ok(())
+    }
 }
 
 /// An effect attached to an element of the line (indices 0-based): the closed set of
@@ -256,6 +272,8 @@ pub enum Effect {
     TimeDelay(TimeDelay),
     /// [`ActuatorLag`].
     ActuatorLag(ActuatorLag),
+    /// [`Compliance`].
+    Compliance(Compliance),
 }
 
 /// `each!(effect, e => expr)`: `expr` with `e` bound to the effect's own type, for every variant.
@@ -266,6 +284,7 @@ macro_rules! each {
             Effect::Backlash($e) => $body,
             Effect::TimeDelay($e) => $body,
             Effect::ActuatorLag($e) => $body,
+            Effect::Compliance($e) => $body,
         }
     };
 }
@@ -279,7 +298,7 @@ macro_rules! into_effect {
         }
     )*};
 }
-into_effect!(CoulombFriction, Backlash, TimeDelay, ActuatorLag);
+into_effect!(CoulombFriction, Backlash, TimeDelay, ActuatorLag, Compliance);
 
 impl Effect {
     /// The vocabulary name.
@@ -328,7 +347,10 @@ impl Effect {
     }
 
     /// One of each effect of the vocabulary, at element 0 and of size 0: what the diagnosis
-    /// places at every element where the record can show it.
+    /// places at every element where the record can show it. A [`Compliance`] is not among
+    /// them yet: a model file declares it, and the paper rig's torsional diagnosis searches the
+    /// drive's; a drive record's search for it at every body waits for a survey of compliant
+    /// lines.
     pub fn vocabulary() -> [Effect; 4] {
         [
             CoulombFriction { body: 0, friction: 0.0, smoothing_speed: 1.0 }.into(),
@@ -395,6 +417,19 @@ impl Effect {
     pub(super) fn linearise(&self, d: &mut Dynamics, contact: bool) {
         each!(self, e => e.linearise(d, contact))
     }
+
+    /// Whether it changes the line's structure ([`EffectModel::STRUCTURAL`]).
+    pub fn is_structural(&self) -> bool {
+        fn structural<E: EffectModel>(_: &E) -> bool {
+            E::STRUCTURAL
+        }
+        each!(self, e => structural(e))
+    }
+
+    /// Writes a structural effect into `m` ([`EffectModel::into_structure`]).
+    pub(super) fn into_structure(&self, m: &mut DriveModel) -> Result<()> {
+        each!(self, e => e.into_structure(m))
+    }
 }
 
 #[cfg(test)]
@@ -402,7 +437,8 @@ mod tests {
     use super::*;
 
     /// The vocabulary holds every effect once: a new variant fails to compile here until it has
-    /// its position, and fails the test until [`Effect::vocabulary`] lists it.
+    /// its position, and fails the test until [`Effect::vocabulary`] lists it (the compliance,
+    /// position 4, deliberately not yet).
     #[test]
     fn the_vocabulary_has_every_effect_once() {
         let position = |e: &Effect| match e {
@@ -410,6 +446,7 @@ mod tests {
             Effect::Backlash(_) => 1,
             Effect::TimeDelay(_) => 2,
             Effect::ActuatorLag(_) => 3,
+            Effect::Compliance(_) => 4,
         };
         let mut seen: Vec<usize> = Effect::vocabulary().iter().map(position).collect();
         seen.sort();
