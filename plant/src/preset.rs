@@ -67,12 +67,20 @@ impl DriveModel {
             }
         }
         // the drive's compliance splits the drive (its torque and friction go to the motor part)
+        // with the side shafts' damping ratio on s, d_s/c_s (section 4.3): the general rule's
+        // D_bb/K_bb, written as the rig has always computed it — the torsional search follows
+        // the last digits (the other rounding of the same ratio moved two of its tests'
+        // answers)
         let compliant = effects.compliance_stiffness_nm_per_rad > 0.0;
         if compliant {
+            let k = effects.compliance_stiffness_nm_per_rad;
+            let c_s = cl * share_l;
+            let d_s = e.d_left * share_l.powi(2) + e.d_right * share_r.powi(2);
             list.push(Effect::Compliance(Compliance {
                 body: 1,
-                stiffness: effects.compliance_stiffness_nm_per_rad,
+                stiffness: k,
                 motor_share: effects.compliance_motor_fraction,
+                damping: Some(d_s / c_s * k),
             }));
         }
         let declared = DriveModel {

@@ -14,7 +14,7 @@ use crate::line::{Coupling, LineBody, MAX_BODIES, MAX_COUPLINGS};
 /// `stiffness` with the body's own stiffness-proportional damping, d = k·D_bb/K_bb — the
 /// generic damping of the paper's section 4.3, D_bb and K_bb the body's diagonal entries of
 /// the line's damping and stiffness matrices: an undamped internal mode would be a resonance
-/// no measurement shows. The total inertia stays the declared one, and the declared couplings'
+/// no measurement shows — unless `damping` gives it. The total inertia stays the declared one, and the declared couplings'
 /// stiffness now acts in series with the spring ([`Moves::SeriesSpring`]).
 ///
 /// The split is structure, not a slot of the right-hand side: [`DriveModel::resolved`] writes
@@ -30,6 +30,9 @@ pub struct Compliance {
     /// The motor part's share of the body's inertia, between 0 and 1 (default 0.5).
     #[serde(default = "half")]
     pub motor_share: f64,
+    /// The spring's damping, N s/m (Nm s/rad); `None`: k·D_bb/K_bb.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub damping: Option<f64>,
 }
 
 fn half() -> f64 {
@@ -103,8 +106,18 @@ impl EffectModel for Compliance {
                 "the compliance at {name} makes the line longer than {MAX_BODIES} bodies or {MAX_COUPLINGS} couplings"
             )));
         }
-        let (k_bb, d_bb) = line.diagonal(b);
-        let damping = if k_bb > 0.0 { self.stiffness * d_bb / k_bb } else { 0.0 };
+        let damping = match self.damping {
+            Some(d) if d.is_finite() && d >= 0.0 => d,
+            Some(d) => {
+                return Err(PlantError::Invalid(format!(
+                    "the compliance at {name}: damping {d}: expected a finite value of at least 0"
+                )))
+            }
+            None => match line.diagonal(b) {
+                (k_bb, d_bb) if k_bb > 0.0 => self.stiffness * d_bb / k_bb,
+                _ => 0.0,
+            },
+        };
         let j = line.bodies[b].inertia;
         line.bodies[b].inertia = (1.0 - f) * j;
         line.bodies.push(LineBody { name: format!("{name}_motor"), inertia: f * j, drag: 0.0 });
@@ -168,7 +181,7 @@ mod tests {
     #[test]
     fn a_compliance_makes_the_three_mass_chain() {
         let (jm, jl, k1, k2, f) = (0.02, 0.5, 3000.0, 900.0, 0.3);
-        let split = Compliance { body: 0, stiffness: k2, motor_share: f };
+        let split = Compliance { body: 0, stiffness: k2, motor_share: f, damping: None };
         let m = motor_load(jm, jl, k1, 0.0, vec![split.into()]);
         let mut m = m.resolved().unwrap().into_owned();
         for b in &mut m.line.bodies {
@@ -197,7 +210,7 @@ mod tests {
     fn the_split_keeps_the_inertia_and_moves_what_drives_the_motor() {
         let (jm, beta) = (0.02, 4e-4);
         let friction = |body| Effect::from(CoulombFriction { body, friction: 0.1, smoothing_speed: 0.05 });
-        let split = Compliance { body: 0, stiffness: 700.0, motor_share: 0.25 };
+        let split = Compliance { body: 0, stiffness: 700.0, motor_share: 0.25, damping: None };
         let m = motor_load(jm, 0.5, 3000.0, beta, vec![friction(0), split.into(), friction(1)]);
         let r = m.resolved().unwrap();
         assert_eq!(r.line.bodies.len(), 3);
@@ -226,10 +239,18 @@ mod tests {
         geared.line.couplings[0].ratio = 4.0;
         let x = Dynamics::new(&geared).unwrap().initial_state(10.0, &[0.0, 0.0]);
         assert_eq!(&x[3..6], &[10.0, 2.5, 2.5]);
+        // a damping given is the spring's
+        let given = motor_load(jm, 0.5, 3000.0, beta, vec![Compliance { damping: Some(0.7), ..split }.into()]);
+        assert_eq!(given.resolved().unwrap().line.couplings[1].damping, 0.7);
         for share in [0.0, 1.0, 1.5] {
             let bad = motor_load(jm, 0.5, 3000.0, beta, vec![Compliance { motor_share: share, ..split }.into()]);
             let e = bad.resolved().unwrap_err().to_string();
             assert!(e.contains("motor_share"), "{e}");
+        }
+        for d in [-1.0, f64::NAN] {
+            let bad = motor_load(jm, 0.5, 3000.0, beta, vec![Compliance { damping: Some(d), ..split }.into()]);
+            let e = bad.resolved().unwrap_err().to_string();
+            assert!(e.contains("damping"), "{e}");
         }
     }
 }
