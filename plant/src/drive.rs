@@ -228,7 +228,7 @@ impl DriveModel {
     }
 
     /// The model with every structural effect written into its line ([`Compliance`]: a body
-    /// split in two, [`EffectModel::into_structure`]) and left out of its effects; borrowed
+    /// split in two, [`EffectModel::write_into_line`]) and left out of its effects; borrowed
     /// when it has none. What the dynamics, the FMU, the controller and the modal analysis
     /// take: a model file's and the paper rig's models are resolved as they are read or built.
     pub fn resolved(&self) -> Result<std::borrow::Cow<'_, DriveModel>> {
@@ -240,7 +240,7 @@ impl DriveModel {
         let effects = self.effects.iter().filter(|e| !e.is_structural()).copied().collect();
         let mut m = DriveModel { effects, ..self.clone() };
         for e in self.effects.iter().filter(|e| e.is_structural()) {
-            e.into_structure(&mut m)?;
+            e.write_into_line(&mut m)?;
         }
         m.validate()?;
         Ok(Cow::Owned(m))

@@ -89,7 +89,7 @@ impl EffectModel for Compliance {
 
     /// Splits the body (see [`Compliance`]); the motor part is the last body, the spring the
     /// last coupling.
-    fn into_structure(&self, m: &mut DriveModel) -> Result<()> {
+    fn write_into_line(&self, m: &mut DriveModel) -> Result<()> {
         let (b, f) = (self.body, self.motor_share);
         let line = &mut m.line;
         let name = line.bodies.get(b).map(|body| body.name.clone()).ok_or_else(|| {

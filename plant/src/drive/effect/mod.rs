@@ -224,7 +224,7 @@ pub trait EffectModel: Copy + Into<Effect> {
     /// What it may change of the declared mechanics (the diagnosis's plausibility).
     const MOVES: Moves = Moves::Nothing;
     /// Whether it changes the line's structure (a compliance splits a body): it is then written
-    /// into the line before the dynamics are built ([`EffectModel::into_structure`]), not into a
+    /// into the line before the dynamics are built ([`EffectModel::write_into_line`]), not into a
     /// slot of the right-hand side.
     const STRUCTURAL: bool = false;
     /// How the diagnosis searches a record for it.
@@ -254,7 +254,7 @@ pub trait EffectModel: Copy + Into<Effect> {
     /// A structural effect ([`EffectModel::STRUCTURAL`]) writes itself into `m`'s bodies,
     /// couplings, inputs and other effects ([`DriveModel::resolved`], which has left it out of
     /// `m`'s effects).
-    fn into_structure(&self, _m: &mut DriveModel) -> Result<()> {
+    fn write_into_line(&self, _m: &mut DriveModel) -> Result<()> {
         Ok(())
     }
 }
@@ -426,9 +426,9 @@ impl Effect {
         each!(self, e => structural(e))
     }
 
-    /// Writes a structural effect into `m` ([`EffectModel::into_structure`]).
-    pub(super) fn into_structure(&self, m: &mut DriveModel) -> Result<()> {
-        each!(self, e => e.into_structure(m))
+    /// Writes a structural effect into `m` ([`EffectModel::write_into_line`]).
+    pub(super) fn write_into_line(&self, m: &mut DriveModel) -> Result<()> {
+        each!(self, e => e.write_into_line(m))
     }
 }
 
