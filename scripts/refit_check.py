@@ -135,10 +135,12 @@ def check(seed, rigtwin, out):
                 scipy_c_short=float(declared["c_short"] * np.exp(best.x[1])))
 
 
-def main():
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+def checks_main(doc, check, default_seeds, header, row):
+    """Runs `check(seed, rigtwin, out)` on the seeds of the command line, each record in its own
+    process, and prints the rows (`header`, then `row(r)` each) as markdown."""
+    ap = argparse.ArgumentParser(description=doc.splitlines()[0])
     ap.add_argument("--rigtwin", required=True)
-    ap.add_argument("--seeds", default="17,31,38")
+    ap.add_argument("--seeds", default=default_seeds)
     ap.add_argument("--out", required=True)
     ap.add_argument("--json", help="write the rows here")
     ap.add_argument("--jobs", type=int, default=os.cpu_count() or 1, help="records checked at once")
@@ -148,16 +150,23 @@ def main():
     # the records are independent: each is written, diagnosed and re-fitted in its own process
     with ProcessPoolExecutor(max_workers=args.jobs) as pool:
         rows = list(pool.map(check, seeds, [args.rigtwin] * len(seeds), [args.out] * len(seeds)))
-    print("| seed | truth | declared cost here / rigtwin's | rigtwin's re-fit: j_drive, c_short | its cost here "
-          "| scipy's least_squares: j_drive, c_short | its cost | ratio |")
-    print("| --- | --- | --- | --- | --- | --- | --- | --- |")
+    print(header)
+    print("|" + " --- |" * header.count(" | ") + " --- |")
     for r in rows:
-        print(f"| {r['seed']} | {r['effect']} | {r['same_cost']:.5f} | {r['rigtwin_j_drive']:.4f} kg·m², "
-              f"{r['rigtwin_c_short']:.1f} N·m/rad | {r['rigtwin_cost']:.6f} | {r['scipy_j_drive']:.4f} kg·m², "
-              f"{r['scipy_c_short']:.1f} N·m/rad | {r['scipy_cost']:.6f} | {r['ratio']:.4f} |")
+        print(row(r))
     if args.json:
         with open(args.json, "w") as f:
             json.dump(rows, f, indent=1)
+
+
+def main():
+    checks_main(
+        __doc__, check, "17,31,38",
+        "| seed | truth | declared cost here / rigtwin's | rigtwin's re-fit: j_drive, c_short | its cost here "
+        "| scipy's least_squares: j_drive, c_short | its cost | ratio |",
+        lambda r: f"| {r['seed']} | {r['effect']} | {r['same_cost']:.5f} | {r['rigtwin_j_drive']:.4f} kg·m², "
+                  f"{r['rigtwin_c_short']:.1f} N·m/rad | {r['rigtwin_cost']:.6f} | {r['scipy_j_drive']:.4f} kg·m², "
+                  f"{r['scipy_c_short']:.1f} N·m/rad | {r['scipy_cost']:.6f} | {r['ratio']:.4f} |")
 
 
 if __name__ == "__main__":

@@ -21,13 +21,11 @@ Three numbers per record:
     python scripts/refit_check_lines.py --rigtwin target/release/rigtwin --seeds 0,7,14 --out /tmp/refit_lines
 """
 
-import argparse
 import json
 import os
 import subprocess
 import sys
 import tomllib
-from concurrent.futures import ProcessPoolExecutor
 
 import numpy as np
 from scipy.linalg import expm
@@ -35,9 +33,8 @@ from scipy.optimize import least_squares
 from scipy.signal import dlsim
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-import survey  # noqa: E402  (parse_seeds)
 import survey_lines  # noqa: E402  (the records)
-from refit_check import high_pass  # noqa: E402  (rigtwin's zero-phase high-pass, written again)
+from refit_check import checks_main, high_pass  # noqa: E402  (rigtwin's zero-phase high-pass, written again)
 
 # rigtwin's bound on a re-fitted inertia or stiffness, a factor either way (ident's MAX_REFIT_FACTOR)
 MAX_FACTOR = 100.0
@@ -170,27 +167,13 @@ def check(seed, rigtwin, out):
 
 
 def main():
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--rigtwin", required=True)
-    ap.add_argument("--seeds", default="0,7,14")
-    ap.add_argument("--out", required=True)
-    ap.add_argument("--json", help="write the rows here")
-    ap.add_argument("--jobs", type=int, default=os.cpu_count() or 1, help="records checked at once")
-    args = ap.parse_args()
-    os.makedirs(args.out, exist_ok=True)
-    seeds = survey.parse_seeds(args.seeds)
-    with ProcessPoolExecutor(max_workers=args.jobs) as pool:
-        rows = list(pool.map(check, seeds, [args.rigtwin] * len(seeds), [args.out] * len(seeds)))
-    print("| seed | line | truth | verdict | declared cost here / rigtwin's | rigtwin's re-fit: its cost here "
-          "| scipy's least_squares: its cost | ratio | largest difference of ln(parameter) |")
-    print("| --- | --- | --- | --- | --- | --- | --- | --- | --- |")
-    for r in rows:
-        print(f"| {r['seed']} | {r['bodies']} bodies, {r['gears']} gear stages | {r['truth']} | {r['verdict']} "
-              f"| {r['same_cost']:.5f} | {r['rigtwin_cost']:.6f} | {r['scipy_cost']:.6f} | {r['ratio']:.4f} "
-              f"| {r['largest_log_difference']:.3f} |")
-    if args.json:
-        with open(args.json, "w") as f:
-            json.dump(rows, f, indent=1)
+    checks_main(
+        __doc__, check, "0,7,14",
+        "| seed | line | truth | verdict | declared cost here / rigtwin's | rigtwin's re-fit: its cost here "
+        "| scipy's least_squares: its cost | ratio | largest difference of ln(parameter) |",
+        lambda r: f"| {r['seed']} | {r['bodies']} bodies, {r['gears']} gear stages | {r['truth']} | {r['verdict']} "
+                  f"| {r['same_cost']:.5f} | {r['rigtwin_cost']:.6f} | {r['scipy_cost']:.6f} | {r['ratio']:.4f} "
+                  f"| {r['largest_log_difference']:.3f} |")
 
 
 if __name__ == "__main__":
