@@ -109,15 +109,21 @@ class Record:
         return float(r @ r)
 
 
+def diagnosed(rigtwin, bundle):
+    """rigtwin's report of `bundle` (beside it, `.json`) and its `none` candidate: the declared
+    model re-fitted."""
+    report_path = bundle.replace(".toml", ".json")
+    p = subprocess.run([rigtwin, "diagnose", bundle, "--json", report_path], capture_output=True, text=True)
+    if p.returncode not in (0, 3):
+        raise RuntimeError(f"{bundle}: rigtwin failed: {p.stderr}")
+    report = json.load(open(report_path))
+    return report, next(c for c in report["candidates"] if c["effect"] == "none")
+
+
 def check(seed, rigtwin, out):
     t = survey.truth_of(seed)
     bundle = survey.write_bundle(out, t)
-    report_path = os.path.join(out, f"seed_{seed:04d}.json")
-    p = subprocess.run([rigtwin, "diagnose", bundle, "--json", report_path], capture_output=True, text=True)
-    if p.returncode not in (0, 3):
-        raise RuntimeError(f"seed {seed}: rigtwin failed: {p.stderr}")
-    report = json.load(open(report_path))
-    none = next(c for c in report["candidates"] if c["effect"] == "none")
+    report, none = diagnosed(rigtwin, bundle)
     declared = survey.DECLARED
     x_rig = [np.log(none["parameters"]["j_drive_kgm2"] / declared["j_drive"]),
              np.log(none["parameters"]["c_short_Nm_per_rad"] / declared["c_short"])]

@@ -21,9 +21,7 @@ Three numbers per record:
     python scripts/refit_check_lines.py --rigtwin target/release/rigtwin --seeds 0,7,14 --out /tmp/refit_lines
 """
 
-import json
 import os
-import subprocess
 import sys
 import tomllib
 
@@ -34,7 +32,7 @@ from scipy.signal import dlsim
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import survey_lines  # noqa: E402  (the records)
-from refit_check import checks_main, high_pass  # noqa: E402  (rigtwin's zero-phase high-pass, written again)
+from refit_check import checks_main, diagnosed, high_pass  # noqa: E402  (rigtwin's zero-phase high-pass, written again)
 
 # rigtwin's bound on a re-fitted inertia or stiffness, a factor either way (ident's MAX_REFIT_FACTOR)
 MAX_FACTOR = 100.0
@@ -140,12 +138,7 @@ class Record:
 def check(seed, rigtwin, out):
     t = survey_lines.truth_of(seed)
     bundle = survey_lines.write_bundle(out, t)
-    report_path = os.path.join(out, f"line_{seed:04d}.json")
-    p = subprocess.run([rigtwin, "diagnose", bundle, "--json", report_path], capture_output=True, text=True)
-    if p.returncode not in (0, 3):
-        raise RuntimeError(f"seed {seed}: rigtwin failed: {p.stderr}")
-    report = json.load(open(report_path))
-    none = next(c for c in report["candidates"] if c["effect"] == "none")
+    report, none = diagnosed(rigtwin, bundle)
     rec = Record(bundle)
     params = none["parameters"]
     names = [f"inertia_b{j + 1}_kg_m2" for j in range(rec.n)] + \
