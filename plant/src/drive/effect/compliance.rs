@@ -14,8 +14,9 @@ use crate::line::{Coupling, LineBody, MAX_BODIES, MAX_COUPLINGS};
 /// `stiffness` with the body's own stiffness-proportional damping, d = k·D_bb/K_bb — the
 /// generic damping of the paper's section 4.3, D_bb and K_bb the body's diagonal entries of
 /// the line's damping and stiffness matrices: an undamped internal mode would be a resonance
-/// no measurement shows — unless `damping` gives it. The total inertia stays the declared one, and the declared couplings'
-/// stiffness now acts in series with the spring ([`Moves::SeriesSpring`]).
+/// no measurement shows — unless `damping` gives it. The total inertia stays the declared one,
+/// and the declared couplings' stiffness now acts in series with the spring
+/// ([`Moves::SeriesSpring`]).
 ///
 /// The split is structure, not a slot of the right-hand side: [`DriveModel::resolved`] writes
 /// it into the line (the motor part appended as body `<body>_motor`, the spring as coupling
