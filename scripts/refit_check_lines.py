@@ -81,7 +81,7 @@ class Record:
         dd = self.e.T @ np.diag(self.damping) @ self.e + np.diag(self.drag)
         return j, k, kk, dd
 
-    def start(self, j, kk, dd):
+    def start(self, j, kk):
         """rigtwin's start: rigid motion at speed0 through the gears, the couplings twisted to
         carry the first torques while the line accelerates as one body (K q = f − M R α, q =
         K⁺(f − M R α), R the rigid-body modes: the null space of K)."""
@@ -122,7 +122,7 @@ class Record:
         phi = expm(big * self.dt)
         ad, bd = phi[: 2 * n, : 2 * n], phi[: 2 * n, 2 * n:]
         _, y, _ = dlsim((ad, bd, np.array(c), np.zeros((len(c), b.shape[1])), self.dt), self.u,
-                        x0=self.start(j, kk, dd))
+                        x0=self.start(j, kk))
         return [high_pass(y[:, i], self.dt, self.fc) for i in range(len(c))]
 
     def residual(self, x):

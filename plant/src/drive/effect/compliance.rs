@@ -92,6 +92,8 @@ impl EffectModel for Compliance {
     /// last coupling.
     fn write_into_line(&self, m: &mut DriveModel) -> Result<()> {
         let (b, f) = (self.body, self.motor_share);
+        // the spring's name from the body's signal label (`phi_<label>`, `T_<label>_compliance`)
+        let label = Element::Body(b).label(m);
         let line = &mut m.line;
         let name = line.bodies.get(b).map(|body| body.name.clone()).ok_or_else(|| {
             PlantError::Invalid(format!("a compliance at body {} of a line of {}", b + 1, line.bodies.len()))
@@ -129,7 +131,6 @@ impl EffectModel for Compliance {
         }
         let mut e = vec![0.0; n + 1];
         (e[b], e[n]) = (-1.0, 1.0);
-        let label: String = name.chars().map(|c| if c.is_ascii_alphanumeric() { c } else { '_' }).collect();
         line.couplings.push(Coupling {
             name: Some(format!("{label}_compliance")),
             elongation: Some(e),
