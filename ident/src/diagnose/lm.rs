@@ -18,7 +18,7 @@ pub fn minimise_to(
     max_iter: usize,
     rel_tol: f64,
 ) -> (Vec<f64>, f64) {
-    minimise(f, x0, max_iter, rel_tol, NOTCH_RAISES)
+    minimise(f, x0, max_iter, rel_tol, NOTCH_RAISES, f64::INFINITY, &[])
 }
 
 /// [`minimise_to`] for a smooth cost (a linear model's: the declared model re-fitted): the
@@ -31,7 +31,38 @@ pub fn minimise_smooth(
     max_iter: usize,
     rel_tol: f64,
 ) -> (Vec<f64>, f64) {
-    minimise(f, x0, max_iter, rel_tol, usize::MAX)
+    minimise(f, x0, max_iter, rel_tol, usize::MAX, f64::INFINITY, &[])
+}
+
+/// [`minimise_to`] (`smooth`: [`minimise_smooth`]) within a trust region: no step longer than
+/// `max_step` (Euclidean, in the fit's parameters) is evaluated; the damping is doubled until the
+/// step fits, which bends it from the Gauss–Newton step towards the gradient (the
+/// Levenberg–Marquardt step is the minimiser of the linearised cost within a ball, Moré 1978).
+/// Where a parameter is weakly determined, an almost Gauss–Newton step can move it by orders of
+/// magnitude, lower the cost and land the fit in another valley; scipy's `least_squares` starts
+/// its trust region at a step of one for the same reason.
+///
+/// `max_abs` (empty: none) bounds the parameters to |x_i| ≤ `max_abs[i]` (∞: free), a box about
+/// the start's origin (the declared values, in logarithms): the start is moved into it, a
+/// parameter on its bound that the gradient pushes outward is held for the step, and every
+/// step is clipped to the box (a projected Levenberg–Marquardt with an active set).
+pub fn minimise_within(
+    f: &(dyn Fn(&[f64]) -> Option<Vec<f64>> + Sync),
+    x0: &[f64],
+    max_iter: usize,
+    rel_tol: f64,
+    smooth: bool,
+    max_step: f64,
+    max_abs: &[f64],
+) -> (Vec<f64>, f64) {
+    minimise(f, x0, max_iter, rel_tol, if smooth { usize::MAX } else { NOTCH_RAISES }, max_step, max_abs)
+}
+
+/// `x` moved into the box |x_i| ≤ `max_abs[i]` (empty: unchanged).
+fn into_box(x: &mut [f64], max_abs: &[f64]) {
+    for (v, m) in x.iter_mut().zip(max_abs) {
+        *v = v.clamp(-m, *m);
+    }
 }
 
 /// Tenfold raises of the damping [`minimise_to`] tries in one iteration.
@@ -43,16 +74,28 @@ fn minimise(
     max_iter: usize,
     rel_tol: f64,
     raises: usize,
+    max_step: f64,
+    max_abs: &[f64],
 ) -> (Vec<f64>, f64) {
     let p = x0.len();
     let mut x = x0.to_vec();
+    into_box(&mut x, max_abs);
     let Some(mut r) = f(&x) else { return (x, f64::INFINITY) };
     let mut cost: f64 = r.iter().map(|v| v * v).sum();
     let mut lambda = 1e-3;
     for _ in 0..max_iter {
-        let Some((jtj, g)) = normal_equations(f, &x, &r, 1, &|_| 0).and_then(|mut n| n.pop()) else { break };
+        let Some((mut jtj, mut g)) = normal_equations(f, &x, &r, 1, &|_| 0).and_then(|mut n| n.pop()) else { break };
         if jtj.iter().chain(g.iter()).any(|v: &f64| !v.is_finite()) {
             break;
+        }
+        // a parameter on its bound that the descent direction −g pushes outward is held
+        for (i, m) in max_abs.iter().enumerate() {
+            if x[i].abs() >= *m && x[i] * -g[i] > 0.0 {
+                jtj.row_mut(i).fill(0.0);
+                jtj.column_mut(i).fill(0.0);
+                jtj[(i, i)] = 1.0;
+                g[i] = 0.0;
+            }
         }
         let mut improved = false;
         let mut tried = 0;
@@ -66,7 +109,14 @@ fn minimise(
                 lambda *= 10.0;
                 continue;
             };
-            let xn: Vec<f64> = x.iter().zip(step.iter()).map(|(a, b)| a + b).collect();
+            if step.norm() > max_step {
+                // outside the trust region: not evaluated, and not counted as a raise
+                tried -= 1;
+                lambda *= 2.0;
+                continue;
+            }
+            let mut xn: Vec<f64> = x.iter().zip(step.iter()).map(|(a, b)| a + b).collect();
+            into_box(&mut xn, max_abs);
             if let Some(rn) = f(&xn) {
                 let cn: f64 = rn.iter().map(|v| v * v).sum();
                 if cn < cost {

@@ -176,14 +176,15 @@ pub fn declared_moved(refitted: &[Refitted], s: &DeclaredSettings) -> Vec<String
     out
 }
 
-/// How strongly the record must prefer an effect's place over every other place of the same
-/// effect, with its default.
+/// How strongly the record must prefer the answer over every other explanation (the same
+/// effects at other places, other effects), with its default.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct PlaceSettings {
     /// Least difference of information criterion (≈ 2 ln of the Bayes factor, Kass & Raftery
-    /// 1995) between the answer and the best candidate of the same effects at other places
-    /// (default 6: "strong" evidence, posterior odds of 20 to 1 — the place is named with the
-    /// 95 % confidence the intervals have). Below it the record shows the effect but not where.
+    /// 1995) between the answer and the best rival explanation ([`undetermined`]; default 6:
+    /// "strong" evidence, posterior odds of 20 to 1 — the effect and its place are named with
+    /// the 95 % confidence the intervals have). Below it the record shows that something is
+    /// missing, but not what or where.
     pub min_evidence: f64,
 }
 
@@ -193,29 +194,49 @@ impl Default for PlaceSettings {
     }
 }
 
-/// Why `answer`'s place is no finding: a candidate among `rivals` with the same effects at
-/// other places scores within [`PlaceSettings::min_evidence`] of it (the closest named, as a
-/// sentence for the report; `None`: the record tells the place). Candidates without a place
-/// (`none`, `damping`) have no rivals.
-pub fn place_undetermined(answer: &CandidateScore, rivals: &[CandidateScore], s: &PlaceSettings) -> Option<String> {
-    let at = answer.at.as_ref()?;
+/// Why `answer` is no finding because the record does not tell it from another explanation: a
+/// candidate among `rivals` that is neither a part of the answer nor contains it — the same
+/// effects at other places, or other effects — scores within [`PlaceSettings::min_evidence`]
+/// of it (the closest named, as a sentence for the report; `None`: the record tells what and
+/// where). The declared model (`none`) is no finding to tell from others: an answer `none` has
+/// no rivals, and no answer has `none` as one (it beat `none` clearly to be chosen); nor are
+/// implausible candidates (which distort the mechanics) rivals.
+pub fn undetermined(answer: &CandidateScore, rivals: &[CandidateScore], s: &PlaceSettings) -> Option<String> {
+    if answer.effect == "none" {
+        return None;
+    }
+    let mine = parts(answer);
     let closest = rivals
         .iter()
-        .filter(|r| r.effect == answer.effect && r.at.as_ref().is_some_and(|a| a != at))
+        .filter(|r| r.effect != "none" && !r.implausible)
+        .filter(|r| {
+            let theirs = parts(r);
+            !theirs.iter().all(|p| mine.contains(p)) && !mine.iter().all(|p| theirs.contains(p))
+        })
         .min_by(|a, b| a.score.total_cmp(&b.score))?;
     let evidence = closest.score - answer.score;
+    let named = |c: &CandidateScore| match &c.at {
+        Some(at) => format!("{} at {at}", c.effect),
+        None => c.effect.clone(),
+    };
+    let what = if closest.effect == answer.effect { "where" } else { "what" };
     (evidence < s.min_evidence).then(|| {
         format!(
-            "the record does not tell where: {} at {} (error {:.4}) and at {} (error {:.4}) explain it alike \
-             (information criterion {evidence:.1} apart, less than the {} that names a place)",
-            answer.effect,
-            at,
+            "the record does not tell {what}: {} (error {:.4}) and {} (error {:.4}) explain it alike \
+             (information criterion {evidence:.1} apart, less than the {} that names a finding)",
+            named(answer),
             answer.error_after,
-            closest.at.as_deref().unwrap_or("?"),
+            named(closest),
             closest.error_after,
             s.min_evidence
         )
     })
+}
+
+/// The effects of a candidate with their places ("a + b" at "x + y"; `damping` alone).
+fn parts(c: &CandidateScore) -> Vec<(&str, &str)> {
+    let ats: Vec<&str> = c.at.as_deref().map_or_else(Vec::new, |a| a.split(" + ").collect());
+    c.effect.split(" + ").enumerate().map(|(i, e)| (e, ats.get(i).copied().unwrap_or(""))).collect()
 }
 
 /// The notes of a time-domain diagnosis that chose `effect`: `none` chosen (nothing beats
@@ -343,7 +364,7 @@ mod tests {
     }
 
     #[test]
-    fn a_place_is_named_only_with_strong_evidence_over_every_other() {
+    fn an_effect_and_its_place_are_named_only_with_strong_evidence_over_every_other() {
         let c = |effect: &str, at: Option<&str>, score| CandidateScore {
             effect: effect.into(),
             at: at.map(Into::into),
@@ -358,12 +379,25 @@ mod tests {
         let answer = c("backlash", Some("coupling 5"), -256.3);
         // the same effect elsewhere 2.5 apart: "positive" evidence only, no place
         let rivals = [answer.clone(), c("backlash", Some("coupling 4"), -253.8), c("none", None, -300.0)];
-        let why = place_undetermined(&answer, &rivals, &s).expect("two places alike");
-        assert!(why.contains("coupling 4"), "{why}");
-        // 6 or more apart, and other effects at any score, leave the place named
-        let rivals = [c("backlash", Some("coupling 4"), -250.3), c("coulomb_friction", Some("body b5"), -257.0)];
-        assert_eq!(place_undetermined(&answer, &rivals, &s), None);
-        // an answer without a place has no rivals
-        assert_eq!(place_undetermined(&c("damping", None, -1.0), &rivals, &s), None);
+        let why = undetermined(&answer, &rivals, &s).expect("two places alike");
+        assert!(why.contains("tell where") && why.contains("coupling 4"), "{why}");
+        // another effect 0.5 apart: the record does not tell what
+        let rivals = [c("backlash", Some("coupling 4"), -240.0), c("actuator_lag", Some("input 2"), -255.8)];
+        let why = undetermined(&answer, &rivals, &s).expect("two effects alike");
+        assert!(why.contains("tell what") && why.contains("input 2"), "{why}");
+        // 6 or more apart from every rival, or a rival only implausible, leaves the answer named
+        let mut distorted = c("coulomb_friction", Some("body b5"), -257.0);
+        distorted.implausible = true;
+        let rivals = [c("backlash", Some("coupling 4"), -250.3), distorted];
+        assert_eq!(undetermined(&answer, &rivals, &s), None);
+        // nested candidates are no rivals: the answer's own parts, and pairs that contain it
+        let pair = c("backlash + time_delay", Some("coupling 5 + input 1"), -256.0);
+        assert_eq!(undetermined(&answer, &[pair.clone()], &s), None);
+        assert_eq!(undetermined(&pair, &[answer.clone()], &s), None);
+        // but a pair with the answer's second effect elsewhere is
+        let elsewhere = c("backlash + time_delay", Some("coupling 5 + input 2"), -255.0);
+        assert!(undetermined(&pair, &[elsewhere], &s).is_some());
+        // the declared model, chosen where no effect beat it clearly, is no finding to tell apart
+        assert_eq!(undetermined(&c("none", None, -250.0), &[answer.clone()], &s), None);
     }
 }
