@@ -376,7 +376,9 @@ impl Problem<'_> {
             (_, best) => best,
         };
         let (s, cost) = match best {
-            Some((s0, _)) if !s0.is_empty() => lm::minimise_within(&own, &s0, SCREEN_ITERATIONS, LM_REL_TOL, false, TRUST_RADIUS, &[]),
+            Some((s0, _)) if !s0.is_empty() => {
+                lm::minimise_within(&own, &s0, SCREEN_ITERATIONS, LM_REL_TOL, false, TRUST_RADIUS, &[])
+            }
             Some((s0, cost)) => (s0, cost),
             None => (vec![], f64::INFINITY),
         };
@@ -664,7 +666,15 @@ pub fn diagnose(rec: DriveRecord, progress: &(dyn Fn(&str) + Sync)) -> Result<Dr
         let f = |x: &[f64]| problem.residual(Candidate::None, x);
         let zero = vec![0.0; nbase];
         let (x, cost) = if m0.effects.is_empty() {
-            lm::minimise_within(&f, &zero, super::torsional::DECLARED_REFIT_ITERATIONS, LM_REL_TOL, true, TRUST_RADIUS, &[])
+            lm::minimise_within(
+                &f,
+                &zero,
+                super::torsional::DECLARED_REFIT_ITERATIONS,
+                LM_REL_TOL,
+                true,
+                TRUST_RADIUS,
+                &[],
+            )
         } else {
             lm::minimise_within(&f, &zero, 20, LM_REL_TOL, false, TRUST_RADIUS, &[])
         };
@@ -710,8 +720,15 @@ pub fn diagnose(rec: DriveRecord, progress: &(dyn Fn(&str) + Sync)) -> Result<Dr
     let fit_from = |c: Candidate, x0: &[f64], held: usize| {
         let free = |s: &[f64]| problem.residual(c, &[&x0[..held], s].concat());
         let bounds = mechanics_box(c, nbase, x0.len());
-        let (s, cost) =
-            lm::minimise_within(&free, &x0[held..], 20, LM_REL_TOL, false, TRUST_RADIUS, &bounds[held.min(bounds.len())..]);
+        let (s, cost) = lm::minimise_within(
+            &free,
+            &x0[held..],
+            20,
+            LM_REL_TOL,
+            false,
+            TRUST_RADIUS,
+            &bounds[held.min(bounds.len())..],
+        );
         progress(&label(c));
         ([&x0[..held], &s[..]].concat(), cost)
     };

@@ -392,12 +392,12 @@ mod tests {
         assert_eq!(undetermined(&answer, &rivals, &s), None);
         // nested candidates are no rivals: the answer's own parts, and pairs that contain it
         let pair = c("backlash + time_delay", Some("coupling 5 + input 1"), -256.0);
-        assert_eq!(undetermined(&answer, &[pair.clone()], &s), None);
-        assert_eq!(undetermined(&pair, &[answer.clone()], &s), None);
+        assert_eq!(undetermined(&answer, std::slice::from_ref(&pair), &s), None);
+        assert_eq!(undetermined(&pair, std::slice::from_ref(&answer), &s), None);
         // but a pair with the answer's second effect elsewhere is
         let elsewhere = c("backlash + time_delay", Some("coupling 5 + input 2"), -255.0);
         assert!(undetermined(&pair, &[elsewhere], &s).is_some());
         // the declared model, chosen where no effect beat it clearly, is no finding to tell apart
-        assert_eq!(undetermined(&c("none", None, -250.0), &[answer.clone()], &s), None);
+        assert_eq!(undetermined(&c("none", None, -250.0), std::slice::from_ref(&answer), &s), None);
     }
 }
