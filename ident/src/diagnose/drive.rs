@@ -183,8 +183,11 @@ pub struct DriveDiagnosis {
     /// The best model still leaves a structured (non-white) residual.
     pub structured_residual: bool,
     /// How the answer's re-fit moved the declared inertias or stiffnesses beyond what its effect
-    /// explains ([`super::verdict::declared_moved`]): reported, not yet judged for an effect.
+    /// explains ([`super::verdict::declared_moved`]; only `none`'s re-fit is free to).
     pub moved_declared: Vec<String>,
+    /// The declared inertias and stiffnesses an effect's re-fit left at the edge of the factor
+    /// they are trusted to ([`super::verdict::declared_at_tolerance`]).
+    pub at_tolerance: Vec<String>,
     /// Why the answer is no finding although it fits: the declared model (`none`) fits only
     /// with its mechanics moved beyond what it may (`None` otherwise).
     pub distorted: Option<String>,
@@ -213,6 +216,12 @@ impl DriveDiagnosis {
         let mut notes = super::verdict::fit_notes(&self.effect, refitted, self.structured_residual, self.error_after);
         if !self.moved_declared.is_empty() {
             notes.push(format!("the answer's re-fit moved the declared mechanics: {}", self.moved_declared.join("; ")));
+        }
+        if !self.at_tolerance.is_empty() {
+            notes.push(format!(
+                "the answer's re-fit kept the declared mechanics within their tolerance and ended at its edge: {}",
+                self.at_tolerance.join("; ")
+            ));
         }
         notes.extend(self.search_notes.iter().cloned());
         for e in &self.model.effects {
@@ -482,6 +491,16 @@ impl Problem<'_> {
 /// them (their `EffectModel::MOVES` is `Moves::Nothing`), so each should stay within the
 /// tolerance; a candidate that moves them further is not chosen.
 fn moved_declared(declared: &DriveModel, fitted: &DriveModel) -> Vec<String> {
+    judge_declared(declared, fitted, declared_moved)
+}
+
+/// `rule` ([`declared_moved`], [`declared_at_tolerance`]) applied to the inertias and
+/// stiffnesses of `fitted` relative to `declared`.
+fn judge_declared(
+    declared: &DriveModel,
+    fitted: &DriveModel,
+    rule: fn(&[Refitted], &DeclaredSettings) -> Vec<String>,
+) -> Vec<String> {
     let (d, f) = (&declared.line, &fitted.line);
     let inertias: Vec<(String, f64)> = d
         .bodies
@@ -501,7 +520,7 @@ fn moved_declared(declared: &DriveModel, fitted: &DriveModel) -> Vec<String> {
         .map(|(name, ratio)| Refitted::Inertia { name, ratio: *ratio })
         .chain(stiffnesses.iter().map(|(name, ratio)| Refitted::Stiffness { name, ratio: *ratio, series_ratio: None }))
         .collect();
-    declared_moved(&refitted, &DeclaredSettings::default())
+    rule(&refitted, &DeclaredSettings::default())
 }
 
 /// The box an effect's re-fit keeps the declared inertias and stiffnesses in (the first `nbase`
@@ -910,6 +929,11 @@ pub fn diagnose(rec: DriveRecord, progress: &(dyn Fn(&str) + Sync)) -> Result<Dr
     let (chosen, model, rho, chosen_candidate, chosen_x, base_fitted) = scored[best].clone();
     let none_moved = moved_declared(m0, &scored[none].1);
     let moved_declared = moved_declared(m0, &model);
+    let at_tolerance = if chosen.effect == "none" {
+        Vec::new()
+    } else {
+        judge_declared(m0, &model, super::verdict::declared_at_tolerance)
+    };
 
     // The answer on data its fit did not see ([`super::check_held_out`], as for the torsional
     // sweep): it and the re-fitted declared model (where its re-fit is plausible) fitted again
@@ -992,6 +1016,7 @@ pub fn diagnose(rec: DriveRecord, progress: &(dyn Fn(&str) + Sync)) -> Result<Dr
         candidates,
         structured_residual,
         moved_declared,
+        at_tolerance,
         distorted,
         high_pass_hz,
         model,

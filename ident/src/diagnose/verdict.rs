@@ -176,6 +176,24 @@ pub fn declared_moved(refitted: &[Refitted], s: &DeclaredSettings) -> Vec<String
     out
 }
 
+/// Which of `refitted` a re-fit kept within the tolerance factor ended at its edge (within a
+/// millionth of it in the logarithm), each as a sentence for the report: the effect explains the
+/// record only with those declared quantities as far off as they are trusted to be, and the fit
+/// would have moved them further.
+pub fn declared_at_tolerance(refitted: &[Refitted], s: &DeclaredSettings) -> Vec<String> {
+    let f = s.tolerance_factor;
+    refitted
+        .iter()
+        .filter_map(|q| match *q {
+            Refitted::Inertia { name, ratio } | Refitted::Stiffness { name, ratio, series_ratio: None } => {
+                (ratio.is_finite() && ratio > 0.0 && ratio.ln().abs() >= f.ln() * (1.0 - 1e-6))
+                    .then(|| format!("{name} ×{ratio:.3} of its declared value, at the factor {f} it is trusted to"))
+            }
+            Refitted::Stiffness { .. } => None,
+        })
+        .collect()
+}
+
 /// How strongly the record must prefer the answer over every other explanation (the same
 /// effects at other places, other effects), with its default.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -345,6 +363,8 @@ mod tests {
         let j = |ratio| Refitted::Inertia { name: "j_drive", ratio };
         assert!(declared_moved(&[j(1.29), j(1.0 / 1.29)], &s).is_empty());
         assert_eq!(declared_moved(&[j(1.31), j(f64::NAN), j(0.0)], &s).len(), 3);
+        // a re-fit kept within the factor that ends on its edge (either way) says so
+        assert_eq!(declared_at_tolerance(&[j(1.3), j(1.0 / 1.3), j(1.29), j(f64::NAN)], &s).len(), 2);
     }
 
     #[test]
