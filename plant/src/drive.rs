@@ -227,16 +227,17 @@ impl DriveModel {
         self.effects.iter().any(Effect::is_nonlinear)
     }
 
-    /// The model with every structural effect written into its line ([`Compliance`]: a body
-    /// split in two, [`EffectModel::write_into_line`]) and left out of its effects; borrowed
-    /// when it has none. What the dynamics, the FMU, the controller and the modal analysis
-    /// take: a model file's and the paper rig's models are resolved as they are read or built.
+    /// The model, validated, with every structural effect written into its line
+    /// ([`Compliance`]: a body split in two, [`EffectModel::write_into_line`]) and left out of
+    /// its effects (the result validated again); borrowed when it has none. What the dynamics,
+    /// the FMU, the controller and the modal analysis take: a model file's and the paper rig's
+    /// models are resolved as they are read or built.
     pub fn resolved(&self) -> Result<std::borrow::Cow<'_, DriveModel>> {
         use std::borrow::Cow;
+        self.validate()?;
         if !self.effects.iter().any(Effect::is_structural) {
             return Ok(Cow::Borrowed(self));
         }
-        self.validate()?;
         let effects = self.effects.iter().filter(|e| !e.is_structural()).copied().collect();
         let mut m = DriveModel { effects, ..self.clone() };
         for e in self.effects.iter().filter(|e| e.is_structural()) {
@@ -526,9 +527,8 @@ pub struct Dynamics {
 pub const FINE_PER_COARSE: f64 = 8.0;
 
 impl Dynamics {
-    /// The dynamics of a validated model (resolved first: [`DriveModel::resolved`]).
+    /// The dynamics of a model, validated and resolved first ([`DriveModel::resolved`]).
     pub fn new(m: &DriveModel) -> Result<Dynamics> {
-        m.validate()?;
         let m = &*m.resolved()?;
         let n = m.line.bodies.len();
         let mut terms = Vec::new();
