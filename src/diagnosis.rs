@@ -487,7 +487,7 @@ pub fn human(r: &DiagnosisReport) -> String {
     let explained = r.verdict != ident::diagnose::verdict::Verdict::NotExplained;
     let mut s = if !explained {
         let mut s = format!(
-            "{kind}: NOT EXPLAINED — the record shows something no candidate explains with physical parameters\n"
+            "{kind}: NOT EXPLAINED — the record shows something missing that no candidate explains with physical parameters, or that several explain alike\n"
         );
         for why in &r.verdict_reasons {
             s += &format!("  {why}\n");

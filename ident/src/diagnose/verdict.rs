@@ -5,7 +5,8 @@
 //! - *declared model fits*: no effect improves the declared model clearly and what is left is
 //!   noise (a white residual);
 //! - *not explained*: a structured residual that no candidate explains with physical
-//!   parameters — no effect found, or the best one's parameters at or beyond a bound.
+//!   parameters — no effect found, or the best one's parameters at or beyond a bound — or that
+//!   several explain alike (the record does not tell what or where: [`undetermined`]).
 
 use std::collections::BTreeMap;
 
@@ -21,7 +22,8 @@ pub enum Verdict {
     Explained,
     /// The declared model fits: nothing is missing that the record shows.
     DeclaredModelFits,
-    /// The record shows something that no candidate explains with physical parameters.
+    /// The record shows something that no candidate explains with physical parameters, or that
+    /// several explain alike.
     NotExplained,
 }
 
