@@ -968,7 +968,7 @@ pub fn diagnose(rec: DriveRecord, progress: &(dyn Fn(&str) + Sync)) -> Result<Dr
 
     let distorted = (chosen.effect == "none" && !moved_declared.is_empty())
         .then(|| format!("the declared model fits only with its mechanics moved: {}", moved_declared.join("; ")));
-    let structured_residual = rho.abs() > 0.5 && chosen.error_after > 0.02;
+    let structured_residual = super::verdict::ResidualSettings::default().structured(rho, chosen.error_after);
     let before = simulate_declared()?;
     let after = after.unwrap_or_else(|| before.clone());
     let traces = DriveTraces {

@@ -1514,7 +1514,7 @@ pub fn diagnose(
     }
     let after = after.unwrap_or_else(|| [vec![0.0; n], vec![0.0; n]]);
     let rho = lag1_autocorrelation(&answer_residual.unwrap_or_else(|| problem.residual_of(&after)));
-    let structured_residual = rho.abs() > 0.5 && current.error() > 0.02;
+    let structured_residual = verdict::ResidualSettings::default().structured(rho, current.error());
     let traces = Traces {
         time_s: (0..n).map(|k| k as f64 * dt).collect(),
         measured: problem.measured.clone(),

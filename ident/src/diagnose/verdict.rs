@@ -259,6 +259,34 @@ fn parts(c: &CandidateScore) -> Vec<(&str, &str)> {
     c.effect.split(" + ").enumerate().map(|(i, e)| (e, ats.get(i).copied().unwrap_or(""))).collect()
 }
 
+/// When the residual the best model leaves is structured — something the model does not
+/// describe remains — with its defaults: the rule of both time-domain engines' verdicts.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ResidualSettings {
+    /// A residual whose lag-1 autocorrelation exceeds this in magnitude is structured (default
+    /// 0.5: white measurement noise gives about 0, and a residual sampled finer than what it
+    /// misses is close to 1).
+    pub structured_lag1: f64,
+    /// A residual whose normalised error is at most this is not judged (default 0.02: the model
+    /// then describes all but 2 % of the measured signals, and what is left holds the
+    /// measurement's own coloured noise and drift).
+    pub negligible_error: f64,
+}
+
+impl Default for ResidualSettings {
+    fn default() -> Self {
+        ResidualSettings { structured_lag1: 0.5, negligible_error: 0.02 }
+    }
+}
+
+impl ResidualSettings {
+    /// Whether a residual of lag-1 autocorrelation `rho` and normalised error `error` is
+    /// structured.
+    pub fn structured(&self, rho: f64, error: f64) -> bool {
+        rho.abs() > self.structured_lag1 && error > self.negligible_error
+    }
+}
+
 /// The notes of a time-domain diagnosis that chose `effect`: `none` chosen (nothing beats
 /// re-fitting `refitted`), a residual still far from white.
 pub fn fit_notes(effect: &str, refitted: &str, structured_residual: bool, error_after: f64) -> Vec<String> {
@@ -268,7 +296,8 @@ pub fn fit_notes(effect: &str, refitted: &str, structured_residual: bool, error_
     }
     if structured_residual {
         notes.push(format!(
-            "the best model still leaves a structured residual (lag-1 autocorrelation above 0.5, error {error_after:.3})"
+            "the best model still leaves a structured residual (lag-1 autocorrelation above {}, error {error_after:.3})",
+            ResidualSettings::default().structured_lag1
         ));
     }
     notes
