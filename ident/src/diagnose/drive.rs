@@ -929,7 +929,7 @@ pub fn diagnose(rec: DriveRecord, progress: &(dyn Fn(&str) + Sync)) -> Result<Dr
     let (chosen, model, rho, chosen_candidate, chosen_x, base_fitted) = scored[best].clone();
     let none_moved = moved_declared(m0, &scored[none].1);
     let moved_declared = moved_declared(m0, &model);
-    let at_tolerance = if chosen.effect == "none" {
+    let at_tolerance = if matches!(chosen_candidate, Candidate::None) {
         Vec::new()
     } else {
         judge_declared(m0, &model, super::verdict::declared_at_tolerance)

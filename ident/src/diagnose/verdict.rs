@@ -150,7 +150,7 @@ pub enum Refitted<'a> {
 /// measured) but not softer than declared within it, and the pair no stiffer.
 pub fn declared_moved(refitted: &[Refitted], s: &DeclaredSettings) -> Vec<String> {
     let f = s.tolerance_factor;
-    let within = |r: f64| r.is_finite() && r > 0.0 && r.ln().abs() <= f.ln();
+    let within = |r: f64| log_factor(r).is_some_and(|l| l <= f.ln());
     let mut out = Vec::new();
     for q in refitted {
         match *q {
@@ -184,16 +184,24 @@ pub fn declared_moved(refitted: &[Refitted], s: &DeclaredSettings) -> Vec<String
 /// would have moved them further.
 pub fn declared_at_tolerance(refitted: &[Refitted], s: &DeclaredSettings) -> Vec<String> {
     let f = s.tolerance_factor;
+    // beyond the factor is [`declared_moved`]'s to report
+    let at_edge = |r: f64| log_factor(r).is_some_and(|l| l <= f.ln() && l >= f.ln() * (1.0 - 1e-6));
     refitted
         .iter()
         .filter_map(|q| match *q {
             Refitted::Inertia { name, ratio } | Refitted::Stiffness { name, ratio, series_ratio: None } => {
-                (ratio.is_finite() && ratio > 0.0 && ratio.ln().abs() >= f.ln() * (1.0 - 1e-6))
+                at_edge(ratio)
                     .then(|| format!("{name} ×{ratio:.3} of its declared value, at the factor {f} it is trusted to"))
             }
             Refitted::Stiffness { .. } => None,
         })
         .collect()
+}
+
+/// How far a re-fitted quantity is off its declared value: |ln ratio|, `None` where the ratio
+/// is no positive finite number (never plausible).
+fn log_factor(ratio: f64) -> Option<f64> {
+    (ratio.is_finite() && ratio > 0.0).then(|| ratio.ln().abs())
 }
 
 /// How strongly the record must prefer the answer over every other explanation (the same
@@ -394,8 +402,13 @@ mod tests {
         let j = |ratio| Refitted::Inertia { name: "j_drive", ratio };
         assert!(declared_moved(&[j(1.29), j(1.0 / 1.29)], &s).is_empty());
         assert_eq!(declared_moved(&[j(1.31), j(f64::NAN), j(0.0)], &s).len(), 3);
-        // a re-fit kept within the factor that ends on its edge (either way) says so
-        assert_eq!(declared_at_tolerance(&[j(1.3), j(1.0 / 1.3), j(1.29), j(f64::NAN)], &s).len(), 2);
+        // a re-fit kept within the factor that ends on its edge (either way) says so: the drive
+        // engine's box lies a billionth inside the factor (exactly 1/1.3 is a rounding beyond it,
+        // a move)
+        let edge = 1.3f64.powf(1.0 - 1e-9);
+        assert_eq!(declared_at_tolerance(&[j(edge), j(1.0 / edge), j(1.29), j(f64::NAN)], &s).len(), 2);
+        // and a ratio beyond the factor is a move (`declared_moved`), not an edge
+        assert!(declared_at_tolerance(&[j(2.0), j(0.4)], &s).is_empty());
     }
 
     #[test]
