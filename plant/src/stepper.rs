@@ -17,9 +17,9 @@
 use nalgebra::{DMatrix, DVector};
 
 use crate::delay_line::DelayLine;
-use crate::drive::{HeldInputs, MAX_INPUTS};
+use crate::drive::{ExactSteps, HeldInputs, MAX_INPUTS};
 use crate::error::{PlantError, Result};
-use crate::integrate::{PieceMaps, PiecewiseRk4};
+use crate::integrate::PiecewiseRk4;
 use crate::line::MAX_BODIES;
 use crate::zoh_step::{longest_exact_piece, ZohCache, CACHE, MAX_PIECES};
 use crate::{DriveModel, Dynamics, Quantity};
@@ -92,11 +92,11 @@ pub struct Stepper {
     /// The nonlinear model's integrator.
     rk: PiecewiseRk4,
     cache: ZohCache,
-    /// Exact steps of the pieces of a model whose only nonlinearity is play that engages at
-    /// once (`Dynamics::play_maps`), per piece length (at most [`CACHE`] lengths).
-    play_maps: Vec<PieceMaps>,
-    /// Whether `play_maps` applies to this model.
-    has_play_maps: bool,
+    /// Whole steps of a model whose only nonlinearity is play that engages at once or friction
+    /// (`Dynamics::exact_steps`), per piece length (at most [`CACHE`] lengths).
+    exact_steps: Vec<ExactSteps>,
+    /// Whether `exact_steps` applies to this model.
+    has_exact_steps: bool,
     /// No input has a dead time.
     undelayed: bool,
     breaks: Vec<f64>,
@@ -148,7 +148,7 @@ impl Stepper {
         }
         let rk = dynamics.integrator();
         let nu = dynamics.ninputs();
-        let has_play_maps = dynamics.pieces_are_linear();
+        let has_exact_steps = dynamics.has_exact_steps();
         let undelayed = (0..nu).all(|j| dynamics.delay_s(j) <= 0.0);
         Ok(Stepper {
             npos: n,
@@ -162,8 +162,8 @@ impl Stepper {
             a,
             b,
             cache: ZohCache::default(),
-            play_maps: Vec::new(),
-            has_play_maps,
+            exact_steps: Vec::new(),
+            has_exact_steps,
             undelayed,
             breaks: Vec::new(),
             segments: Vec::new(),
@@ -377,9 +377,9 @@ impl Stepper {
                 *value = if tau > 0.0 { delays[j].value_at(mid - tau, u[j]) } else { u[j] };
             }
             if nonlinear {
-                let maps = self.play_maps_for(len);
+                let maps = self.exact_steps_for(len);
                 self.rk.advance(
-                    &mut HeldInputs { d: &self.dynamics, u: &self.u_piece, maps: maps.map(|i| &self.play_maps[i]) },
+                    &mut HeldInputs { d: &self.dynamics, u: &self.u_piece, maps: maps.map(|i| &self.exact_steps[i]) },
                     state.as_mut_slice(),
                     len,
                 );
@@ -414,19 +414,19 @@ impl Stepper {
 
     /// The index of the exact piece steps of length `h` (built on first use, [`CACHE`]
     /// lengths kept); `None` where the model's pieces are not linear (RK4 alone then).
-    fn play_maps_for(&mut self, h: f64) -> Option<usize> {
-        if !self.has_play_maps {
+    fn exact_steps_for(&mut self, h: f64) -> Option<usize> {
+        if !self.has_exact_steps {
             return None;
         }
-        if let Some(i) = self.play_maps.iter().position(|m| m.h() == h) {
+        if let Some(i) = self.exact_steps.iter().position(|m| m.h() == h) {
             return Some(i);
         }
-        let maps = self.dynamics.play_maps(&[h])?.pop()?;
-        if self.play_maps.len() >= CACHE {
-            self.play_maps.remove(0);
+        let maps = self.dynamics.exact_steps(&[h])?.pop()?;
+        if self.exact_steps.len() >= CACHE {
+            self.exact_steps.remove(0);
         }
-        self.play_maps.push(maps);
-        Some(self.play_maps.len() - 1)
+        self.exact_steps.push(maps);
+        Some(self.exact_steps.len() - 1)
     }
 
     /// (Ad, Bd) of the linear model in z over `h` (the common step's matrices: a reference

@@ -769,10 +769,26 @@ pub fn diagnose(rec: DriveRecord, progress: &(dyn Fn(&str) + Sync)) -> Result<Dr
         let (x, cost) = fit_all(cands[i], &start);
         (i, x, cost)
     };
+    // the re-fits longest first: a nonlinear effect's simulations take many short steps (a
+    // friction's re-fit on the real-sized line was half of the whole diagnosis), then by their
+    // parameters (a Jacobian column each)
+    let longest_first = |jobs: &[usize]| -> Vec<usize> {
+        let mut order: Vec<usize> = (0..jobs.len()).collect();
+        let cost = |k: &usize| {
+            let c = cands[jobs[*k]];
+            let nonlinear = c.effects().iter().any(|e| e.is_nonlinear());
+            let parameters = screened.iter().find(|s| s.0 == jobs[*k]).map_or(0, |s| s.1.len());
+            (std::cmp::Reverse(nonlinear), std::cmp::Reverse(parameters))
+        };
+        order.sort_by_key(cost);
+        order
+    };
     // (candidate, parameters, cost, whether the inertias and stiffnesses were fitted or held at
     // their re-fit — else at the declared values)
-    let mut fits: Vec<(usize, Vec<f64>, f64, bool)> =
-        super::on_two_workers(refit.len(), &fit_one).into_iter().map(|(i, x, c)| (i, x, c, true)).collect();
+    let mut fits: Vec<(usize, Vec<f64>, f64, bool)> = super::on_two_workers_in_order(&longest_first(&refit), &fit_one)
+        .into_iter()
+        .map(|(i, x, c)| (i, x, c, true))
+        .collect();
     for s in &screened {
         if !refit.contains(&s.0) {
             let base_fitted = matches!(cands[s.0], Candidate::None) || base_refitted;
