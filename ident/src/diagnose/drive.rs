@@ -35,7 +35,7 @@ pub const HIGH_PASS_MIN_HZ: f64 = 0.02;
 pub const SCREEN_ITERATIONS: usize = 8;
 
 /// The longest step of every fit of the drive engine, in the parameters' logarithms (a factor e
-/// on one parameter): its trust region ([`lm::minimise_within`]). The declared model's re-fit
+/// on one parameter): its trust region ([`lm::Fit::within`]). The declared model's re-fit
 /// left its minimum's basin without it (`scripts/refit_check_lines.py`, seeds 2 and 28).
 pub const TRUST_RADIUS: f64 = 1.0;
 
@@ -386,7 +386,7 @@ impl Problem<'_> {
         };
         let (s, cost) = match best {
             Some((s0, _)) if !s0.is_empty() => {
-                lm::minimise_within(&own, &s0, SCREEN_ITERATIONS, LM_REL_TOL, false, TRUST_RADIUS, &[])
+                lm::minimise(&own, &s0, lm::Fit::new(SCREEN_ITERATIONS, LM_REL_TOL).within(TRUST_RADIUS))
             }
             Some((s0, cost)) => (s0, cost),
             None => (vec![], f64::INFINITY),
@@ -685,17 +685,10 @@ pub fn diagnose(rec: DriveRecord, progress: &(dyn Fn(&str) + Sync)) -> Result<Dr
         let f = |x: &[f64]| problem.residual(Candidate::None, x);
         let zero = vec![0.0; nbase];
         let (x, cost) = if m0.effects.is_empty() {
-            lm::minimise_within(
-                &f,
-                &zero,
-                super::torsional::DECLARED_REFIT_ITERATIONS,
-                LM_REL_TOL,
-                true,
-                TRUST_RADIUS,
-                &[],
-            )
+            let fit = lm::Fit::new(super::torsional::DECLARED_REFIT_ITERATIONS, LM_REL_TOL).smooth(true);
+            lm::minimise(&f, &zero, fit.within(TRUST_RADIUS))
         } else {
-            lm::minimise_within(&f, &zero, 20, LM_REL_TOL, false, TRUST_RADIUS, &[])
+            lm::minimise(&f, &zero, lm::Fit::new(20, LM_REL_TOL).within(TRUST_RADIUS))
         };
         progress(&label(Candidate::None));
         (x, cost)
@@ -739,15 +732,8 @@ pub fn diagnose(rec: DriveRecord, progress: &(dyn Fn(&str) + Sync)) -> Result<Dr
     let fit_from = |c: Candidate, x0: &[f64], held: usize| {
         let free = |s: &[f64]| problem.residual(c, &[&x0[..held], s].concat());
         let bounds = mechanics_box(c, nbase, x0.len());
-        let (s, cost) = lm::minimise_within(
-            &free,
-            &x0[held..],
-            20,
-            LM_REL_TOL,
-            false,
-            TRUST_RADIUS,
-            &bounds[held.min(bounds.len())..],
-        );
+        let fit = lm::Fit::new(20, LM_REL_TOL).within(TRUST_RADIUS);
+        let (s, cost) = lm::minimise(&free, &x0[held..], fit.boxed(&bounds[held.min(bounds.len())..]));
         progress(&label(c));
         ([&x0[..held], &s[..]].concat(), cost)
     };

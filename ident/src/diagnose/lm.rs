@@ -7,57 +7,6 @@ use nalgebra::{DMatrix, DVector};
 /// gradient step's scale; the fit has converged or the cost is flat to rounding).
 pub const LAMBDA_MAX: f64 = 1e10;
 
-/// Minimises ‖f(x)‖² from `x0`; `f` returns `None` where the model cannot be evaluated.
-/// Returns the best x and its sum of squares. Stops after `max_iter` iterations, when a step
-/// gains less than `rel_tol` of the cost, or when [`NOTCH_RAISES`] tenfold raises of the damping
-/// find no step that lowers it: the cost of a model with play or friction has notches, and a fit
-/// caught beside one is moved on by the search's restarts, not by ever shorter steps.
-pub fn minimise_to(
-    f: &(dyn Fn(&[f64]) -> Option<Vec<f64>> + Sync),
-    x0: &[f64],
-    max_iter: usize,
-    rel_tol: f64,
-) -> (Vec<f64>, f64) {
-    minimise(f, x0, max_iter, rel_tol, NOTCH_RAISES, f64::INFINITY, &[])
-}
-
-/// [`minimise_to`] for a smooth cost (a linear model's: the declared model re-fitted): the
-/// damping is raised until a step lowers the cost (up to [`LAMBDA_MAX`]). In a long curved valley,
-/// after a run of good steps has taken it to its floor, eight raises leave it at 0.1, and the
-/// fit stopped at twice the minimum (a survey record's declared model, `scripts/refit_check.py`).
-pub fn minimise_smooth(
-    f: &(dyn Fn(&[f64]) -> Option<Vec<f64>> + Sync),
-    x0: &[f64],
-    max_iter: usize,
-    rel_tol: f64,
-) -> (Vec<f64>, f64) {
-    minimise(f, x0, max_iter, rel_tol, usize::MAX, f64::INFINITY, &[])
-}
-
-/// [`minimise_to`] (`smooth`: [`minimise_smooth`]) within a trust region: no step longer than
-/// `max_step` (Euclidean, in the fit's parameters) is evaluated; the damping is doubled until the
-/// step fits, which bends it from the Gauss–Newton step towards the gradient (the
-/// Levenberg–Marquardt step is the minimiser of the linearised cost within a ball, Moré 1978).
-/// Where a parameter is weakly determined, an almost Gauss–Newton step can move it by orders of
-/// magnitude, lower the cost and land the fit in another valley; scipy's `least_squares` starts
-/// its trust region at a step of one for the same reason.
-///
-/// `max_abs` (empty: none) bounds the parameters to |x_i| ≤ `max_abs[i]` (∞: free), a box about
-/// the start's origin (the declared values, in logarithms): the start is moved into it, a
-/// parameter on its bound that the gradient pushes outward is held for the step, and every
-/// step is clipped to the box (a projected Levenberg–Marquardt with an active set).
-pub fn minimise_within(
-    f: &(dyn Fn(&[f64]) -> Option<Vec<f64>> + Sync),
-    x0: &[f64],
-    max_iter: usize,
-    rel_tol: f64,
-    smooth: bool,
-    max_step: f64,
-    max_abs: &[f64],
-) -> (Vec<f64>, f64) {
-    minimise(f, x0, max_iter, rel_tol, if smooth { usize::MAX } else { NOTCH_RAISES }, max_step, max_abs)
-}
-
 /// `x` moved into the box |x_i| ≤ `max_abs[i]` (empty: unchanged).
 fn into_box(x: &mut [f64], max_abs: &[f64]) {
     for (v, m) in x.iter_mut().zip(max_abs) {
@@ -65,18 +14,71 @@ fn into_box(x: &mut [f64], max_abs: &[f64]) {
     }
 }
 
-/// Tenfold raises of the damping [`minimise_to`] tries in one iteration.
+/// Tenfold raises of the damping a notched fit tries in one iteration ([`Fit::raises`]).
 pub const NOTCH_RAISES: usize = 8;
 
-fn minimise(
-    f: &(dyn Fn(&[f64]) -> Option<Vec<f64>> + Sync),
-    x0: &[f64],
-    max_iter: usize,
-    rel_tol: f64,
-    raises: usize,
-    max_step: f64,
-    max_abs: &[f64],
-) -> (Vec<f64>, f64) {
+/// How a fit runs ([`minimise`]). [`Fit::new`] is the notched fit of a model with play or
+/// friction, without a trust region or a box; the builders add each.
+#[derive(Debug, Clone, Copy)]
+pub struct Fit<'a> {
+    /// Most iterations.
+    pub max_iter: usize,
+    /// A step that gains less than this share of the cost ends the fit.
+    pub rel_tol: f64,
+    /// Tenfold raises of the damping tried in one iteration before the fit stops:
+    /// [`NOTCH_RAISES`] (the cost of a model with play or friction has notches, and a fit caught
+    /// beside one is moved on by the search's restarts, not by ever shorter steps), or without
+    /// limit up to [`LAMBDA_MAX`] for a smooth cost ([`Fit::smooth`]).
+    pub raises: usize,
+    /// The trust region's radius: no step longer than this (Euclidean, in the fit's
+    /// parameters) is evaluated (∞: none; [`Fit::within`]).
+    pub max_step: f64,
+    /// Bounds |x_i| ≤ `max_abs[i]` (∞: free; empty: none; [`Fit::boxed`]).
+    pub max_abs: &'a [f64],
+}
+
+impl<'a> Fit<'a> {
+    /// At most `max_iter` iterations, ended by a step that gains less than `rel_tol` of the
+    /// cost or by [`NOTCH_RAISES`] raises of the damping that find no lower cost.
+    pub fn new(max_iter: usize, rel_tol: f64) -> Fit<'static> {
+        Fit { max_iter, rel_tol, raises: NOTCH_RAISES, max_step: f64::INFINITY, max_abs: &[] }
+    }
+
+    /// For a smooth cost (a linear model's: the declared model re-fitted): the damping is
+    /// raised until a step lowers the cost (up to [`LAMBDA_MAX`]). In a long curved valley,
+    /// after a run of good steps has taken it to its floor, eight raises leave it at 0.1, and
+    /// the fit stopped at twice the minimum (a survey record's declared model,
+    /// `scripts/refit_check.py`).
+    pub fn smooth(self, smooth: bool) -> Self {
+        Fit { raises: if smooth { usize::MAX } else { NOTCH_RAISES }, ..self }
+    }
+
+    /// Within a trust region: no step longer than `max_step` is evaluated; the damping is
+    /// doubled until the step fits, which bends it from the Gauss–Newton step towards the
+    /// gradient (the Levenberg–Marquardt step is the minimiser of the linearised cost within a
+    /// ball, Moré 1978). Where a parameter is weakly determined, an almost Gauss–Newton step can
+    /// move it by orders of magnitude, lower the cost and land the fit in another valley;
+    /// scipy's `least_squares` starts its trust region at a step of one for the same reason.
+    pub fn within(self, max_step: f64) -> Self {
+        Fit { max_step, ..self }
+    }
+
+    /// Within the box |x_i| ≤ `max_abs[i]` about the start's origin (the declared values, in
+    /// logarithms): the start is moved into it, a parameter on its bound that the gradient
+    /// pushes outward is held for the step, and every step is clipped to the box (a projected
+    /// Levenberg–Marquardt with an active set).
+    pub fn boxed<'b>(self, max_abs: &'b [f64]) -> Fit<'b>
+    where
+        'a: 'b,
+    {
+        Fit { max_abs, ..self }
+    }
+}
+
+/// Minimises ‖f(x)‖² from `x0` as `fit` says; `f` returns `None` where the model cannot be
+/// evaluated. Returns the best x and its sum of squares.
+pub fn minimise(f: &(dyn Fn(&[f64]) -> Option<Vec<f64>> + Sync), x0: &[f64], fit: Fit) -> (Vec<f64>, f64) {
+    let Fit { max_iter, rel_tol, raises, max_step, max_abs } = fit;
     let p = x0.len();
     let mut x = x0.to_vec();
     into_box(&mut x, max_abs);

@@ -916,7 +916,7 @@ pub fn diagnose(
 
     let fit_with = |effects: Vec<Candidate>, x0: Vec<f64>, iterations: usize| -> Fit {
         let f = |x: &[f64]| problem.residual(&problem.build(&effects, x));
-        let (x, cost) = lm::minimise_to(&f, &x0, iterations, LM_REL_TOL);
+        let (x, cost) = lm::minimise(&f, &x0, lm::Fit::new(iterations, LM_REL_TOL));
         let k = x.len();
         Fit { effects, x, cost, score: score(cost, k) }
     };
@@ -1045,7 +1045,7 @@ pub fn diagnose(
             return best;
         };
         let held = |y: &[f64]| problem.residual(&problem.build(&effects, &[&[0.0, 0.0], y].concat()));
-        let (y, cost) = lm::minimise_to(&held, &start, LM_ITERATIONS, LM_REL_TOL);
+        let (y, cost) = lm::minimise(&held, &start, lm::Fit::new(LM_ITERATIONS, LM_REL_TOL));
         let pinned =
             Fit { effects: effects.clone(), x: [vec![0.0, 0.0], y].concat(), cost, score: score(cost, start.len()) };
         if pinned.cost.is_finite() && !best.beats(&pinned) {
@@ -1061,7 +1061,7 @@ pub fn diagnose(
     let phase_free = |effects: &[Candidate]| effects.contains(&Candidate::Backlash) && problem.spectra_norm > 0.0;
     let phase_free_fit = |effects: &[Candidate], x0: &[f64]| -> Fit {
         let spectral = |x: &[f64]| problem.spectral_residual(&problem.build(effects, x));
-        let (located, cost) = lm::minimise_to(&spectral, x0, LM_ITERATIONS, LM_REL_TOL);
+        let (located, cost) = lm::minimise(&spectral, x0, lm::Fit::new(LM_ITERATIONS, LM_REL_TOL));
         if cost.is_finite() {
             fit_with(effects.to_vec(), located, LM_ITERATIONS)
         } else {
@@ -1153,10 +1153,10 @@ pub fn diagnose(
     };
 
     // the declared model re-fitted: `none`
-    // to its minimum: its cost is smooth ([`lm::minimise_smooth`])
+    // to its minimum: its cost is smooth ([`lm::Fit::smooth`])
     let none = {
         let f = |x: &[f64]| problem.residual(&problem.build(&[], x));
-        let (x, cost) = lm::minimise_smooth(&f, &[0.0, 0.0], DECLARED_REFIT_ITERATIONS, LM_REL_TOL);
+        let (x, cost) = lm::minimise(&f, &[0.0, 0.0], lm::Fit::new(DECLARED_REFIT_ITERATIONS, LM_REL_TOL).smooth(true));
         Fit { effects: Vec::new(), score: score(cost, x.len()), x, cost }
     };
     if !none.cost.is_finite() {
