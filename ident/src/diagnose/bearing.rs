@@ -337,6 +337,7 @@ pub fn diagnose(
                 fitted_parameters: *k,
                 implausible: false,
                 implausible_because: Vec::new(),
+                parts: vec![(name.clone(), String::new())],
             }
         })
         .collect();

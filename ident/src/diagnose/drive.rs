@@ -795,13 +795,18 @@ pub fn diagnose(rec: DriveRecord, progress: &(dyn Fn(&str) + Sync)) -> Result<Dr
         let m = problem.build(c, &x)?;
         let rho = problem.simulate(&m).map_or(0.0, |s| lag1_autocorrelation(&problem.residual_of(&s)));
         let own = c.effects();
-        let effect = own.iter().map(|e| e.name()).collect::<Vec<_>>().join(" + ");
-        let at = (!own.is_empty()).then(|| own.iter().map(|e| e.element(&m)).collect::<Vec<_>>().join(" + "));
+        let parts: Vec<(String, String)> = if own.is_empty() {
+            vec![(c.name().to_string(), String::new())]
+        } else {
+            own.iter().map(|e| (e.name().to_string(), e.element(&m))).collect()
+        };
+        let effect = parts.iter().map(|p| p.0.as_str()).collect::<Vec<_>>().join(" + ");
+        let at = (!own.is_empty()).then(|| parts.iter().map(|p| p.1.as_str()).collect::<Vec<_>>().join(" + "));
         // the one rule of what an effect may move (`verdict::declared_moved`); the declared
         // model's own re-fit is judged as the answer (`distorted`), not here
         let moved = if matches!(c, Candidate::None) { Vec::new() } else { moved_declared(m0, &m) };
         let score = CandidateScore {
-            effect: if own.is_empty() { c.name().to_string() } else { effect },
+            effect,
             at,
             parameters: problem.report(c, &m),
             error_after: cost.sqrt(),
@@ -809,6 +814,7 @@ pub fn diagnose(rec: DriveRecord, progress: &(dyn Fn(&str) + Sync)) -> Result<Dr
             fitted_parameters: fitted,
             implausible: !moved.is_empty(),
             implausible_because: moved,
+            parts,
         };
         Some((score, m, rho, c, x, base_fitted))
     };

@@ -60,6 +60,11 @@ pub struct CandidateScore {
     /// effect explains ([`verdict::declared_moved`]).
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub implausible_because: Vec<String>,
+    /// Each of its effects and where it acts ("" where nowhere in particular; `damping` and
+    /// `none` are one part of that name): `effect` and `at` join them with " + " for the
+    /// report, and [`verdict::undetermined`] compares these, whatever the elements are named.
+    #[serde(skip)]
+    pub parts: Vec<(String, String)>,
 }
 
 /// Bayesian information criterion of a residual of `n` values whose effective count is

@@ -1435,6 +1435,10 @@ pub fn diagnose(
             fitted_parameters: f.x.len(),
             implausible: !why.is_empty(),
             implausible_because: why,
+            parts: vec![f.effects.last().map_or_else(
+                || ("none".to_string(), String::new()),
+                |c| (c.name().to_string(), c.at().unwrap_or_default()),
+            )],
         }
     };
     let mut candidates: Vec<CandidateScore> =
@@ -1457,6 +1461,7 @@ pub fn diagnose(
             // it is the re-fitted declared model, judged as that
             implausible: !none_moved.is_empty(),
             implausible_because: none_moved.clone(),
+            parts: vec![(c.name().to_string(), c.at().unwrap_or_default())],
         });
     }
     candidates.sort_by(|a, b| a.score.total_cmp(&b.score));

@@ -233,12 +233,12 @@ pub fn undetermined(answer: &CandidateScore, rivals: &[CandidateScore], s: &Plac
     if answer.effect == "none" {
         return None;
     }
-    let mine = parts(answer);
+    let mine = &answer.parts;
     let closest = rivals
         .iter()
         .filter(|r| r.effect != "none" && !r.implausible)
         .filter(|r| {
-            let theirs = parts(r);
+            let theirs = &r.parts;
             !theirs.iter().all(|p| mine.contains(p)) && !mine.iter().all(|p| theirs.contains(p))
         })
         .min_by(|a, b| a.score.total_cmp(&b.score))?;
@@ -259,12 +259,6 @@ pub fn undetermined(answer: &CandidateScore, rivals: &[CandidateScore], s: &Plac
             s.min_evidence
         )
     })
-}
-
-/// The effects of a candidate with their places ("a + b" at "x + y"; `damping` alone).
-fn parts(c: &CandidateScore) -> Vec<(&str, &str)> {
-    let ats: Vec<&str> = c.at.as_deref().map_or_else(Vec::new, |a| a.split(" + ").collect());
-    c.effect.split(" + ").enumerate().map(|(i, e)| (e, ats.get(i).copied().unwrap_or(""))).collect()
 }
 
 /// When the residual the best model leaves is structured — something the model does not
@@ -438,6 +432,11 @@ mod tests {
             fitted_parameters: 1,
             implausible: false,
             implausible_because: Vec::new(),
+            parts: effect
+                .split(" + ")
+                .zip(at.map_or_else(|| vec![""; 2], |a| a.split(" + ").collect()))
+                .map(|(e, a)| (e.to_string(), a.to_string()))
+                .collect(),
         };
         let s = PlaceSettings::default();
         let answer = c("backlash", Some("coupling 5"), -256.3);
@@ -463,5 +462,15 @@ mod tests {
         assert!(undetermined(&pair, &[elsewhere], &s).is_some());
         // the declared model, chosen where no effect beat it clearly, is no finding to tell apart
         assert_eq!(undetermined(&c("none", None, -250.0), std::slice::from_ref(&answer), &s), None);
+        // places are compared as the candidates name them, not as the report's joined text
+        // reads: a body whose name holds " + " is one place, another body no part of it
+        let mut odd = c("coulomb_friction", None, -256.3);
+        odd.at = Some("body pinion + hub".into());
+        odd.parts = vec![("coulomb_friction".into(), "body pinion + hub".into())];
+        let mut near = c("coulomb_friction", None, -255.0);
+        near.at = Some("body pinion".into());
+        near.parts = vec![("coulomb_friction".into(), "body pinion".into())];
+        let why = undetermined(&odd, &[near], &s).expect("two places alike");
+        assert!(why.contains("tell where") && why.contains("at body pinion (error"), "{why}");
     }
 }
