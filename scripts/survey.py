@@ -278,7 +278,18 @@ def arguments(doc):
     ap.add_argument("--out", required=True)
     ap.add_argument("--jobs", type=int, default=os.cpu_count() or 1, help="processes simulating the records")
     ap.add_argument("--summary", help="write the counts (right, not explained, wrong, records) as JSON here")
+    ap.add_argument("--reuse", action="store_true", help="diagnose the records already in --out (written by an "
+                    "earlier run with the same seeds) instead of simulating them again")
     return ap
+
+
+def bundles_of(args, truths, write_bundle, name):
+    """The bundles of `truths` in `args.out`: those an earlier run wrote there (`--reuse`; `name`
+    the file name of a seed's), else written now on `args.jobs` processes."""
+    if args.reuse:
+        return [os.path.join(args.out, name(t["seed"])) for t in truths]
+    with ProcessPoolExecutor(max_workers=args.jobs) as pool:
+        return list(pool.map(write_bundle, [args.out] * len(truths), truths))
 
 
 def write_summary(path, rows):
@@ -300,8 +311,7 @@ def main():
     truths = [truth_of(seed) for seed in seeds]
     # the records are simulated on every core (the simulations are independent and
     # single-threaded); the diagnoses then run one at a time (each uses two threads)
-    with ProcessPoolExecutor(max_workers=args.jobs) as pool:
-        bundles = list(pool.map(write_bundle, [args.out] * len(truths), truths))
+    bundles = bundles_of(args, truths, write_bundle, lambda seed: f"seed_{seed:04d}.toml")
     rows = diagnose_all(args.rigtwin, seeds, truths, bundles, score, describe)
     print(table(rows, [(e, lambda t, e=e: t["effect"] == e) for e in EFFECTS]))
     if args.summary:

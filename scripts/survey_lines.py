@@ -17,12 +17,11 @@ survey's tuning part; seeds from 1000 on are held out (run once after a change, 
 """
 
 import os
-from concurrent.futures import ProcessPoolExecutor
 
 import numpy as np
 from scipy.integrate import solve_ivp
 
-from survey import arguments, diagnose_all, measured, parse_seeds, table, write_summary
+from survey import arguments, bundles_of, diagnose_all, measured, parse_seeds, table, write_summary
 
 DT = 1e-3
 DURATION_S = 10.0
@@ -384,18 +383,11 @@ def describe(t, report):
 
 
 def main():
-    ap = arguments(__doc__)
-    ap.add_argument("--reuse", action="store_true", help="diagnose the records already in --out (written by an "
-                    "earlier run with the same seeds) instead of simulating them again")
-    args = ap.parse_args()
+    args = arguments(__doc__).parse_args()
     os.makedirs(args.out, exist_ok=True)
     seeds = parse_seeds(args.seeds)
     truths = [truth_of(seed) for seed in seeds]
-    if args.reuse:
-        bundles = [os.path.join(args.out, f"line_{seed:04d}.toml") for seed in seeds]
-    else:
-        with ProcessPoolExecutor(max_workers=args.jobs) as pool:
-            bundles = list(pool.map(write_bundle, [args.out] * len(truths), truths))
+    bundles = bundles_of(args, truths, write_bundle, lambda seed: f"line_{seed:04d}.toml")
     rows = diagnose_all(args.rigtwin, seeds, truths, bundles, score, describe)
     groups = [("none", lambda t: not t["effects"])]
     groups += [(k, lambda t, k=k: [e["effect"] for e in t["effects"]] == [k]) for k in KINDS]

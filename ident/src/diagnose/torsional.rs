@@ -98,6 +98,11 @@ pub struct TorsionalDiagnosis {
     /// Why the answer is no finding although it fits the record: its effects do not predict
     /// the held-out folds better than the re-fitted declared model (`None`: they do).
     pub unsupported: Option<String>,
+    /// Why the answer is no finding: another effect, or the same elsewhere, explains the record
+    /// about as well ([`verdict::undetermined`], the rule of every engine; `None`: the record
+    /// tells what and where).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub undetermined: Option<String>,
     /// Every effect found, in the order found, with its parameters in the final model.
     pub effects: Vec<FoundEffect>,
     /// The answer's path: declared (re-fitted) → +A → +A+B, the kept effects in the order
@@ -190,7 +195,7 @@ impl TorsionalDiagnosis {
             self.structured_residual,
             judged,
             &scales,
-            self.distorted.iter().chain(&self.unsupported),
+            self.distorted.iter().chain(&self.unsupported).chain(&self.undetermined),
             &verdict::BoundSettings::default(),
         )
     }
@@ -470,6 +475,17 @@ impl Candidate {
         match self {
             Candidate::CoulombFriction(m) => Some(m.name().to_string()),
             _ => None,
+        }
+    }
+
+    /// Its effects, each with where it acts ([`CandidateScore::parts`]): a friction at both load
+    /// machines is a friction at each (each its own), so it contains one at either.
+    fn parts(self) -> Vec<(String, String)> {
+        match self {
+            Candidate::CoulombFriction(m) => {
+                m.indices().iter().map(|&k| (self.name().to_string(), MACHINE_NAMES[k].to_string())).collect()
+            }
+            _ => vec![(self.name().to_string(), String::new())],
         }
     }
 
@@ -1435,10 +1451,7 @@ pub fn diagnose(
             fitted_parameters: f.x.len(),
             implausible: !why.is_empty(),
             implausible_because: why,
-            parts: vec![f.effects.last().map_or_else(
-                || ("none".to_string(), String::new()),
-                |c| (c.name().to_string(), c.at().unwrap_or_default()),
-            )],
+            parts: f.effects.last().map_or_else(|| vec![("none".to_string(), String::new())], |c| c.parts()),
         }
     };
     let mut candidates: Vec<CandidateScore> =
@@ -1461,10 +1474,33 @@ pub fn diagnose(
             // it is the re-fitted declared model, judged as that
             implausible: !none_moved.is_empty(),
             implausible_because: none_moved.clone(),
-            parts: vec![(c.name().to_string(), c.at().unwrap_or_default())],
+            parts: c.parts(),
         });
     }
     candidates.sort_by(|a, b| a.score.total_cmp(&b.score));
+    // the answer against every candidate fitted beside the declared model: no finding where
+    // another explains the record about as well
+    let undetermined = {
+        let parts: Vec<(String, String)> = current.effects.iter().flat_map(|c| c.parts()).collect();
+        // named as the candidates' table names a single effect, a set by its labels
+        let (effect, at) = match current.effects.as_slice() {
+            [] => ("none".to_string(), None),
+            [c] => (c.name().to_string(), c.at()),
+            many => (many.iter().map(|c| label(*c)).collect::<Vec<_>>().join(" + "), None),
+        };
+        let answer = CandidateScore {
+            effect,
+            at,
+            parameters: BTreeMap::new(),
+            error_after: current.error(),
+            score: current.score,
+            fitted_parameters: current.x.len(),
+            implausible: false,
+            implausible_because: Vec::new(),
+            parts,
+        };
+        verdict::undetermined(&answer, &candidates, &verdict::PlaceSettings::default())
+    };
 
     let model = problem.build(&current.effects, &current.x);
     // The answer on data its fit did not see ([`super::check_held_out`]): it and the re-fitted
@@ -1551,6 +1587,7 @@ pub fn diagnose(
         intervals,
         held_out: check.held_out,
         unsupported: check.unsupported,
+        undetermined,
         effects,
         path,
         search,
