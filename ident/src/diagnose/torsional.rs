@@ -101,7 +101,6 @@ pub struct TorsionalDiagnosis {
     /// Why the answer is no finding: another effect, or the same elsewhere, explains the record
     /// about as well ([`verdict::undetermined`], the rule of every engine; `None`: the record
     /// tells what and where).
-    #[serde(skip_serializing_if = "Option::is_none")]
     pub undetermined: Option<String>,
     /// Every effect found, in the order found, with its parameters in the final model.
     pub effects: Vec<FoundEffect>,
