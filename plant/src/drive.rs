@@ -1600,6 +1600,26 @@ mod tests {
         }
     }
 
+    /// `steps` classical RK4 steps of `h` of ẋ = f(x, u) for two bodies (x = [q1, q2, w1, w2]),
+    /// written out here as the tests' reference, independent of `integrate`.
+    fn rk4_written_out(
+        f: &dyn Fn([f64; 4], f64) -> [f64; 4],
+        mut x: [f64; 4],
+        u: f64,
+        h: f64,
+        steps: usize,
+    ) -> [f64; 4] {
+        let add = |a: [f64; 4], k: [f64; 4], s: f64| std::array::from_fn::<f64, 4, _>(|i| a[i] + s * k[i]);
+        for _ in 0..steps {
+            let k1 = f(x, u);
+            let k2 = f(add(x, k1, h / 2.0), u);
+            let k3 = f(add(x, k2, h / 2.0), u);
+            let k4 = f(add(x, k3, h), u);
+            x = std::array::from_fn(|i| x[i] + h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]));
+        }
+        x
+    }
+
     /// A rattling play stepped exactly within its pieces ([`Dynamics::play_maps`])
     /// against RK4 written out here over 10 µs steps, the dead zone as its own branches: two
     /// bodies, a spring with 20 mrad of play damped to 35 % of critical (lighter damping makes
@@ -1639,14 +1659,7 @@ mod tests {
         let mut worst = 0.0f64;
         for (k, &uk) in u.iter().enumerate() {
             worst = worst.max((y[0][k] - x[2]).abs().max((y[1][k] - x[3]).abs()));
-            for _ in 0..sub {
-                let add = |a: [f64; 4], k: [f64; 4], s: f64| std::array::from_fn::<f64, 4, _>(|i| a[i] + s * k[i]);
-                let k1 = f(x, uk);
-                let k2 = f(add(x, k1, h / 2.0), uk);
-                let k3 = f(add(x, k2, h / 2.0), uk);
-                let k4 = f(add(x, k3, h), uk);
-                x = std::array::from_fn(|i| x[i] + h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]));
-            }
+            x = rk4_written_out(&f, x, uk, h, sub);
             let now_inside = (x[0] - x[1]).abs() < b / 2.0;
             contacts += usize::from(inside && !now_inside);
             inside = now_inside;
@@ -1694,14 +1707,7 @@ mod tests {
             let mut held = HeldInputs { d: &dynamics, u: &[uk], maps: Some(&steps[0]) };
             whole += usize::from(held.exact(0, &x, dt, &mut out));
             let before = x[3];
-            for _ in 0..sub {
-                let add = |a: [f64; 4], k: [f64; 4], s: f64| std::array::from_fn::<f64, 4, _>(|i| a[i] + s * k[i]);
-                let k1 = f(x, uk);
-                let k2 = f(add(x, k1, h / 2.0), uk);
-                let k3 = f(add(x, k2, h / 2.0), uk);
-                let k4 = f(add(x, k3, h), uk);
-                x = std::array::from_fn(|i| x[i] + h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]));
-            }
+            x = rk4_written_out(&f, x, uk, h, sub);
             reversals += usize::from((before > 0.0) != (x[3] > 0.0));
         }
         assert!(reversals >= 5, "the load reversed {reversals} times: the test must stick and slip");
