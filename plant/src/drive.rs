@@ -636,11 +636,8 @@ impl Dynamics {
         let f = &mut rest[..n];
         for i in 0..n {
             dq[i] = v[i];
-            let (fc, vs) = self.friction[i];
-            // Coulomb friction smoothed as F_c v/√(v² + v_s²): the slope F_c/v_s at rest of
-            // tanh(v/v_s), without its exponential
-            let friction = if fc > 0.0 { fc * v[i] / (v[i] * v[i] + vs * vs).sqrt() } else { 0.0 };
-            f[i] = -self.drag[i] * v[i] - friction;
+            let friction = if self.friction[i].0 > 0.0 { self.friction_force(i, v[i]) } else { 0.0 };
+            f[i] = -self.drag[i] * v[i] + friction;
         }
         for (&(body, _, tau, z), &u) in self.inputs.iter().zip(u) {
             f[body] += if tau > 0.0 { x[z] } else { u };
@@ -779,7 +776,18 @@ impl Dynamics {
         if self.pieces_are_linear() {
             return Some(self.play_maps(lengths)?.into_iter().map(|m| ExactSteps::Play(Box::new(m))).collect());
         }
-        lengths.iter().map(|&h| self.sliding_steps(h)).collect()
+        if !self.slides_exactly() {
+            return None;
+        }
+        // the frictionless linear part (A, B), each friction a force on its body (F)
+        let (n, ns) = (self.n, self.nstates);
+        let (a, b) = self.linear();
+        let bodies: Vec<usize> = (0..n).filter(|&i| self.friction[i].0 > 0.0).collect();
+        let mut f = DMatrix::zeros(ns, bodies.len());
+        for (j, &i) in bodies.iter().enumerate() {
+            f[(n + i, j)] = self.inv_j[i];
+        }
+        lengths.iter().map(|&h| self.sliding_steps(h, &a, &b, &f, &bodies)).collect()
     }
 
     /// Whether [`Dynamics::exact_steps`] has steps for this model.
@@ -795,35 +803,33 @@ impl Dynamics {
             && self.nstates <= AFFINE_MAX_STATES
     }
 
-    /// The step of `h` while every body with friction slides: the frictionless linear part
-    /// (A, B) stepped exactly, the frictions −F_c v/√(v² + v_s²) as forces on their bodies
-    /// (ETD2RK, [`ForcedMaps`]); each body's band where the step may not be taken so, where the
-    /// friction's slope times `h` exceeds [`SLIDING_SLOPE_TIMES_STEP`] (and never inside its
-    /// steep band, [`Dynamics::piece`]).
-    fn sliding_steps(&self, h: f64) -> Option<ExactSteps> {
-        if !self.slides_exactly() {
-            return None;
-        }
-        let (n, ns) = (self.n, self.nstates);
-        let (a, b) = self.linear();
-        let bodies: Vec<(usize, f64)> = (0..n)
-            .filter(|&i| self.friction[i].0 > 0.0)
-            .map(|i| {
+    /// The step of `h` while every body with friction (`bodies`) slides: the frictionless
+    /// linear part (A, B) stepped exactly, the frictions −F_c v/√(v² + v_s²) as forces on their
+    /// bodies (F; ETD2RK, [`ForcedMaps`]); each body's band where the step may not be taken so,
+    /// where the friction's slope times `h` exceeds [`SLIDING_SLOPE_TIMES_STEP`] (and never
+    /// inside its steep band, [`Dynamics::piece`]).
+    fn sliding_steps(
+        &self,
+        h: f64,
+        a: &DMatrix<f64>,
+        b: &DMatrix<f64>,
+        f: &DMatrix<f64>,
+        bodies: &[usize],
+    ) -> Option<ExactSteps> {
+        let bodies = bodies
+            .iter()
+            .map(|&i| {
                 let (fc, vs) = self.friction[i];
                 let wide =
                     friction_band(h * RK4_STEP_TIMES_RATE / SLIDING_SLOPE_TIMES_STEP, fc, vs, 1.0 / self.inv_j[i]);
                 (i, wide.max(self.friction_band[i]))
             })
             .collect();
-        let mut f = DMatrix::zeros(ns, bodies.len());
-        for (j, &(i, _)) in bodies.iter().enumerate() {
-            f[(n + i, j)] = self.inv_j[i];
-        }
-        Some(ExactSteps::Sliding { maps: Box::new(ForcedMaps::new(h, &a, &b, &f)?), bodies })
+        Some(ExactSteps::Sliding { maps: Box::new(ForcedMaps::new(h, a, b, f)?), bodies })
     }
 
-    /// Body `i`'s friction force at speed `v`: F_c v/√(v² + v_s²) against the motion
-    /// ([`Dynamics::rhs`]'s).
+    /// Body `i`'s friction force at speed `v`, against the motion: Coulomb friction smoothed as
+    /// F_c v/√(v² + v_s²), the slope F_c/v_s at rest of tanh(v/v_s) without its exponential.
     #[inline]
     fn friction_force(&self, i: usize, v: f64) -> f64 {
         let (fc, vs) = self.friction[i];

@@ -325,14 +325,7 @@ impl ForcedMaps {
         for j in 0..k {
             mh[(ns + m + j, ns + m + k + j)] = 1.0;
         }
-        let norm = mh.column_iter().map(|c| c.lp_norm(1)).fold(0.0, f64::max);
-        if !(norm.is_finite() && norm <= crate::statespace::ZOH_MAX_NORM) {
-            return None;
-        }
-        let e = mh.exp();
-        if e.iter().any(|v| !v.is_finite()) {
-            return None;
-        }
+        let e = crate::statespace::block_exponential(&mh, h).ok()?;
         let top = e.view((0, 0), (ns, size));
         let phi = top.columns(0, ns).into_owned();
         let gamma = top.columns(ns, m + k).into_owned();

@@ -43,6 +43,14 @@ pub fn zoh(a: &DMatrix<f64>, b: &DMatrix<f64>, dt_s: f64) -> Result<(DMatrix<f64
     let mut aug = DMatrix::zeros(n + m, n + m);
     aug.view_mut((0, 0), (n, n)).copy_from(&(a * dt_s));
     aug.view_mut((0, n), (n, m)).copy_from(&(b * dt_s));
+    let e = block_exponential(&aug, dt_s)?;
+    Ok((e.view((0, 0), (n, n)).into_owned(), e.view((0, n), (n, m)).into_owned()))
+}
+
+/// The exponential of an augmented matrix already scaled by the step `dt_s` (Van Loan's block
+/// exponential: [`zoh`]'s, `integrate::ForcedMaps`'), refused where ‖·‖₁ exceeds
+/// [`ZOH_MAX_NORM`] or the result overflows.
+pub(crate) fn block_exponential(aug: &DMatrix<f64>, dt_s: f64) -> Result<DMatrix<f64>> {
     let norm = aug.column_iter().map(|c| c.lp_norm(1)).fold(0.0, f64::max);
     if norm.is_nan() || norm > ZOH_MAX_NORM {
         return Err(PlantError::Numerical(format!(
@@ -54,7 +62,7 @@ pub fn zoh(a: &DMatrix<f64>, b: &DMatrix<f64>, dt_s: f64) -> Result<(DMatrix<f64
     if e.iter().any(|v| !v.is_finite()) {
         return Err(PlantError::Numerical(format!("the discretisation over {dt_s} s overflows")));
     }
-    Ok((e.view((0, 0), (n, n)).into_owned(), e.view((0, n), (n, m)).into_owned()))
+    Ok(e)
 }
 
 /// Least-squares solution of a x ≈ b by SVD (singular values at or below `eps` dropped), with

@@ -1433,26 +1433,38 @@ pub fn diagnose(
         last.score = current.score;
     }
 
-    // the first round's table: every candidate beside the declared parameters
+    // a fit as a row of the candidates' table: a single effect by its name and place, a set
+    // by its labels
     let entry = |f: &Fit| -> CandidateScore {
         let why = problem.moved(f);
         let m = problem.build(&f.effects, &f.x);
         let mut parameters = declared_keys(&m);
-        if let Some(c) = f.effects.last() {
+        for c in &f.effects {
             parameters.extend(c.report(&m));
         }
+        let (effect, at) = match f.effects.as_slice() {
+            [] => ("none".to_string(), None),
+            [c] => (c.name().to_string(), c.at()),
+            many => (many.iter().map(|c| label(*c)).collect::<Vec<_>>().join(" + "), None),
+        };
+        let parts = if f.effects.is_empty() {
+            vec![("none".to_string(), String::new())]
+        } else {
+            f.effects.iter().flat_map(|c| c.parts()).collect()
+        };
         CandidateScore {
-            effect: f.effects.last().map_or("none", |c| c.name()).to_string(),
-            at: f.effects.last().and_then(|c| c.at()),
+            effect,
+            at,
             parameters,
             error_after: f.error(),
             score: f.score,
             fitted_parameters: f.x.len(),
             implausible: !why.is_empty(),
             implausible_because: why,
-            parts: f.effects.last().map_or_else(|| vec![("none".to_string(), String::new())], |c| c.parts()),
+            parts,
         }
     };
+    // the first round's table: every candidate beside the declared parameters
     let mut candidates: Vec<CandidateScore> =
         std::iter::once(&none).chain(first_round.iter().filter(|f| f.cost.is_finite())).map(entry).collect();
     // A candidate the data cannot show scores as the re-fitted declared model with one more
@@ -1479,27 +1491,7 @@ pub fn diagnose(
     candidates.sort_by(|a, b| a.score.total_cmp(&b.score));
     // the answer against every candidate fitted beside the declared model: no finding where
     // another explains the record about as well
-    let undetermined = {
-        let parts: Vec<(String, String)> = current.effects.iter().flat_map(|c| c.parts()).collect();
-        // named as the candidates' table names a single effect, a set by its labels
-        let (effect, at) = match current.effects.as_slice() {
-            [] => ("none".to_string(), None),
-            [c] => (c.name().to_string(), c.at()),
-            many => (many.iter().map(|c| label(*c)).collect::<Vec<_>>().join(" + "), None),
-        };
-        let answer = CandidateScore {
-            effect,
-            at,
-            parameters: BTreeMap::new(),
-            error_after: current.error(),
-            score: current.score,
-            fitted_parameters: current.x.len(),
-            implausible: false,
-            implausible_because: Vec::new(),
-            parts,
-        };
-        verdict::undetermined(&answer, &candidates, &verdict::PlaceSettings::default())
-    };
+    let undetermined = verdict::undetermined(&entry(&current), &candidates, &verdict::PlaceSettings::default());
 
     let model = problem.build(&current.effects, &current.x);
     // The answer on data its fit did not see ([`super::check_held_out`]): it and the re-fitted
