@@ -29,7 +29,7 @@ from concurrent.futures import ProcessPoolExecutor
 import numpy as np
 from scipy.linalg import expm
 from scipy.optimize import least_squares
-from scipy.signal import dlsim, lfilter, lfilter_zi
+from scipy.signal import lfilter, lfilter_zi
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import survey  # noqa: E402  (the records and the declared model)
@@ -62,6 +62,43 @@ def high_pass(x, dt, fc):
     # (lfilter's start differs by rounding: 1e-10 of the signal)
     assert np.allclose(fast(x[:50]), one_pass(x[:50]), rtol=1e-8, atol=1e-8 * np.max(np.abs(x[:50])))
     return fast(fast(x)[::-1])[::-1]
+
+
+def lti_outputs(ad, bd, c, u, x0, block=64):
+    """The outputs y_k = C x_k of x_(k+1) = A x_k + B u_k from x_0 = `x0` (scipy's `dlsim` without
+    a feed-through, 20–50 times faster): the record cut into blocks of `block` samples, each
+    block's state at its start carried on by A^block, inside a block the free response
+    C A^j x_start and the forced one Σ_(i<j) C A^(j-1-i) B u_i as matrix products."""
+    u = np.asarray(u, dtype=float).reshape(len(u), -1)
+    steps, m = u.shape
+    ns, p, big = ad.shape[0], c.shape[0], block
+    ca = np.empty((big, p, ns))  # C A^j
+    ca[0] = c
+    for j in range(1, big):
+        ca[j] = ca[j - 1] @ ad
+    markov = np.zeros((big, p, m))  # C A^(j-1) B
+    markov[1:] = ca[:-1] @ bd
+    # lower-triangular block Toeplitz: toeplitz[j, :, i, :] = C A^(j-1-i) B for i < j
+    toeplitz = np.zeros((big, p, big, m))
+    for j in range(1, big):
+        toeplitz[j, :, :j, :] = markov[j:0:-1].transpose(1, 0, 2)
+    blocks = -(-steps // big)
+    padded = np.zeros((blocks * big, m))
+    padded[:steps] = u
+    ub = padded.reshape(blocks, big * m)
+    # the state at each block's start
+    a_pow = np.eye(ns)
+    gathered = np.empty((ns, big, m))  # A^(big-1-i) B
+    for i in range(big - 1, -1, -1):
+        gathered[:, i, :] = a_pow @ bd
+        a_pow = a_pow @ ad
+    pushed = ub @ gathered.reshape(ns, big * m).T  # Σ_i A^(big-1-i) B u_i per block
+    starts = np.empty((blocks, ns))
+    starts[0] = x0
+    for k in range(1, blocks):
+        starts[k] = a_pow @ starts[k - 1] + pushed[k - 1]
+    y = starts @ ca.reshape(big * p, ns).T + ub @ toeplitz.reshape(big * p, big * m).T
+    return y.reshape(blocks * big, p)[:steps]
 
 
 class Record:
@@ -97,7 +134,7 @@ class Record:
         e = expm(big * self.dt)
         ad, bd = e[:4, :4], e[:4, 4]
         xk = np.array([self.u[0] / 2 / cs, self.speed0, self.speed0, self.speed0])
-        _, y, _ = dlsim((ad, bd.reshape(4, 1), np.eye(4)[[1, 3]], np.zeros((2, 1)), self.dt), self.u, x0=xk)
+        y = lti_outputs(ad, bd.reshape(4, 1), np.eye(4)[[1, 3]], self.u, xk)
         return high_pass(y[:, 0], self.dt, self.fc), high_pass(y[:, 1], self.dt, self.fc)
 
     def residual(self, x):

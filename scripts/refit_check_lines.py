@@ -28,11 +28,10 @@ import tomllib
 import numpy as np
 from scipy.linalg import expm
 from scipy.optimize import least_squares
-from scipy.signal import dlsim
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import survey_lines  # noqa: E402  (the records)
-from refit_check import checks_main, diagnosed, high_pass  # noqa: E402  (rigtwin's zero-phase high-pass, written again)
+from refit_check import checks_main, diagnosed, high_pass, lti_outputs  # noqa: E402  (rigtwin's zero-phase high-pass, written again)
 
 # rigtwin's bound on a re-fitted inertia or stiffness, a factor either way (ident's MAX_REFIT_FACTOR)
 MAX_FACTOR = 100.0
@@ -121,8 +120,7 @@ class Record:
         big[: 2 * n, : 2 * n], big[: 2 * n, 2 * n:] = a, b
         phi = expm(big * self.dt)
         ad, bd = phi[: 2 * n, : 2 * n], phi[: 2 * n, 2 * n:]
-        _, y, _ = dlsim((ad, bd, np.array(c), np.zeros((len(c), b.shape[1])), self.dt), self.u,
-                        x0=self.start(j, kk))
+        y = lti_outputs(ad, bd, np.array(c), self.u, self.start(j, kk))
         return [high_pass(y[:, i], self.dt, self.fc) for i in range(len(c))]
 
     def residual(self, x):

@@ -8,7 +8,8 @@
 //! - `faer_normal`: a faer Mat J, `Jᵀ * J`, `Jᵀ * r`, LU of the small system;
 //! - `faer_qr` / `nalgebra_qr`: least squares by QR of the tall J (no normal equations).
 //!
-//! Run: `cargo bench -p ident --bench lm_algebra`.
+//! Run: `cargo bench -p ident --features faer-bench --bench lm_algebra` (faer is built for this
+//! bench only).
 
 use std::hint::black_box;
 
