@@ -73,37 +73,26 @@ fn start(p: &FmuParams, values: &[f64], slot: Slot) -> Option<String> {
 }
 
 /// The rig FMU's description and whether it needs CompletedIntegratorStep (a dead time's
-/// history is pruned there).
+/// history is pruned there): the paper rig's model as its preset builds it
+/// (`plant::DriveModel::paper_rig`), described as any model's effects and step are.
 fn rig_description(p: &FmuParams) -> (String, bool) {
-    let e = &p.effects;
     let mut desc = String::from("Open-differential powertrain of a HIL test rig (Hübner & Prokop, Vehicles 2026)");
     if p.bearing.is_some() {
         desc += " and a bearing K/C/M block on its support (San Andrés 2011)";
     }
-    let on: Vec<&str> = [
-        (e.time_delay_s > 0.0, "dead time of the drive torque"),
-        (e.actuator_lag_s > 0.0, "actuator lag"),
-        (e.backlash_rad > 0.0, "side-shaft backlash"),
-        (e.compliance_stiffness_nm_per_rad > 0.0, "drive compliance"),
-        (e.coulomb_friction_nm[0] > 0.0, "Coulomb friction at M2"),
-        (e.coulomb_friction_nm[1] > 0.0, "Coulomb friction at the drive"),
-        (e.coulomb_friction_nm[2] > 0.0, "Coulomb friction at M3"),
-    ]
-    .into_iter()
-    .filter_map(|(on, name)| on.then_some(name))
-    .collect();
-    if on.is_empty() {
-        desc += "; linear, exact zero-order-hold co-simulation step";
-    } else {
-        let _ = write!(desc, "; with {}", on.join(", "));
-        desc += if e.is_nonlinear() {
-            "; co-simulation step by RK4 of at most 0.125 ms"
-        } else {
-            "; exact zero-order-hold co-simulation step"
-        };
+    match plant::DriveModel::paper_rig(&p.powertrain, p.variant, &p.effects) {
+        Ok(m) => {
+            if m.line.bodies.len() > 3 {
+                // a drive compliance splits the drive into its cage and motor
+                let names: Vec<&str> = m.line.bodies.iter().map(|b| b.name.as_str()).collect();
+                let _ = write!(desc, "; bodies {}", names.join(", "));
+            }
+            desc += &effects_and_step(&m);
+            (desc, has_dead_time(&m))
+        }
+        // not a valid rig (refused where the FMU is built): its effects as they are written
+        Err(_) => (desc, p.effects.time_delay_s > 0.0),
     }
-    // the dead time's history is pruned at accepted integrator steps
-    (desc, e.time_delay_s > 0.0)
 }
 
 /// A drive model's description: its bodies, gear stages and effects, and the co-simulation
@@ -119,17 +108,33 @@ fn drive_description(m: &plant::DriveModel) -> (String, bool) {
     if gears > 0 {
         let _ = write!(desc, ", {gears} gear stage(s)");
     }
-    let effects: Vec<String> = m.effects.iter().map(|e| format!("{} at {}", e.name(), e.element(m))).collect();
+    desc += &effects_and_step(m);
+    (desc, has_dead_time(m))
+}
+
+/// "; with" a model's effects ([`plant::Effect::summary`]), and the co-simulation step it takes
+/// (`plant::Stepper`, as rigtwin's diagnosis simulates: [`plant::Dynamics::exact_steps`] where
+/// it has them, RK4 sub-steps elsewhere).
+fn effects_and_step(m: &plant::DriveModel) -> String {
+    let mut words = String::new();
+    let effects: Vec<String> = m.effects.iter().map(|e| e.summary(m)).collect();
     if !effects.is_empty() {
-        let _ = write!(desc, "; with {}", effects.join(", "));
+        let _ = write!(words, "; with {}", effects.join(", "));
     }
-    desc += if m.is_nonlinear() {
-        "; co-simulation step by RK4 sub-steps of h |lambda|max <= 0.5, as rigtwin's diagnosis simulates"
-    } else {
+    words += if m.is_nonlinear() {
+        "; co-simulation step as rigtwin's diagnosis simulates: whole steps by matrix exponentials where a play is \
+         the only nonlinearity or every body with friction slides, RK4 sub-steps of h |lambda|max <= 0.5 elsewhere"
+    } else if effects.is_empty() {
         "; linear, exact zero-order-hold co-simulation step"
+    } else {
+        "; exact zero-order-hold co-simulation step"
     };
-    let delayed = m.effects.iter().any(|e| matches!(e, plant::Effect::TimeDelay(_)));
-    (desc, delayed)
+    words
+}
+
+/// Whether a model has a dead time (its history is pruned at CompletedIntegratorStep).
+fn has_dead_time(m: &plant::DriveModel) -> bool {
+    m.effects.iter().any(|e| matches!(e, plant::Effect::TimeDelay(_)))
 }
 
 /// The controller FMU's communication step (its control period), s.
@@ -160,27 +165,14 @@ fn controller_description(p: &FmuParams, c: &crate::params::ControllerSpec) -> S
         }
         return d;
     }
-    let e = &p.effects;
-    let on: Vec<&str> = [
-        (e.time_delay_s > 0.0, "the drive torque's dead time"),
-        (e.actuator_lag_s > 0.0, "an actuator lag"),
-        (e.compliance_stiffness_nm_per_rad > 0.0, "a drive compliance"),
-    ]
-    .into_iter()
-    .filter_map(|(on, name)| on.then_some(name))
-    .collect();
     let mut d = format!(
         "rigtwin's model-predictive controller of the open-differential HIL rig (Clarabel QP, horizon {} steps of {} s, Kalman filter with input disturbances): the load machines hold their speed references, the drive follows its torque reference, the side-shaft oscillation is penalised",
         c.horizon, CONTROL_PERIOD_S
     );
-    if !on.is_empty() {
-        let _ = write!(d, "; the prediction includes {}", on.join(", "));
-    }
-    if e.backlash_rad > 0.0 {
-        d += "; the side-shaft backlash is not in the prediction (linear in contact)";
-    }
-    if e.coulomb_friction_nm.iter().any(|&f| f > 0.0) {
-        d += "; the machines' Coulomb friction is not in the prediction (the input disturbances absorb it)";
+    if let Ok(pred) = mpc::prediction::prediction(&p.powertrain, p.variant, &p.effects, CONTROL_PERIOD_S) {
+        for note in pred.notes {
+            let _ = write!(d, "; {note}");
+        }
     }
     d
 }
@@ -493,6 +485,29 @@ fn describe_with(p: &FmuParams, version: Version, token: &str) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The rig's description names its preset model's effects where they act, with their
+    /// sizes, and its bodies where a compliance split the drive; the default rig's is the
+    /// linear one.
+    #[test]
+    fn the_rig_is_described_by_its_preset_model() {
+        let (plain, _) = rig_description(&FmuParams::default());
+        assert!(plain.ends_with("; linear, exact zero-order-hold co-simulation step"), "{plain}");
+        let mut p = FmuParams::default();
+        p.effects.time_delay_s = 0.002;
+        p.effects.compliance_stiffness_nm_per_rad = 2000.0;
+        p.effects.coulomb_friction_nm = [0.0, 0.0, 1.1];
+        let (desc, delayed) = rig_description(&p);
+        assert!(delayed, "{desc}");
+        for part in [
+            "; bodies m2, drive, m3, motor",
+            "time_delay at input 2 (delay_s = 0.002)",
+            "coulomb_friction at body m3 (friction_Nm = 1.1",
+            "RK4 sub-steps",
+        ] {
+            assert!(desc.contains(part), "{part}: {desc}");
+        }
+    }
 
     #[test]
     fn token_follows_the_start_values() {

@@ -73,34 +73,7 @@ pub fn prediction(rig: &RigParams, variant: Variant, effects: &DriveEffects, dt_
         )));
     }
     let model = DriveModel::paper_rig(rig, variant, effects)?;
-    let e = effects;
-    let mut notes = Vec::new();
-    if e.time_delay_s > 0.0 {
-        notes.push(format!("drive-torque dead time {:.4} ms as input-delay states", e.time_delay_s * 1e3));
-    }
-    if e.actuator_lag_s > 0.0 {
-        notes.push(format!("actuator lag {:.4} ms as a state", e.actuator_lag_s * 1e3));
-    }
-    if e.compliance_stiffness_nm_per_rad > 0.0 {
-        notes.push(format!(
-            "drive compliance {:.1} Nm/rad (motor share {:.2}) as two states",
-            e.compliance_stiffness_nm_per_rad, e.compliance_motor_fraction
-        ));
-    }
-    if e.backlash_rad > 0.0 {
-        notes.push(format!(
-            "side-shaft backlash {:.4} mrad is NOT in the prediction: it stays linear with the shafts in contact",
-            e.backlash_rad * 1e3
-        ));
-    }
-    for (k, name) in ["M2", "the drive", "M3"].iter().enumerate() {
-        if e.coulomb_friction_nm[k] > 0.0 {
-            notes.push(format!(
-                "Coulomb friction {:.3} Nm at {name} is NOT in the prediction: the filter's input disturbance absorbs it",
-                e.coulomb_friction_nm[k]
-            ));
-        }
-    }
+    let notes = effect_notes(&model);
     let ss = rig_control_state_space(&model)?;
     // the rig has no gear stage: every body at 1
     let motion = Motion::physical(&vec![1.0; model.line.bodies.len()], ss.nstates());
@@ -156,20 +129,31 @@ pub fn drive_prediction(model: &DriveModel, dt_s: f64) -> Result<Prediction> {
     prediction_of(model, model.control_state_space()?, dt_s)
 }
 
+/// How the prediction holds each of `model`'s effects: a linear one in it (a dead time as
+/// input-delay states, a lag as a state, a compliance as the line's bodies), a nonlinear one not
+/// (the prediction is the linearisation in contact without friction; the filter's input
+/// disturbances absorb what it leaves out).
+fn effect_notes(model: &DriveModel) -> Vec<String> {
+    model
+        .effects
+        .iter()
+        .map(|e| {
+            if e.is_nonlinear() {
+                format!(
+                    "{} is NOT in the prediction: it stays linear (in contact, without friction; the filter's input \
+                     disturbances absorb it)",
+                    e.summary(model)
+                )
+            } else {
+                format!("{} is in the prediction", e.summary(model))
+            }
+        })
+        .collect()
+}
+
 /// [`drive_prediction`] from the model's control state space `ss`.
 fn prediction_of(model: &DriveModel, ss: StateSpace, dt_s: f64) -> Result<Prediction> {
-    let mut notes = Vec::new();
-    for e in &model.effects {
-        notes.push(match e {
-            plant::Effect::TimeDelay(_) => format!("{} at {}: input-delay states", e.name(), e.element(model)),
-            plant::Effect::ActuatorLag(_) => format!("{} at {}: a state", e.name(), e.element(model)),
-            _ => format!(
-                "{} at {} is NOT in the prediction: it stays linear (in contact, without friction)",
-                e.name(),
-                e.element(model)
-            ),
-        });
-    }
+    let mut notes = effect_notes(model);
     let nyquist_hz = 0.5 / dt_s;
     let (ss, dropped, motion) = without_modes_beyond(ss, model, nyquist_hz)?;
     if !dropped.is_empty() {
@@ -289,6 +273,31 @@ impl Design<'_> {
 mod tests {
     use super::*;
     use plant::Output;
+
+    /// The notes name each effect of the rig's preset model where it acts, with its size, and
+    /// tell the linear ones (in the prediction) from the nonlinear ones (left out), for the rig
+    /// as for any model; a compliance is part of the line (the motor's speed is a state).
+    #[test]
+    fn the_notes_say_which_effects_the_prediction_holds() {
+        let rig = plant::paper::damped_params();
+        let effects = DriveEffects {
+            actuator_lag_s: 0.004,
+            compliance_stiffness_nm_per_rad: 2000.0,
+            coulomb_friction_nm: [0.8, 0.0, 0.0],
+            ..DriveEffects::default()
+        };
+        let pred = prediction(&rig, Variant::V1, &effects, 1e-3).unwrap();
+        let held = |what: &str| {
+            let note =
+                pred.notes.iter().find(|n| n.starts_with(what)).unwrap_or_else(|| panic!("{what}: {:?}", pred.notes));
+            !note.contains("NOT")
+        };
+        assert!(held("actuator_lag at input 2 (time_constant_s = 0.004)"), "{:?}", pred.notes);
+        assert!(!held("coulomb_friction at body m2 (friction_Nm = 0.8"), "{:?}", pred.notes);
+        // the compliance is in it: the motor's speed is a state of the prediction
+        assert!(pred.model.state_names.iter().any(|n| n == "w_motor"), "{:?}", pred.model.state_names);
+        assert_eq!(pred.notes.len(), 2, "{:?}", pred.notes);
+    }
 
     /// What the MPC predicts the rig with is the open differential assembled by
     /// `MechanicalModel` from the springs' elongation vectors (another path to the same

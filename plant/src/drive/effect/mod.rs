@@ -408,6 +408,13 @@ impl Effect {
             .collect()
     }
 
+    /// It in words, where it acts and its parameters, as descriptions and notes name it
+    /// ("time_delay at input 2 (delay_s = 0.002)").
+    pub fn summary(&self, model: &DriveModel) -> String {
+        let values: Vec<String> = self.parameters(model).iter().map(|(k, v)| format!("{k} = {v}")).collect();
+        format!("{} at {} ({})", self.name(), self.element(model), values.join(", "))
+    }
+
     /// Fills its slot of the dynamics.
     pub(super) fn enter(&self, d: &mut Dynamics) {
         each!(self, e => e.enter(d))
