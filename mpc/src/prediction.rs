@@ -129,26 +129,10 @@ pub fn drive_prediction(model: &DriveModel, dt_s: f64) -> Result<Prediction> {
     prediction_of(model, model.control_state_space()?, dt_s)
 }
 
-/// How the prediction holds each of `model`'s effects: a linear one in it (a dead time as
-/// input-delay states, a lag as a state, a compliance as the line's bodies), a nonlinear one not
-/// (the prediction is the linearisation in contact without friction; the filter's input
-/// disturbances absorb what it leaves out).
+/// How the prediction holds each of `model`'s effects, as each effect says
+/// ([`plant::Effect::prediction`]), named where it acts with its size.
 fn effect_notes(model: &DriveModel) -> Vec<String> {
-    model
-        .effects
-        .iter()
-        .map(|e| {
-            if e.is_nonlinear() {
-                format!(
-                    "{} is NOT in the prediction: it stays linear (in contact, without friction; the filter's input \
-                     disturbances absorb it)",
-                    e.summary(model)
-                )
-            } else {
-                format!("{} is in the prediction", e.summary(model))
-            }
-        })
-        .collect()
+    model.effects.iter().map(|e| format!("{} is {}", e.summary(model), e.prediction())).collect()
 }
 
 /// [`drive_prediction`] from the model's control state space `ss`.

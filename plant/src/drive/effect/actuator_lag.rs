@@ -23,6 +23,7 @@ impl EffectModel for ActuatorLag {
         what: "first-order lag",
     }];
 
+    const PREDICTION: &'static str = "in the prediction as a state";
     const SEARCH: Search = INPUT_TIME_SEARCH;
 
     fn element(&self) -> Element {

@@ -27,6 +27,7 @@ impl EffectModel for Backlash {
     /// notch at the truth (±0.3 % wide for a shaft at 4 % of critical damping, measured), whose
     /// shoulder a 10 % grid meets and a 21 % grid misses (measured on
     /// `tests/diagnose_drive.rs`); up to 3000 times the twist.
+    const PREDICTION: &'static str = "NOT in the prediction: it stays linear with the play in contact";
     const SEARCH: Search = Search {
         shows: Shows::ForceChangesSign,
         scale: Scale::CouplingTwist,

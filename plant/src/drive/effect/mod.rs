@@ -229,6 +229,10 @@ pub trait EffectModel: Copy + Into<Effect> {
     const STRUCTURAL: bool = false;
     /// How the diagnosis searches a record for it.
     const SEARCH: Search;
+    /// How a controller's linear prediction (the linearisation in contact, friction and dead
+    /// times left out of the matrices) holds it, after "is" or "is NOT": what the controller's
+    /// notes say of it.
+    const PREDICTION: &'static str;
 
     /// Where it acts.
     fn element(&self) -> Element;
@@ -331,6 +335,14 @@ impl Effect {
             E::MOVES
         }
         each!(self, e => moves(e))
+    }
+
+    /// How a controller's linear prediction holds it ([`EffectModel::PREDICTION`]).
+    pub fn prediction(&self) -> &'static str {
+        fn prediction<E: EffectModel>(_: &E) -> &'static str {
+            E::PREDICTION
+        }
+        each!(self, e => prediction(e))
     }
 
     /// How the diagnosis searches a record for it.

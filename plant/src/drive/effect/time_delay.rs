@@ -19,6 +19,7 @@ impl EffectModel for TimeDelay {
     const PARAMETERS: &'static [EffectParameter] =
         &[EffectParameter { name: "delay", key: "delay", dimension: Dimension::Time, what: "dead time" }];
 
+    const PREDICTION: &'static str = "in the prediction as input-delay states (the whole samples of the delay, its fraction by the split of the held input)";
     const SEARCH: Search = INPUT_TIME_SEARCH;
 
     fn element(&self) -> Element {
