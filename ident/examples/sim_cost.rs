@@ -1,5 +1,6 @@
-//! Cost of one 60 s, 1 kHz simulation of the rig with side-shaft play (the backlash candidate's
-//! unit of work): `cargo run --release -p ident --example sim_cost`.
+//! Cost of one 60 s, 1 kHz simulation of the rig: linear, with side-shaft play (the backlash
+//! candidate's unit of work), with friction at the load machines, and with both:
+//! `cargo run --release -p ident --example sim_cost`.
 use plant::rig::DriveEffects;
 use std::time::Instant;
 fn main() {
@@ -11,6 +12,15 @@ fn main() {
         (
             "friction",
             DriveEffects {
+                coulomb_friction_nm: [1.0, 0.0, 1.0],
+                friction_smoothing_radps: 0.002,
+                ..Default::default()
+            },
+        ),
+        (
+            "backlash + friction",
+            DriveEffects {
+                backlash_rad: 0.003,
                 coulomb_friction_nm: [1.0, 0.0, 1.0],
                 friction_smoothing_radps: 0.002,
                 ..Default::default()

@@ -873,25 +873,37 @@ pub fn diagnose(rec: DriveRecord, progress: &(dyn Fn(&str) + Sync)) -> Result<Dr
         // enough that another could beat it clearly (the torsional engine's rule): every effect
         // of another kind, at every element where it can act, added to the best single one (its
         // own size screened with the rest held, the SCREEN_KEEP best re-fitted); a pair must
-        // beat the single effect as that beat the declared model. Beside a friction or a play
-        // every simulation takes their fine steps: there only a linear effect (a dead time, a
-        // lag) is added, and the pair re-fits the two effects' sizes with the inertias and
-        // stiffnesses held at the single effect's re-fit (minutes per record otherwise)
+        // beat the single effect as that beat the declared model. Beside a friction or a play a
+        // second nonlinear effect (a play beside a friction, a friction beside a play) is
+        // searched only where the pair is stepped whole (`plant::Dynamics::has_exact_steps`: a
+        // play that engages at once; elsewhere RK4's fine steps throughout take minutes per
+        // record), and the pair re-fits the two effects' sizes with the inertias and
+        // stiffnesses held at the single effect's re-fit
         let nonlinear_first = first.is_nonlinear();
-        if nonlinear_first {
-            search_notes.push(format!(
-                "beside {} only a dead time or a lag was searched for as a second effect, the sizes re-fitted with the mechanics held (a second friction or play: minutes per record)",
-                label(scored[best].3)
-            ));
-        }
+        let stepped_whole = |second: Effect| {
+            let mut m = m0.clone();
+            for mut e in [first, second] {
+                // the structure decides, not the sizes: every parameter at 1
+                e.set_values(&vec![1.0; e.values().len()]);
+                m.effects.push(e);
+            }
+            plant::Dynamics::new(&m).is_ok_and(|d| d.has_exact_steps())
+        };
         let x1 = scored[best].4.clone();
         let seconds: Vec<Effect> = cands
             .iter()
             .filter_map(|c| match *c {
-                Candidate::Effect(e) if e.name() != first.name() && !(nonlinear_first && e.is_nonlinear()) => Some(e),
+                Candidate::Effect(e) if e.name() != first.name() => Some(e),
                 _ => None,
             })
+            .filter(|&e| !(nonlinear_first && e.is_nonlinear()) || stepped_whole(e))
             .collect();
+        if nonlinear_first && seconds.iter().all(|e| !e.is_nonlinear()) {
+            search_notes.push(format!(
+                "beside {} only a dead time or a lag was searched for as a second effect (a second friction or play has no whole steps in this model: minutes per record)",
+                label(scored[best].3)
+            ));
+        }
         let screen_second = |k: usize| -> (usize, Vec<f64>, f64) {
             let (x, cost) = problem.screen(Candidate::Pair(first, seconds[k]), &x1);
             (k, x, cost)
