@@ -1671,6 +1671,29 @@ mod tests {
         x
     }
 
+    /// The torque that drives the play tests' twist through the play and back many times a
+    /// second (3 Hz and 17 Hz), `n` samples of `dt`.
+    fn rattling_torque(n: usize, dt: f64) -> Vec<f64> {
+        (0..n)
+            .map(|k| {
+                let t = k as f64 * dt;
+                0.5 * (std::f64::consts::TAU * 3.0 * t).sin() + 0.2 * (std::f64::consts::TAU * 17.0 * t).sin()
+            })
+            .collect()
+    }
+
+    /// A shaft's torque with total play `b` written out as the dead zone's own branches: stiffness
+    /// `c` on the twist `s` beyond ±b/2, damping `d` on its rate `r` only in contact.
+    fn shaft_with_play(c: f64, d: f64, b: f64, s: f64, r: f64) -> f64 {
+        if s > b / 2.0 {
+            c * (s - b / 2.0) + d * r
+        } else if s < -b / 2.0 {
+            c * (s + b / 2.0) + d * r
+        } else {
+            0.0
+        }
+    }
+
     /// A rattling play stepped exactly within its pieces ([`Dynamics::play_maps`])
     /// against RK4 written out here over 10 µs steps, the dead zone as its own branches: two
     /// bodies, a spring with 20 mrad of play damped to 35 % of critical (lighter damping makes
@@ -1682,24 +1705,12 @@ mod tests {
         let backlash = Effect::Backlash(Backlash { coupling: 0, backlash: b });
         let model = two_bodies([j1, j2], [0.01, 0.02], Coupling::new(c, d, 1.0), vec![backlash]);
         assert!(Dynamics::new(&model).unwrap().play_maps(&[dt]).is_some(), "the exact path is taken");
-        let u: Vec<f64> = (0..2000)
-            .map(|k| {
-                let t = k as f64 * dt;
-                0.5 * (std::f64::consts::TAU * 3.0 * t).sin() + 0.2 * (std::f64::consts::TAU * 17.0 * t).sin()
-            })
-            .collect();
+        let u = rattling_torque(2000, dt);
         let y =
             model.simulate(std::slice::from_ref(&u), dt, 0.0, &[(Quantity::Speed, 0), (Quantity::Speed, 1)]).unwrap();
         // x = [q1, q2, w1, w2]; force in the shaft on the twist q1 − q2 beyond ±b/2
         let f = |x: [f64; 4], torque: f64| -> [f64; 4] {
-            let (s, r) = (x[0] - x[1], x[2] - x[3]);
-            let t = if s > b / 2.0 {
-                c * (s - b / 2.0) + d * r
-            } else if s < -b / 2.0 {
-                c * (s + b / 2.0) + d * r
-            } else {
-                0.0
-            };
+            let t = shaft_with_play(c, d, b, x[0] - x[1], x[2] - x[3]);
             [x[2], x[3], (torque - t - 0.01 * x[2]) / j1, (t - 0.02 * x[3]) / j2]
         };
         let (mut x, sub) = ([0.0; 4], 100);
@@ -1783,23 +1794,11 @@ mod tests {
         let model = two_bodies([j1, j2], [0.01, 0.02], Coupling::new(c, d, 1.0), effects);
         let dynamics = Dynamics::new(&model).unwrap();
         let steps = dynamics.exact_steps(&[dt]).expect("play and friction have whole steps");
-        let u: Vec<f64> = (0..2000)
-            .map(|k| {
-                let t = k as f64 * dt;
-                0.5 * (std::f64::consts::TAU * 3.0 * t).sin() + 0.2 * (std::f64::consts::TAU * 17.0 * t).sin()
-            })
-            .collect();
+        let u = rattling_torque(2000, dt);
         let y =
             model.simulate(std::slice::from_ref(&u), dt, 0.0, &[(Quantity::Speed, 0), (Quantity::Speed, 1)]).unwrap();
         let f = |x: [f64; 4], torque: f64| -> [f64; 4] {
-            let (s, r) = (x[0] - x[1], x[2] - x[3]);
-            let t = if s > b / 2.0 {
-                c * (s - b / 2.0) + d * r
-            } else if s < -b / 2.0 {
-                c * (s + b / 2.0) + d * r
-            } else {
-                0.0
-            };
+            let t = shaft_with_play(c, d, b, x[0] - x[1], x[2] - x[3]);
             let friction = fc * x[3] / (x[3] * x[3] + vs * vs).sqrt();
             [x[2], x[3], (torque - t - 0.01 * x[2]) / j1, (t - 0.02 * x[3] - friction) / j2]
         };
