@@ -614,14 +614,12 @@ impl Dynamics {
         let mut mix = |class: u64| key = mix_piece(key, class);
         for s in &self.couplings {
             if s.half > 0.0 {
-                let twist = self.elastic_twist(s, x);
-                mix(u64::from(twist > s.half) + 2 * u64::from(twist < -s.half));
+                mix(side(self.elastic_twist(s, x), s.half));
             }
         }
         for (i, &band) in self.friction_band.iter().enumerate() {
             if band > 0.0 {
-                let v = x[n + i];
-                mix(u64::from(v > band) + 2 * u64::from(v < -band));
+                mix(side(x[n + i], band));
             }
         }
         key
@@ -764,8 +762,23 @@ impl Dynamics {
         if !self.pieces_are_linear() {
             return None;
         }
-        let offset = self.play_offset();
-        lengths.iter().map(|&h| PieceMaps::new(h, &|contact| self.linear_piece(contact), &offset)).collect()
+        let pieces = self.play_pieces();
+        lengths.iter().map(|&h| PieceMaps::new(h, &pieces)).collect()
+    }
+
+    /// The three linear pieces of a play that engages at once, in [`PieceMaps`]' order: inside
+    /// it (A, B without its couplings), beyond it and below it (A, B in contact), each B with one
+    /// more column, the play's offset ([`Dynamics::play_offset`]; 0 inside, its negative below)
+    /// as an input held at 1.
+    fn play_pieces(&self) -> [(DMatrix<f64>, DMatrix<f64>); 3] {
+        let offset = DVector::from_vec(self.play_offset());
+        [(false, 0.0), (true, 1.0), (true, -1.0)].map(|(contact, sign)| {
+            let (a, b) = self.linear_piece(contact);
+            let mut with_offset = DMatrix::zeros(self.nstates, b.ncols() + 1);
+            with_offset.columns_mut(0, b.ncols()).copy_from(&b);
+            with_offset.set_column(b.ncols(), &(&offset * sign));
+            (a, with_offset)
+        })
     }
 
     /// The steps over each of `lengths` (s) that [`HeldInputs`] takes whole where it can: the
@@ -779,25 +792,11 @@ impl Dynamics {
         if !self.slides_exactly() {
             return None;
         }
-        // each piece's frictionless linear part (A, B; with play inside it, beyond it with the
-        // play's offset as one more input held at 1, below it with its negative), each friction a
-        // force on its body (F)
+        // the frictionless linear part (A, B), with play each of its pieces
+        // ([`Dynamics::play_pieces`]), each friction a force on its body (F)
         let (n, ns) = (self.n, self.nstates);
-        let pieces: Vec<(DMatrix<f64>, DMatrix<f64>)> = if self.couplings.iter().any(|s| s.half > 0.0) {
-            let offset = DVector::from_vec(self.play_offset());
-            [(false, 0.0), (true, 1.0), (true, -1.0)]
-                .into_iter()
-                .map(|(contact, sign)| {
-                    let (a, b) = self.linear_piece(contact);
-                    let mut with_offset = DMatrix::zeros(ns, b.ncols() + 1);
-                    with_offset.columns_mut(0, b.ncols()).copy_from(&b);
-                    with_offset.set_column(b.ncols(), &(&offset * sign));
-                    (a, with_offset)
-                })
-                .collect()
-        } else {
-            vec![self.linear()]
-        };
+        let pieces: Vec<(DMatrix<f64>, DMatrix<f64>)> =
+            if self.couplings.iter().any(|s| s.half > 0.0) { self.play_pieces().into() } else { vec![self.linear()] };
         let bodies: Vec<usize> = (0..n).filter(|&i| self.friction[i].0 > 0.0).collect();
         let mut f = DMatrix::zeros(ns, bodies.len());
         for (j, &i) in bodies.iter().enumerate() {
@@ -823,13 +822,7 @@ impl Dynamics {
     /// The class of state `x` in its plays (0 inside, 1 beyond, 2 below: the order of
     /// [`ExactSteps::Sliding`]'s pieces), told by the first play (they engage at once).
     fn play_class(&self, x: &[f64]) -> usize {
-        match self.couplings.iter().find(|s| s.half > 0.0) {
-            Some(s) => {
-                let twist = self.elastic_twist(s, x);
-                usize::from(twist > s.half) + 2 * usize::from(twist < -s.half)
-            }
-            None => 0,
-        }
+        self.couplings.iter().find(|s| s.half > 0.0).map_or(0, |s| side(self.elastic_twist(s, x), s.half) as usize)
     }
 
     /// The step of `h` while every body with friction (`bodies`) slides: the frictionless
@@ -1311,6 +1304,12 @@ impl Zoh {
             }
         }
     }
+}
+
+/// Where `v` lies about a band ±`half`: 0 inside, 1 above, 2 below (a play's pieces, a
+/// friction's steep band; [`Dynamics::piece`]).
+fn side(v: f64, half: f64) -> u64 {
+    u64::from(v > half) + 2 * u64::from(v < -half)
 }
 
 /// One element's class folded into a piece key ([`Dynamics::piece`]).

@@ -258,23 +258,16 @@ pub struct PieceMaps {
 }
 
 impl PieceMaps {
-    /// The maps of `h` for the system `(A, B)` of `linear(contact)` and the play's offset
-    /// (state derivative beyond the positive edge): x⁺ = Φ x + Γ u + e per piece.
-    pub fn new(h: f64, linear: &dyn Fn(bool) -> (DMatrix<f64>, DMatrix<f64>), offset: &[f64]) -> Option<PieceMaps> {
-        let ns = offset.len();
-        let map = |contact: bool, sign: f64| -> Option<AffineStep> {
-            let (a, b) = linear(contact);
-            let m = b.ncols();
-            let mut inputs = DMatrix::zeros(ns, m + 1);
-            inputs.columns_mut(0, m).copy_from(&b);
-            for (i, &e) in offset.iter().enumerate() {
-                inputs[(i, m)] = sign * e;
-            }
-            let (phi, gamma) = crate::statespace::zoh(&a, &inputs, h).ok()?;
+    /// The maps of `h` for the three pieces' systems (A, B), each B's last column the piece's
+    /// offset, an input held at 1 (`Dynamics::play_pieces`): x⁺ = Φ x + Γ u + e per piece.
+    pub fn new(h: f64, pieces: &[(DMatrix<f64>, DMatrix<f64>); 3]) -> Option<PieceMaps> {
+        let map = |(a, b): &(DMatrix<f64>, DMatrix<f64>)| -> Option<AffineStep> {
+            let (ns, m) = (a.nrows(), b.ncols().checked_sub(1)?);
+            let (phi, gamma) = crate::statespace::zoh(a, b, h).ok()?;
             let g = gamma.as_slice();
             AffineStep::new(phi.as_slice(), &g[..ns * m], &g[ns * m..])
         };
-        Some(PieceMaps { h, maps: [map(false, 0.0)?, map(true, 1.0)?, map(true, -1.0)?] })
+        Some(PieceMaps { h, maps: [map(&pieces[0])?, map(&pieces[1])?, map(&pieces[2])?] })
     }
 
     /// The step length, s.

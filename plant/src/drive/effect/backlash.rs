@@ -21,13 +21,14 @@ impl EffectModel for Backlash {
         &[EffectParameter { name: "backlash", key: "backlash", dimension: Dimension::Coordinate, what: "total play" }];
     const NONLINEAR: bool = true;
 
+    const PREDICTION: &'static str = "NOT in the prediction: it stays linear with the play in contact";
+
     /// Where the coupling's force changes sign: a profile over five decades of the declared
     /// model's elastic twist (a play can be far wider than the twist the spring takes), 10 %
     /// apart. A coupling that rattles in its play has an error over the play with a narrow
     /// notch at the truth (±0.3 % wide for a shaft at 4 % of critical damping, measured), whose
     /// shoulder a 10 % grid meets and a 21 % grid misses (measured on
     /// `tests/diagnose_drive.rs`); up to 3000 times the twist.
-    const PREDICTION: &'static str = "NOT in the prediction: it stays linear with the play in contact";
     const SEARCH: Search = Search {
         shows: Shows::ForceChangesSign,
         scale: Scale::CouplingTwist,

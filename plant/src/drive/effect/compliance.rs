@@ -59,9 +59,10 @@ impl EffectModel for Compliance {
     const MOVES: Moves = Moves::SeriesSpring;
     const STRUCTURAL: bool = true;
 
+    const PREDICTION: &'static str = "in the prediction: the line's bodies and couplings hold it";
+
     /// Anywhere: from a tenth to ten times the stiffness the body's couplings give it (K_bb),
     /// 9 starts; beyond a hundred times it the spring is rigid to any record.
-    const PREDICTION: &'static str = "in the prediction: the line's bodies and couplings hold it";
     const SEARCH: Search = Search {
         shows: Shows::Always,
         scale: Scale::BodyStiffness,

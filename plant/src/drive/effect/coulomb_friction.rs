@@ -30,8 +30,9 @@ impl EffectModel for CoulombFriction {
     ];
     const NONLINEAR: bool = true;
 
-    /// Where a body's speed comes near zero, from 1 % to the input's whole force (8 starts).
     const PREDICTION: &'static str = "NOT in the prediction: that is the linearisation without friction, and the filter's input disturbances absorb it";
+
+    /// Where a body's speed comes near zero, from 1 % to the input's whole force (8 starts).
     const SEARCH: Search = Search {
         shows: Shows::SpeedNearZero,
         scale: Scale::BodyForce,
