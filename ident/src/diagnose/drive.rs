@@ -890,17 +890,27 @@ pub fn diagnose(rec: DriveRecord, progress: &(dyn Fn(&str) + Sync)) -> Result<Dr
             plant::Dynamics::new(&m).is_ok_and(|d| d.has_exact_steps())
         };
         let x1 = scored[best].4.clone();
-        let seconds: Vec<Effect> = cands
+        let others: Vec<Effect> = cands
             .iter()
             .filter_map(|c| match *c {
                 Candidate::Effect(e) if e.name() != first.name() => Some(e),
                 _ => None,
             })
-            .filter(|&e| !(nonlinear_first && e.is_nonlinear()) || stepped_whole(e))
             .collect();
-        if nonlinear_first && seconds.iter().all(|e| !e.is_nonlinear()) {
+        let (seconds, not_stepped): (Vec<Effect>, Vec<Effect>) =
+            others.into_iter().partition(|&e| !(nonlinear_first && e.is_nonlinear()) || stepped_whole(e));
+        if nonlinear_first {
+            let unsearched = if not_stepped.is_empty() {
+                String::new()
+            } else {
+                format!(
+                    " ({} {} not searched for: the pair has no whole steps in this model, minutes per record)",
+                    not_stepped.len(),
+                    if not_stepped.len() == 1 { "second friction or play was" } else { "second frictions or plays were" }
+                )
+            };
             search_notes.push(format!(
-                "beside {} only a dead time or a lag was searched for as a second effect (a second friction or play has no whole steps in this model: minutes per record)",
+                "beside {} the pair's sizes were re-fitted with the inertias and stiffnesses held at the single effect's re-fit{unsearched}",
                 label(scored[best].3)
             ));
         }
