@@ -503,6 +503,22 @@ impl Candidate {
         }
     }
 
+    /// Indices into its starts ([`Candidate::starts`]) worth refining, given their `costs`: the
+    /// best of each basin of its grid — per motor share for the compliance
+    /// ([`best_per_share`]), the [`BACKLASH_REFINED`] deepest local minima of the play's
+    /// profile, every start of the others' few decades.
+    fn basins(self, costs: &[f64]) -> Vec<usize> {
+        match self {
+            Candidate::DriveCompliance => best_per_share(costs),
+            Candidate::Backlash => {
+                let mut minima = local_minima(costs);
+                minima.truncate(BACKLASH_REFINED);
+                minima
+            }
+            _ => (0..costs.len()).filter(|&i| costs[i].is_finite()).collect(),
+        }
+    }
+
     /// Number of its own parameters.
     fn own_len(self) -> usize {
         match self {
@@ -671,6 +687,18 @@ pub const EQUIVALENT_BIC: f64 = 2.0;
 pub const EQUIVALENT_APART_LN: f64 = 0.223_143_551_314_209_7;
 /// Two fits' motor shares this far apart are different solutions.
 pub const EQUIVALENT_APART_SHARE: f64 = 0.1;
+
+/// The local minima of a profile's finite `costs`, the deepest first.
+fn local_minima(costs: &[f64]) -> Vec<usize> {
+    let n = costs.len();
+    let mut minima: Vec<usize> = (0..n)
+        .filter(|&i| {
+            costs[i].is_finite() && (i == 0 || costs[i - 1] >= costs[i]) && (i + 1 == n || costs[i + 1] >= costs[i])
+        })
+        .collect();
+    minima.sort_by(|&a, &b| costs[a].total_cmp(&costs[b]));
+    minima
+}
 
 /// The logistic function, 1/(1 + e^−v) (the compliance's motor share from its logit).
 fn logistic(v: f64) -> f64 {
@@ -958,9 +986,13 @@ pub fn diagnose(
         }
         // beside an implausible single effect (it bent j_drive or c_short to imitate what it
         // lacks), that effect re-seated from its own starts too, with the declared j_drive and
-        // c_short: its value was fitted without the candidate that explains the rest
+        // c_short: its value was fitted without the candidate that explains the rest. Only the
+        // best of each of its basins on its grid ([`Candidate::basins`]) goes on to a fit.
+        let reseated_from = bases.len();
+        let mut reseated: Option<Candidate> = None;
         if let [own] = base.effects[..] {
             if !problem.plausible(base) {
+                reseated = Some(own);
                 for s in own.starts(&problem, shuffle_hz) {
                     let mut x = base.x.clone();
                     x[..2].fill(0.0);
@@ -984,26 +1016,30 @@ pub fn diagnose(
         let mut best: Vec<usize> = if c == Candidate::Backlash {
             // local minima of each profile, best first
             let len = starts.len();
-            let mut minima: Vec<usize> = (0..grid.len())
-                .filter(|&i| {
-                    let k = i % len;
-                    grid[i].1.is_finite()
-                        && (k == 0 || grid[i - 1].1 >= grid[i].1)
-                        && (k + 1 == len || grid[i + 1].1 >= grid[i].1)
-                })
+            let costs: Vec<f64> = grid.iter().map(|g| g.1).collect();
+            let mut minima: Vec<usize> = costs
+                .chunks(len)
+                .enumerate()
+                .flat_map(|(b, profile)| local_minima(profile).into_iter().map(move |k| b * len + k))
                 .collect();
-            minima.sort_by(|&a, &b| grid[a].1.total_cmp(&grid[b].1));
+            minima.sort_by(|&a, &b| costs[a].total_cmp(&costs[b]));
             minima.truncate(BACKLASH_REFINED);
             minima
         } else {
-            // the best start beside each base
-            (0..bases.len())
-                .filter_map(|b| {
-                    (b * starts.len()..(b + 1) * starts.len())
-                        .filter(|&i| grid[i].1.is_finite())
-                        .min_by(|&a, &b| grid[a].1.total_cmp(&grid[b].1))
-                })
-                .collect()
+            // the best start beside each base; of the re-seated effect's starts, those of its
+            // basins
+            let best_beside = |b: usize| {
+                (b * starts.len()..(b + 1) * starts.len())
+                    .filter(|&i| grid[i].1.is_finite())
+                    .min_by(|&a, &b| grid[a].1.total_cmp(&grid[b].1))
+            };
+            let mut best: Vec<usize> = (0..reseated_from).filter_map(best_beside).collect();
+            if let Some(own) = reseated {
+                let beside: Vec<Option<usize>> = (reseated_from..bases.len()).map(best_beside).collect();
+                let costs: Vec<f64> = beside.iter().map(|i| i.map_or(f64::INFINITY, |i| grid[i].1)).collect();
+                best.extend(own.basins(&costs).into_iter().filter_map(|k| beside[k]));
+            }
+            best
         };
         best.dedup();
         let mut chosen: Vec<Vec<f64>> = best.iter().map(|&i| grid[i].0.clone()).collect();
