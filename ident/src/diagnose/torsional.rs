@@ -506,7 +506,7 @@ impl Candidate {
     /// Indices into its starts ([`Candidate::starts`]) worth refining, given their `costs`: the
     /// best of each basin of its grid — per motor share for the compliance
     /// ([`best_per_share`]), the [`BACKLASH_REFINED`] deepest local minima of the play's
-    /// profile, every start of the others' few decades.
+    /// profile, every local minimum of the others' few decades.
     fn basins(self, costs: &[f64]) -> Vec<usize> {
         match self {
             Candidate::DriveCompliance => best_per_share(costs),
@@ -515,7 +515,7 @@ impl Candidate {
                 minima.truncate(BACKLASH_REFINED);
                 minima
             }
-            _ => (0..costs.len()).filter(|&i| costs[i].is_finite()).collect(),
+            _ => local_minima(costs),
         }
     }
 
