@@ -80,6 +80,19 @@ pub(crate) fn clearly_beats(score: f64, error: f64, incumbent_score: f64, refere
     score < incumbent_score && error < 0.9 * reference_error
 }
 
+/// The local minima of a profile's finite `costs` (a grid over one parameter), the deepest
+/// first: the best point of each of its basins.
+pub(crate) fn local_minima(costs: &[f64]) -> Vec<usize> {
+    let n = costs.len();
+    let mut minima: Vec<usize> = (0..n)
+        .filter(|&i| {
+            costs[i].is_finite() && (i == 0 || costs[i - 1] >= costs[i]) && (i + 1 == n || costs[i + 1] >= costs[i])
+        })
+        .collect();
+    minima.sort_by(|&a, &b| costs[a].total_cmp(&costs[b]));
+    minima
+}
+
 /// Lag-1 autocorrelation of `r` (0 for white noise).
 pub fn lag1_autocorrelation(r: &[f64]) -> f64 {
     let m = r.iter().sum::<f64>() / r.len().max(1) as f64;

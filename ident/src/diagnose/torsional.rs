@@ -511,11 +511,11 @@ impl Candidate {
         match self {
             Candidate::DriveCompliance => best_per_share(costs),
             Candidate::Backlash => {
-                let mut minima = local_minima(costs);
+                let mut minima = super::local_minima(costs);
                 minima.truncate(BACKLASH_REFINED);
                 minima
             }
-            _ => local_minima(costs),
+            _ => super::local_minima(costs),
         }
     }
 
@@ -687,18 +687,6 @@ pub const EQUIVALENT_BIC: f64 = 2.0;
 pub const EQUIVALENT_APART_LN: f64 = 0.223_143_551_314_209_7;
 /// Two fits' motor shares this far apart are different solutions.
 pub const EQUIVALENT_APART_SHARE: f64 = 0.1;
-
-/// The local minima of a profile's finite `costs`, the deepest first.
-fn local_minima(costs: &[f64]) -> Vec<usize> {
-    let n = costs.len();
-    let mut minima: Vec<usize> = (0..n)
-        .filter(|&i| {
-            costs[i].is_finite() && (i == 0 || costs[i - 1] >= costs[i]) && (i + 1 == n || costs[i + 1] >= costs[i])
-        })
-        .collect();
-    minima.sort_by(|&a, &b| costs[a].total_cmp(&costs[b]));
-    minima
-}
 
 /// The logistic function, 1/(1 + e^−v) (the compliance's motor share from its logit).
 fn logistic(v: f64) -> f64 {
@@ -1020,7 +1008,7 @@ pub fn diagnose(
             let mut minima: Vec<usize> = costs
                 .chunks(len)
                 .enumerate()
-                .flat_map(|(b, profile)| local_minima(profile).into_iter().map(move |k| b * len + k))
+                .flat_map(|(b, profile)| super::local_minima(profile).into_iter().map(move |k| b * len + k))
                 .collect();
             minima.sort_by(|&a, &b| costs[a].total_cmp(&costs[b]));
             minima.truncate(BACKLASH_REFINED);
