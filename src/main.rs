@@ -351,10 +351,15 @@ fn parse_variant(s: &str) -> Result<Variant, String> {
 }
 
 fn load(args: &RigArgs) -> anyhow::Result<(Rig, Variant)> {
-    let mut rig = match &args.rig {
+    let rig = match &args.rig {
         Some(f) => load_rig(f)?,
         None => paper::rig(),
     };
+    configure(rig, args)
+}
+
+/// `rig` in the variant and with the shaft damping the command line gives.
+fn configure(mut rig: Rig, args: &RigArgs) -> anyhow::Result<(Rig, Variant)> {
     let variant = args.variant.unwrap_or(rig.variant);
     if let Some(zeta) = args.damping_ratio {
         rig.model =
@@ -388,22 +393,21 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             let mut outs = Outputs::new(&inputs);
             let json = rig.json.as_ref().map(|f| outs.file(f, "--json")).transpose()?;
             let plot = plot.map(|f| outs.svg(&f, "--plot")).transpose()?;
-            let drive = match &params {
-                Some(f) => rigtwin::fmu_package::params_of_file(f)?.drive,
-                None => None,
-            };
-            match (drive, &params) {
-                (Some(m), Some(f)) => {
+            // --params read once: a drive model, or a rig file that is the rig
+            let file = params.as_ref().map(|f| modelfile::read(f).map(|m| (f, m.model))).transpose()?;
+            match file {
+                Some((f, modelfile::Model::Drive(m))) => {
                     let rep = report::modal_of_line(&f.display().to_string(), &m)?;
                     if let Some(t) = &plot {
                         rep.plot(t)?;
                     }
                     emit(json.as_ref(), &rep, &rep.human())?;
                 }
-                _ => {
-                    // a rig file given as --params is the rig
-                    let rig = RigArgs { rig: params.or(rig.rig.clone()), ..rig };
-                    let (r, variant) = load(&rig)?;
+                file => {
+                    let (r, variant) = match file {
+                        Some((_, modelfile::Model::Rig(r))) => configure(*r, &rig)?,
+                        _ => load(&rig)?,
+                    };
                     let rep = report::modal(&r, model, variant)?;
                     if let Some(t) = &plot {
                         rep.plot(t)?;
