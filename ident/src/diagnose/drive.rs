@@ -906,7 +906,11 @@ pub fn diagnose(rec: DriveRecord, progress: &(dyn Fn(&str) + Sync)) -> Result<Dr
                 format!(
                     " ({} {} not searched for: the pair has no whole steps in this model, minutes per record)",
                     not_stepped.len(),
-                    if not_stepped.len() == 1 { "second friction or play was" } else { "second frictions or plays were" }
+                    if not_stepped.len() == 1 {
+                        "second friction or play was"
+                    } else {
+                        "second frictions or plays were"
+                    }
                 )
             };
             search_notes.push(format!(
