@@ -863,12 +863,14 @@ pub fn diagnose(rec: DriveRecord, progress: &(dyn Fn(&str) + Sync)) -> Result<Dr
         }
     }
     let mut search_notes = Vec::new();
-    let structured = scored[best].2.abs() >= WHITE_RESIDUAL_LAG1;
-    let second_step = match scored[best].3 {
-        Candidate::Effect(first) if structured => Some(first),
-        _ => None,
-    };
-    if let Some(first) = second_step {
+    // The second step of the forward selection from single effect `single` (an index into
+    // `scored`, whose residual is structured): returns the answer, the single effect or a pair
+    // added to `scored`.
+    let second_step = |single: usize, scored: &mut Vec<Scored>, search_notes: &mut Vec<String>| -> usize {
+        let Candidate::Effect(first) = scored[single].3 else {
+            return single;
+        };
+        let mut best = single;
         // forward selection, second step, where the single effect leaves a residual structured
         // enough that another could beat it clearly (the torsional engine's rule): every effect
         // of another kind, at every element where it can act, added to the best single one (its
@@ -933,7 +935,6 @@ pub fn diagnose(rec: DriveRecord, progress: &(dyn Fn(&str) + Sync)) -> Result<Dr
             let (x, cost) = fit_from(Candidate::Pair(first, seconds[*j]), x0, held);
             (*j, x, cost)
         };
-        let single = best;
         for (j, x, cost) in super::on_two_workers(screened2.len(), &fit_pair) {
             if let Some(entry) = score_fit(Candidate::Pair(first, seconds[j]), x, cost, !nonlinear_first) {
                 scored.push(entry);
@@ -957,6 +958,52 @@ pub fn diagnose(rec: DriveRecord, progress: &(dyn Fn(&str) + Sync)) -> Result<Dr
                         best = single;
                     }
                 }
+            }
+        }
+        best
+    };
+    let structured = |s: &Scored| s.2.abs() >= WHITE_RESIDUAL_LAG1;
+    if matches!(scored[best].3, Candidate::Effect(_)) && structured(&scored[best]) {
+        best = second_step(best, &mut scored, &mut search_notes);
+    }
+    // The torsional engine's restart ([`super::torsional::RESTART_LEFT_FRACTION`]): an answer
+    // that leaves more than that fraction of the declared model's error in a structured
+    // residual may owe it to its first effect (one that explains much of the record alone, in
+    // a wrong place or of a wrong kind, hides what belongs beside the right one). The second
+    // step is run again from the best other plausible single effect that beats the declared
+    // model clearly (re-fitted with everything first), and its answer is kept where it beats
+    // this one clearly.
+    if best != none
+        && scored[best].0.error_after > super::torsional::RESTART_LEFT_FRACTION * error_before
+        && structured(&scored[best])
+    {
+        let answer_parts = scored[best].0.parts.clone();
+        let runner_up = (0..scored.len())
+            .filter(|&i| matches!(scored[i].3, Candidate::Effect(_)) && i != best)
+            .filter(|&i| !scored[i].0.parts.iter().any(|p| answer_parts.contains(p)))
+            .filter(|&i| !scored[i].0.implausible && clearly_beats(&scored[i].0, &scored[none].0, &scored[none].0))
+            .min_by(|&a, &b| scored[a].0.score.total_cmp(&scored[b].0.score));
+        if let Some(r) = runner_up {
+            if !scored[r].5 {
+                let c = scored[r].3;
+                let (x, cost) = fit_all(c, &scored[r].4);
+                if let Some(again) = score_fit(c, x, cost, true).filter(|a| !a.0.implausible) {
+                    scored[r] = again;
+                }
+            }
+            let alternative = if structured(&scored[r]) { second_step(r, &mut scored, &mut search_notes) } else { r };
+            let kept = !scored[alternative].0.implausible
+                && clearly_beats(&scored[alternative].0, &scored[best].0, &scored[best].0);
+            search_notes.push(format!(
+                "the answer left {:.0} % of the declared model's error in a structured residual: the search was run again from {} ({}, error {:.4}){}",
+                100.0 * scored[best].0.error_after / error_before,
+                label(scored[r].3),
+                scored[alternative].0.effect,
+                scored[alternative].0.error_after,
+                if kept { ", which beats it clearly and is the answer" } else { ", which does not beat it clearly" }
+            ));
+            if kept {
+                best = alternative;
             }
         }
     }
