@@ -835,18 +835,24 @@ pub fn diagnose(rec: DriveRecord, progress: &(dyn Fn(&str) + Sync)) -> Result<Dr
         }
         best
     };
-    let mut best = choose(&scored);
-    // an answer only screened (the inertias and stiffnesses held at the declared values) is
-    // re-fitted with everything before anything is compared with it
-    for _ in 0..ANSWER_REFITS {
-        if scored[best].5 {
-            break;
-        }
-        let c = scored[best].3;
-        let (x, cost) = fit_all(c, &scored[best].4);
+    // entry `i`, only screened (the inertias and stiffnesses held at the declared values),
+    // re-fitted with everything; kept where that is plausible and scores no worse (whether it was)
+    let refit_whole = |i: usize, scored: &mut Vec<Scored>| -> bool {
+        let c = scored[i].3;
+        let (x, cost) = fit_all(c, &scored[i].4);
         match score_fit(c, x, cost, true) {
-            Some(again) if !again.0.implausible && again.0.score <= scored[best].0.score => scored[best] = again,
-            _ => break,
+            Some(again) if !again.0.implausible && again.0.score <= scored[i].0.score => {
+                scored[i] = again;
+                true
+            }
+            _ => false,
+        }
+    };
+    let mut best = choose(&scored);
+    // an answer only screened is re-fitted with everything before anything is compared with it
+    for _ in 0..ANSWER_REFITS {
+        if scored[best].5 || !refit_whole(best, &mut scored) {
+            break;
         }
         best = choose(&scored);
     }
@@ -971,8 +977,8 @@ pub fn diagnose(rec: DriveRecord, progress: &(dyn Fn(&str) + Sync)) -> Result<Dr
     // residual may owe it to its first effect (one that explains much of the record alone, in
     // a wrong place or of a wrong kind, hides what belongs beside the right one). The second
     // step is run again from the best other plausible single effect that beats the declared
-    // model clearly (re-fitted with everything first), and its answer is kept where it beats
-    // this one clearly.
+    // model clearly (re-fitted with everything first, as an answer only screened is), and its
+    // answer is kept where it beats this one clearly.
     if best != none
         && scored[best].0.error_after > super::torsional::RESTART_LEFT_FRACTION * error_before
         && structured(&scored[best])
@@ -985,11 +991,7 @@ pub fn diagnose(rec: DriveRecord, progress: &(dyn Fn(&str) + Sync)) -> Result<Dr
             .min_by(|&a, &b| scored[a].0.score.total_cmp(&scored[b].0.score));
         if let Some(r) = runner_up {
             if !scored[r].5 {
-                let c = scored[r].3;
-                let (x, cost) = fit_all(c, &scored[r].4);
-                if let Some(again) = score_fit(c, x, cost, true).filter(|a| !a.0.implausible) {
-                    scored[r] = again;
-                }
+                refit_whole(r, &mut scored);
             }
             let alternative = if structured(&scored[r]) { second_step(r, &mut scored, &mut search_notes) } else { r };
             let kept = !scored[alternative].0.implausible

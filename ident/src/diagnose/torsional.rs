@@ -1002,13 +1002,13 @@ pub fn diagnose(
         };
         let grid: Vec<(Vec<f64>, f64)> = points.into_iter().zip(costs).collect();
         let mut best: Vec<usize> = if c == Candidate::Backlash {
-            // local minima of each profile, best first
+            // the basins of each profile ([`Candidate::basins`]), the deepest first
             let len = starts.len();
             let costs: Vec<f64> = grid.iter().map(|g| g.1).collect();
             let mut minima: Vec<usize> = costs
                 .chunks(len)
                 .enumerate()
-                .flat_map(|(b, profile)| super::local_minima(profile).into_iter().map(move |k| b * len + k))
+                .flat_map(|(b, profile)| c.basins(profile).into_iter().map(move |k| b * len + k))
                 .collect();
             minima.sort_by(|&a, &b| costs[a].total_cmp(&costs[b]));
             minima.truncate(BACKLASH_REFINED);
