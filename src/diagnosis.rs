@@ -350,8 +350,8 @@ fn bearing(file: &Path, _progress: &(dyn Fn(&str) + Sync)) -> anyhow::Result<Dia
     let w_ref = d.reference_radps;
     let bearing_model =
         plant::BearingModel { element: d.model.equivalent_element(w_ref), support: b.support, table: None };
-    let fmu = rigtwin_fmu::FmuParams::default();
-    let model_toml = rig_toml(&fmu.powertrain, fmu.variant, &Default::default(), Some(&bearing_model))?;
+    let rig = rigtwin_fmu::RigPlant::default();
+    let model_toml = rig_toml(&rig.powertrain, rig.variant, &Default::default(), Some(&bearing_model))?;
     let none = d.declared_fit.clone();
     let signals = {
         let mut header = vec!["frequency_hz".to_string()];

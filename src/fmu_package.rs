@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 
 use crate::files::{Outputs, Target};
 use plant::Rig;
-use rigtwin_fmu::{describe, FmuParams, Version, MODEL_IDENTIFIER, PARAMS_RESOURCE};
+use rigtwin_fmu::{describe, FmuParams, RigPlant, Version, MODEL_IDENTIFIER, PARAMS_RESOURCE};
 
 /// The FMU's shared library for this platform, built by build.rs (the `fmu` crate, profile
 /// `fmu`: optimised and stripped) and carried inside the `rigtwin` binary.
@@ -41,14 +41,12 @@ pub fn library() -> anyhow::Result<std::borrow::Cow<'static, [u8]>> {
 /// its bearing block if it describes one.
 pub fn params_of_rig(rig: &Rig) -> anyhow::Result<FmuParams> {
     rig.effects.validate().map_err(|e| anyhow::anyhow!("{}: {e}", rig.name))?;
-    Ok(FmuParams {
+    Ok(FmuParams::of_rig(RigPlant {
         powertrain: rig.model.clone(),
         variant: rig.variant,
         bearing: rig.bearing.clone(),
         effects: rig.effects,
-        drive: None,
-        controller: None,
-    })
+    }))
 }
 
 /// The FMU parameter set of a file given to `--params` (`modelfile::read`): a drive model
@@ -62,7 +60,7 @@ pub fn params_of_file(file: &Path) -> anyhow::Result<FmuParams> {
 /// The FMU parameter set of a model read from a file.
 pub fn params_of_model(model: &modelfile::Model) -> anyhow::Result<FmuParams> {
     match model {
-        modelfile::Model::Drive(drive) => Ok(FmuParams { drive: Some(drive.clone()), ..FmuParams::default() }),
+        modelfile::Model::Drive(drive) => Ok(FmuParams::of_drive(drive.clone())),
         modelfile::Model::Rig(rig) => params_of_rig(rig),
     }
 }

@@ -575,10 +575,10 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             let (prediction, mut settings) =
                 design.controller(&section, horizon).map_err(|e| anyhow::anyhow!("{model_name}: {e}"))?;
             tuning.apply(&mut settings)?;
-            let report = if let Some(model) = &p.drive {
+            let report = if let Some(model) = p.plant.drive() {
                 // a drive model: its [mpc] section, a reference step from rest
                 let truth = match &plant {
-                    Some(f) => rigtwin::fmu_package::params_of_file(f)?.drive.ok_or_else(|| {
+                    Some(f) => rigtwin::fmu_package::params_of_file(f)?.plant.drive().cloned().ok_or_else(|| {
                         anyhow::anyhow!("--plant {}: a rig file; --params is a drive model", f.display())
                     })?,
                     None => model.clone(),
@@ -608,7 +608,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                 let truth = match &plant {
                     Some(f) => {
                         let t = rigtwin::fmu_package::params_of_file(f)?;
-                        if t.drive.is_some() {
+                        if t.plant.drive().is_some() {
                             anyhow::bail!(
                                 "--plant {}: a drive model; --params is the paper rig (give a rig file)",
                                 f.display()

@@ -7,7 +7,7 @@ use std::process::Command;
 
 use nalgebra::{DMatrix, DVector};
 use plant::Output;
-use rigtwin_fmu::FmuParams;
+use rigtwin_fmu::RigPlant;
 use serde_json::Value;
 
 /// A rig file with drive-path effects (dead time, actuator lag, drive compliance) on the
@@ -63,7 +63,7 @@ fn floats(v: &Value) -> Vec<f64> {
 
 /// The default powertrain as `plant` builds it: the reference every FMU run is held to.
 fn powertrain() -> plant::StateSpace {
-    let p = FmuParams::default();
+    let p = RigPlant::default();
     p.powertrain
         .open_differential(p.variant)
         .unwrap()
@@ -189,7 +189,7 @@ fn fmus_pass_validation_simulate_like_the_plant_and_run_in_libcosim() {
     // φ_m2 − φ_m3, and the stiffness acts through s only, so a change of s is a change of
     // φ_drive by half of it: ∂ẇ_drive/∂s = −K[1,1]/(2 J_drive), ∂T_short/∂s = half the torque
     // row's φ_drive entry; ∂ẇ_drive/∂M_drive = 1/J_drive; φ_drive = (s + φ_m2 + φ_m3)/2.
-    let p = FmuParams::default();
+    let p = RigPlant::default();
     let m = p.powertrain.open_differential(p.variant).unwrap();
     let k = m.stiffness_matrix();
     let j = p.powertrain.j_drive;

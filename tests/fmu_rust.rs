@@ -15,7 +15,7 @@ use common::vr;
 
 /// plant's free response of w_drive after an initial drive twist of 0.01 rad, at 1 ms.
 fn plant_w_drive(steps: usize) -> Vec<f64> {
-    let p = FmuParams::default();
+    let p = rigtwin_fmu::RigPlant::default();
     let ss = p.powertrain.open_differential(p.variant).unwrap().state_space(&[Output::Speeds]).unwrap();
     let mut x0 = DVector::zeros(6);
     x0[1] = 0.01;

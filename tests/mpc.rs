@@ -9,7 +9,6 @@ use fmi::fmi3::import::Fmi3Import;
 use fmi::fmi3::{CoSimulation, Common, Fmi3Model, GetSet};
 use mpc::closed_loop::{compare, LinearPlant, Plant, Probes, RigSignals, Scenario, ScenarioKind};
 use mpc::MpcSettings;
-use rigtwin_fmu::FmuParams;
 
 use common::vr;
 
@@ -135,7 +134,7 @@ impl Plant for FmuPlant {
 /// room for the interior-point solver's sensitivity to 1e-12 differences in its data.
 #[test]
 fn closed_loop_with_the_fmu_matches_the_plant() {
-    let params = FmuParams::default();
+    let params = rigtwin_fmu::RigPlant::default();
     let ss = mpc::prediction::prediction(&params.powertrain, params.variant, &params.effects, 1e-3).unwrap().model;
     let sig = RigSignals::of(&ss).unwrap();
     let mut settings = MpcSettings::powertrain(50);
@@ -203,6 +202,7 @@ fn controller_fmu_closes_the_loop_in_fmpy() {
     // the in-process loop: the command of each point applied at once (`delayed` false), or
     // from the next point on (a Jacobi master's sample of computational delay)
     let params = rigtwin::fmu_package::params_of_file(&rig).unwrap();
+    let params = params.plant.rig().expect("a rig file");
     let p = mpc::prediction::prediction(&params.powertrain, params.variant, &params.effects, 1e-3).unwrap();
     let mut settings = MpcSettings::powertrain(50);
     settings.solver.time_limit_s = 1.0;

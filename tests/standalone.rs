@@ -77,7 +77,10 @@ fn a_binary_copied_alone_writes_both_fmus() {
         let b = entry(&dir.join("run").join(fmu), "resources/params.json");
         assert_eq!(a, b, "{fmu}: params.json of `fmu` and `run` differ");
         let p: serde_json::Value = serde_json::from_slice(&a).unwrap();
-        assert!(p["powertrain"]["d_short"].as_f64().unwrap() > 0.0, "the default is the damped rig: {p}");
+        assert!(
+            p["plant"]["paper_rig"]["powertrain"]["d_short"].as_f64().unwrap() > 0.0,
+            "the default is the damped rig: {p}"
+        );
     }
 }
 

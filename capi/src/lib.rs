@@ -15,7 +15,7 @@ use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::path::Path;
 
 use modelfile::{Model, ModelFile};
-use mpc::{Design, MpcSection, MpcSettings, RealTime};
+use mpc::{MpcSection, MpcSettings, RealTime};
 
 pub use mpc::Status;
 
@@ -80,11 +80,7 @@ pub struct RigtwinMpc {
 impl RigtwinMpc {
     /// The controller of the model `file` (its `[mpc]` section and `options`), at rest.
     pub fn new(file: &ModelFile, options: &Options) -> anyhow::Result<Self> {
-        let design = match &file.model {
-            Model::Rig(rig) => Design::Rig { rig: &rig.model, variant: rig.variant, effects: &rig.effects },
-            Model::Drive(m) => Design::Drive(m),
-        };
-        let (prediction, mut settings) = design.controller(&file.mpc, options.horizon()?)?;
+        let (prediction, mut settings) = file.model.design().controller(&file.mpc, options.horizon()?)?;
         options.apply(&mut settings)?;
         let core = RealTime::new(&prediction, &settings)?;
         let c_names = |names: &[String]| -> anyhow::Result<Vec<CString>> {

@@ -54,7 +54,7 @@ fn fmu_step(c: &mut Criterion) {
     unsafe { fmi3FreeInstance(inst) };
 
     // the model's step alone (no FMI call, no instance checks)
-    let mut m = Model::new(&p).unwrap();
+    let mut m = Model::new(&p.plant).unwrap();
     let mut z = nalgebra::DVector::zeros(m.nx());
     z[1] = 0.01;
     let mut u = [0.0; NU];
@@ -79,7 +79,7 @@ fn fmu_step(c: &mut Criterion) {
         eprintln!("gcc is not available: no C reference");
         return;
     }
-    let mut m = Model::new(&p).unwrap();
+    let mut m = Model::new(&p.plant).unwrap();
     let nx = m.nx();
     let (ad, bd) = m.discretisation(1e-3).unwrap();
     let nu = bd.ncols();

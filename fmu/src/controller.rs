@@ -11,7 +11,7 @@
 //! input before the next (Jacobi, as OSP libcosim) gets the commands of the step before: one
 //! sample of computational delay.
 
-use crate::params::{ControllerSpec, FmuParams};
+use crate::params::{ControllerSpec, FmuParams, Plant};
 use crate::variables::{Constraint, Port, Ports};
 use mpc::{Design, MpcSection, MpcSettings, Prediction, RealTime, Status};
 use plant::drive::{Dimension, MAX_INPUTS};
@@ -102,12 +102,12 @@ impl ControllerSpec {
         horizon: usize,
         move_blocks: usize,
     ) -> Result<ControllerSpec, String> {
-        let spec = match &p.drive {
-            None => {
+        let spec = match &p.plant {
+            Plant::PaperRig(_) => {
                 let s = section.rig_settings(horizon).map_err(|e| e.to_string())?;
                 ControllerSpec { horizon, move_blocks, values: rig_values(&s), section: None }
             }
-            Some(m) => {
+            Plant::Drive(m) => {
                 let (_, s) = Design::Drive(m).controller(section, horizon).map_err(|e| e.to_string())?;
                 let largest = s.inputs.iter().map(|u| u.max_nm).fold(0.0, f64::max);
                 let (speed_weight, force_weight) = section.drive_weights(largest);
@@ -135,17 +135,15 @@ impl ControllerSpec {
         for (v, q) in self.values.iter().zip(&parameters) {
             q.constraint.check(*v).map_err(|want| format!("`{}` = {v}: expected {want}", q.name))?;
         }
-        let (prediction, mut s) = match (&p.drive, &self.section) {
-            (None, _) => {
+        let (prediction, mut s) = match (&p.plant, &self.section) {
+            (Plant::PaperRig(_), _) => {
                 let s = self.rig_settings();
-                let p = mpc::prediction::prediction(&p.powertrain, p.variant, &p.effects, s.dt_s)
-                    .map_err(|e| e.to_string())?;
-                (p, s)
+                (p.design().prediction(s.dt_s).map_err(|e| e.to_string())?, s)
             }
-            (Some(m), Some(section)) => {
+            (Plant::Drive(m), Some(section)) => {
                 Design::Drive(m).controller(&self.drive_section(section), self.horizon).map_err(|e| e.to_string())?
             }
-            (Some(_), None) => return Err("a drive model's controller needs its [mpc] section".into()),
+            (Plant::Drive(_), None) => return Err("a drive model's controller needs its [mpc] section".into()),
         };
         s.move_blocks =
             if self.move_blocks == 0 { Vec::new() } else { mpc::exponential_blocks(self.horizon, self.move_blocks) };
@@ -199,8 +197,8 @@ impl ControllerSpec {
     /// The FMU's tunable parameters for the model of `p` (the rig's [`PARAMETERS`]), in
     /// [`ControllerSpec::values`] order.
     fn parameters(&self, p: &FmuParams) -> Result<Vec<Port>, String> {
-        match (&p.drive, &self.section) {
-            (None, _) => Ok(PARAMETERS
+        match (&p.plant, &self.section) {
+            (Plant::PaperRig(_), _) => Ok(PARAMETERS
                 .iter()
                 .map(|&(name, unit, description, constraint)| Port {
                     name: name.into(),
@@ -209,14 +207,14 @@ impl ControllerSpec {
                     constraint,
                 })
                 .collect()),
-            (Some(m), Some(section)) => Ok(drive_parameters(m, section)),
-            (Some(_), None) => Err("a drive model's controller needs its [mpc] section".into()),
+            (Plant::Drive(m), Some(section)) => Ok(drive_parameters(m, section)),
+            (Plant::Drive(_), None) => Err("a drive model's controller needs its [mpc] section".into()),
         }
     }
 
     /// The FMU's variables for the model of `p`.
     pub fn ports(&self, p: &FmuParams) -> Result<Ports, String> {
-        let Some(m) = &p.drive else {
+        let Plant::Drive(m) = &p.plant else {
             return Ok(Ports {
                 parameters: self.parameters(p)?,
                 inputs: INPUTS.iter().map(|&(n, u, d)| Port::of(n, u, d)).collect(),

@@ -4,7 +4,7 @@
 
 use std::fmt::Write as _;
 
-use crate::params::FmuParams;
+use crate::params::{FmuParams, Plant, RigPlant};
 use crate::variables::{parameter_values, variant_number, Causality, Constraint, Kind, Slot, Variable};
 
 /// The model identifier: the shared library's name inside the FMU.
@@ -66,7 +66,7 @@ fn xml_escape(s: &str) -> String {
 fn start(p: &FmuParams, values: &[f64], slot: Slot) -> Option<String> {
     match slot {
         Slot::Param(i) => Some(format!("{:?}", values[i])),
-        Slot::Variant => Some(variant_number(p.variant).to_string()),
+        Slot::Variant => p.plant.rig().map(|r| variant_number(r.variant).to_string()),
         Slot::State(_) | Slot::Input(_) => Some("0.0".into()),
         _ => None,
     }
@@ -75,12 +75,12 @@ fn start(p: &FmuParams, values: &[f64], slot: Slot) -> Option<String> {
 /// The rig FMU's description and whether it needs CompletedIntegratorStep (a dead time's
 /// history is pruned there): the paper rig's model as its preset builds it
 /// (`plant::DriveModel::paper_rig`), described as any model's effects and step are.
-fn rig_description(p: &FmuParams) -> (String, bool) {
+fn rig_description(p: &RigPlant) -> (String, bool) {
     let mut desc = String::from("Open-differential powertrain of a HIL test rig (Hübner & Prokop, Vehicles 2026)");
     if p.bearing.is_some() {
         desc += " and a bearing K/C/M block on its support (San Andrés 2011)";
     }
-    match plant::DriveModel::paper_rig(&p.powertrain, p.variant, &p.effects) {
+    match p.drive_model() {
         Ok(m) => {
             if m.line.bodies.len() > 3 {
                 // a drive compliance splits the drive into its cage and motor
@@ -142,7 +142,7 @@ pub const CONTROL_PERIOD_S: f64 = 1e-3;
 
 /// The controller FMU's description: what it controls and with which prediction model.
 fn controller_description(p: &FmuParams, c: &crate::params::ControllerSpec) -> String {
-    if let Some(m) = &p.drive {
+    if let Plant::Drive(m) = &p.plant {
         let ports = match c.ports(p) {
             Ok(ports) => ports,
             Err(e) => return format!("rigtwin's model-predictive controller of a drive model (not valid: {e})"),
@@ -169,7 +169,7 @@ fn controller_description(p: &FmuParams, c: &crate::params::ControllerSpec) -> S
         "rigtwin's model-predictive controller of the open-differential HIL rig (Clarabel QP, horizon {} steps of {} s, Kalman filter with input disturbances): the load machines hold their speed references, the drive follows its torque reference, the side-shaft oscillation is penalised",
         c.horizon, CONTROL_PERIOD_S
     );
-    if let Ok(pred) = mpc::prediction::prediction(&p.powertrain, p.variant, &p.effects, CONTROL_PERIOD_S) {
+    if let Ok(pred) = p.design().prediction(CONTROL_PERIOD_S) {
         for note in pred.notes {
             let _ = write!(d, "; {note}");
         }
@@ -210,10 +210,10 @@ pub fn describe(p: &FmuParams, version: Version) -> String {
 /// The FMU's `modelName`, which importers show: what the FMU is, so that a plant, a drive line
 /// and a controller side by side in a tool are told apart.
 pub fn model_name(p: &FmuParams) -> String {
-    match (&p.drive, &p.controller) {
+    match (&p.plant, &p.controller) {
         (_, Some(_)) => "rigtwin MPC controller".into(),
-        (None, None) => "rigtwin open-differential rig".into(),
-        (Some(m), None) => {
+        (Plant::PaperRig(_), None) => "rigtwin open-differential rig".into(),
+        (Plant::Drive(m), None) => {
             let kind = match m.line.domain {
                 plant::Domain::Rotational => "drive line",
                 plant::Domain::Translational => "linear axis",
@@ -229,10 +229,10 @@ fn describe_with(p: &FmuParams, version: Version, token: &str) -> String {
     let params = parameter_values(p);
     let mut x = String::new();
     let controller = p.controller.is_some();
-    let (desc, needs_completed) = match (&p.drive, &p.controller) {
+    let (desc, needs_completed) = match (&p.plant, &p.controller) {
         (_, Some(c)) => (controller_description(p, c), false),
-        (None, None) => rig_description(p),
-        (Some(m), None) => drive_description(m),
+        (Plant::PaperRig(r), None) => rig_description(r),
+        (Plant::Drive(m), None) => drive_description(m),
     };
     let _ = writeln!(x, "<?xml version=\"1.0\" encoding=\"UTF-8\"?>");
     match version {
@@ -491,9 +491,9 @@ mod tests {
     /// linear one.
     #[test]
     fn the_rig_is_described_by_its_preset_model() {
-        let (plain, _) = rig_description(&FmuParams::default());
+        let (plain, _) = rig_description(&RigPlant::default());
         assert!(plain.ends_with("; linear, exact zero-order-hold co-simulation step"), "{plain}");
-        let mut p = FmuParams::default();
+        let mut p = RigPlant::default();
         p.effects.time_delay_s = 0.002;
         p.effects.compliance_stiffness_nm_per_rad = 2000.0;
         p.effects.coulomb_friction_nm = [0.0, 0.0, 1.1];
@@ -512,8 +512,9 @@ mod tests {
     #[test]
     fn token_follows_the_start_values() {
         let a = FmuParams::default();
-        let mut b = a.clone();
-        b.powertrain.j_drive *= 1.5;
+        let mut r = RigPlant::default();
+        r.powertrain.j_drive *= 1.5;
+        let b = FmuParams::of_rig(r);
         assert_ne!(token(&a), token(&b));
         assert_eq!(token(&a), token(&a.clone()));
         assert!(describe(&a, Version::Fmi3).contains(&token(&a)));

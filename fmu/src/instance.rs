@@ -6,7 +6,7 @@ use nalgebra::DVector;
 
 use crate::controller::ControllerMachine;
 use crate::model::{Model, DRIVE_INPUT};
-use crate::params::FmuParams;
+use crate::params::{FmuParams, Plant};
 use crate::variables::{parameter_set, parameter_values, rig_parameter, variant_number, Causality, Kind, Slot, Table};
 use plant::DelayLine;
 
@@ -280,20 +280,20 @@ impl Instance {
     /// A new instance with the start values of `p`.
     pub fn new(name: &str, interface: Interface, logger: Box<dyn Logger>, logging_on: bool, p: &FmuParams) -> Instance {
         let params = parameter_values(p);
-        let variant = variant_number(p.variant);
+        let variant = p.plant.rig().map_or(0, |r| variant_number(r.variant));
         let table = crate::table(p);
         let nu = table.nu();
-        let delay_param = match &p.drive {
+        let delay_param = match &p.plant {
             // the controller's inputs act at once (the dead time is in its prediction)
             _ if p.controller.is_some() => vec![None; nu],
-            None => (0..nu)
+            Plant::PaperRig(r) => (0..nu)
                 .map(|j| {
-                    (j == DRIVE_INPUT && p.effects.time_delay_s > 0.0)
+                    (j == DRIVE_INPUT && r.effects.time_delay_s > 0.0)
                         .then(|| rig_parameter("drive.time_delay"))
                         .flatten()
                 })
                 .collect(),
-            Some(m) => (0..nu).map(|j| m.delay_parameter(j)).collect(),
+            Plant::Drive(m) => (0..nu).map(|j| m.delay_parameter(j)).collect(),
         };
         Instance {
             name: name.to_string(),
@@ -409,14 +409,14 @@ impl Instance {
     #[cold]
     fn build_model(&mut self) -> Res<()> {
         let p = self.params()?;
-        let built = match (&p.drive, &p.controller) {
-            (_, Some(_)) => ControllerMachine::new(&p).map(|mut m| {
+        let built = match &p.controller {
+            Some(_) => ControllerMachine::new(&p).map(|mut m| {
                 if let Some(s) = self.carry.take() {
                     m.restore(&s);
                 }
                 Machine::Controller(Box::new(m))
             }),
-            (_, None) => Model::new(&p).map(|m| Machine::Plant(Box::new(m))),
+            None => Model::new(&p.plant).map(|m| Machine::Plant(Box::new(m))),
         };
         self.model = Some(built.or_else(|e| error(format!("the parameters do not describe a model: {e}")))?);
         Ok(())

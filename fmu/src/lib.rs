@@ -30,7 +30,7 @@ pub mod params;
 pub mod variables;
 
 pub use description::{describe, token, Version, MODEL_IDENTIFIER};
-pub use params::{ControllerSpec, FmuParams};
+pub use params::{ControllerSpec, FmuParams, Plant, RigPlant};
 
 use std::path::{Path, PathBuf};
 
@@ -43,7 +43,7 @@ pub fn check(p: &FmuParams) -> Result<(), String> {
     if p.controller.is_some() {
         return controller::ControllerMachine::new(p).map(|_| ());
     }
-    model::Model::new(p).map(|_| ())
+    model::Model::new(&p.plant).map(|_| ())
 }
 
 /// The variable table of parameter set `p`: the controller FMU's (its ports, generated from the
@@ -51,7 +51,7 @@ pub fn check(p: &FmuParams) -> Result<(), String> {
 pub fn table(p: &FmuParams) -> variables::Table {
     match &p.controller {
         Some(spec) => variables::Table::of_ports(&spec.ports(p).unwrap_or_default()),
-        None => variables::Table::of_plant(p),
+        None => variables::Table::of_plant(&p.plant),
     }
 }
 

@@ -8,7 +8,7 @@
 
 use nalgebra::{DMatrix, DVector};
 
-use crate::params::FmuParams;
+use crate::params::{Plant, RigPlant};
 use crate::variables::{powertrain_states, Table};
 use plant::zoh_step::{longest_exact_piece, ZohCache, MAX_PIECES};
 use plant::{DelayLine, DriveModel, Stepper};
@@ -55,11 +55,11 @@ pub struct Model {
 
 impl Model {
     /// Builds the model; the error names the offending parameter.
-    pub fn new(p: &FmuParams) -> Result<Self, String> {
+    pub fn new(p: &Plant) -> Result<Self, String> {
         let table = Table::of_plant(p);
-        match &p.drive {
-            Some(m) => Model::of_drive(m, table.input_slots),
-            None => Model::of_rig(p, &table),
+        match p {
+            Plant::Drive(m) => Model::of_drive(m, table.input_slots),
+            Plant::PaperRig(r) => Model::of_rig(r, &table),
         }
     }
 
@@ -72,8 +72,8 @@ impl Model {
 
     /// The paper rig: its drive model ([`DriveModel::paper_rig`], stepped by
     /// [`Stepper::paper_rig`]) and bearing block.
-    fn of_rig(p: &FmuParams, table: &Table) -> Result<Self, String> {
-        let rig = DriveModel::paper_rig(&p.powertrain, p.variant, &p.effects).map_err(|e| e.to_string())?;
+    fn of_rig(p: &RigPlant, table: &Table) -> Result<Self, String> {
+        let rig = p.drive_model()?;
         let stepper = Stepper::paper_rig(&rig).map_err(|e| e.to_string())?;
         let map: Vec<usize> = powertrain_states(&p.effects)
             .iter()
@@ -255,12 +255,14 @@ impl Model {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::params::FmuParams;
     use approx::assert_relative_eq;
 
     #[test]
     fn shuffle_and_bearing_poles_survive_the_assembly() {
-        let p = FmuParams::with_sfd_bearing();
-        let mut m = Model::new(&p).unwrap();
+        let params = FmuParams::with_sfd_bearing();
+        let mut m = Model::new(&params.plant).unwrap();
+        let p = params.plant.rig().unwrap();
         let nx = m.nx();
         let (a, _, _) = m.jacobians(&vec![0.0; nx], &[0.0; NU]);
         let poles = plant::damp(&a).unwrap();
@@ -273,7 +275,7 @@ mod tests {
         let f_b = (k / mass).sqrt() / (2.0 * std::f64::consts::PI);
         assert!(poles.iter().any(|q| (q.natural_hz - f_b).abs() < 0.05 * f_b), "{poles:?}");
         // the paper rig alone has the powertrain's six states and no pole near the bearing's
-        let mut rig = Model::new(&FmuParams::default()).unwrap();
+        let mut rig = Model::new(&FmuParams::default().plant).unwrap();
         assert_eq!(rig.nx(), 6);
         let (a, _, _) = rig.jacobians(&[0.0; 6], &[0.0; NU]);
         let poles = plant::damp(&a).unwrap();
@@ -282,7 +284,7 @@ mod tests {
 
     #[test]
     fn two_half_steps_are_one_step() {
-        let mut m = Model::new(&FmuParams::with_sfd_bearing()).unwrap();
+        let mut m = Model::new(&FmuParams::with_sfd_bearing().plant).unwrap();
         let u = [1.0, 10.0, -2.0, 50.0, -20.0];
         let mut x1 = DVector::from_element(10, 1e-3);
         let mut x2 = x1.clone();

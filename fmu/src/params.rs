@@ -1,15 +1,47 @@
-//! The parameter set an FMU is built from: the powertrain (with its variant and drive-path
-//! effects) and the bearing, or a drivetrain model (`plant::DriveModel`).
+//! The parameter set an FMU is built from: its plant — the one drive model, given by the paper
+//! rig's preset (its reduced parameters, variant, effects and bearing block, under the rig's
+//! fixed names and value references) or as a drive model of its own (`plant::DriveModel`) — and,
+//! for the controller FMU, the controller of that plant.
 
 use serde::{Deserialize, Serialize};
 
 use mpc::MpcSection;
 use plant::rig::DriveEffects;
-use plant::{paper, BearingModel, Coefficients, RigParams, Support, Variant};
+use plant::{paper, BearingModel, Coefficients, DriveModel, RigParams, Support, Variant};
 
 /// Everything that sets the FMU's start values.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct FmuParams {
+    /// The plant: what the plant FMU simulates, and what the controller FMU controls.
+    pub plant: Plant,
+    /// The controller FMU: when given, the FMU is rigtwin's MPC of the plant above instead of
+    /// the plant itself (`crate::controller`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub controller: Option<ControllerSpec>,
+}
+
+/// The plant of an FMU: one drive model, as the paper rig's preset builds it or written as a
+/// drive model. The two differ only in how the model is named and parameterised: the rig keeps
+/// its fixed variable names and value references (users' SSP files point at them) and its
+/// reduced parameters; a drive model's table is generated from its bodies, couplings, inputs
+/// and effects.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+// one per FMU instance, built once: the rig's inline size costs nothing
+#[allow(clippy::large_enum_variant)]
+pub enum Plant {
+    /// The paper rig (`plant::DriveModel::paper_rig`) with its bearing block.
+    PaperRig(RigPlant),
+    /// A drivetrain model (a `drive_test` bundle's model, or one written by `rigtwin diagnose
+    /// --write-model`).
+    Drive(DriveModel),
+}
+
+/// The paper rig's preset as an FMU's plant.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RigPlant {
     /// Reduced three-mass parameters of the open-differential powertrain.
     pub powertrain: RigParams,
     /// Rig variant (where the additional spring is mounted).
@@ -18,19 +50,53 @@ pub struct FmuParams {
     /// displacements and velocities states and outputs. Without it the FMU has none of them.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub bearing: Option<BearingModel>,
-    /// Drive-path effects (dead time, actuator lag, backlash, drive compliance), all off by
-    /// default; the ones on add parameters and states to the FMU.
+    /// Drive-path effects (dead time, actuator lag, backlash, drive compliance, friction), all
+    /// off by default; the ones on add parameters and states to the FMU.
     #[serde(default)]
     pub effects: DriveEffects,
-    /// A drivetrain model in place of the paper rig (a `drive_test` bundle's model, or one
-    /// written by `rigtwin diagnose --write-model`): when given, the FMU is this model — its
-    /// parameters, inputs, outputs and effects — and the rig's fields above are not used.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub drive: Option<plant::DriveModel>,
-    /// The controller FMU: when given, the FMU is rigtwin's MPC of the rig above (with its
-    /// effects) instead of the rig itself (`crate::controller`).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub controller: Option<ControllerSpec>,
+}
+
+impl Default for RigPlant {
+    /// The embedded default rig (`plant::paper::rig`: the paper's V1/V2 parameter set, Table 4,
+    /// with the shaft damping and load drag declared in the example bundles), without a bearing
+    /// block (the paper's rig has none).
+    fn default() -> Self {
+        let rig = paper::rig();
+        RigPlant { powertrain: rig.model, variant: rig.variant, bearing: None, effects: DriveEffects::default() }
+    }
+}
+
+impl RigPlant {
+    /// The rig's drive model (its preset, `plant::DriveModel::paper_rig`).
+    pub fn drive_model(&self) -> Result<DriveModel, String> {
+        DriveModel::paper_rig(&self.powertrain, self.variant, &self.effects).map_err(|e| e.to_string())
+    }
+}
+
+impl Plant {
+    /// The model a controller of this plant is designed on.
+    pub fn design(&self) -> mpc::Design<'_> {
+        match self {
+            Plant::PaperRig(r) => mpc::Design::Rig { rig: &r.powertrain, variant: r.variant, effects: &r.effects },
+            Plant::Drive(m) => mpc::Design::Drive(m),
+        }
+    }
+
+    /// The paper rig's preset, if the plant is the rig.
+    pub fn rig(&self) -> Option<&RigPlant> {
+        match self {
+            Plant::PaperRig(r) => Some(r),
+            Plant::Drive(_) => None,
+        }
+    }
+
+    /// The drive model, if the plant is written as one.
+    pub fn drive(&self) -> Option<&DriveModel> {
+        match self {
+            Plant::PaperRig(_) => None,
+            Plant::Drive(m) => Some(m),
+        }
+    }
 }
 
 /// The controller an FMU carries: horizon and move blocks (fixed at export), the tunable
@@ -52,36 +118,32 @@ pub struct ControllerSpec {
 }
 
 impl Default for FmuParams {
-    /// The embedded default rig (`plant::paper::rig`: the paper's V1/V2 parameter set, Table 4,
-    /// with the shaft damping and load drag declared in the example bundles), without a bearing
-    /// block (the paper's rig has none).
+    /// The embedded default rig ([`RigPlant::default`]).
     fn default() -> Self {
-        let rig = paper::rig();
-        FmuParams {
-            powertrain: rig.model,
-            variant: rig.variant,
-            bearing: None,
-            effects: DriveEffects::default(),
-            drive: None,
-            controller: None,
-        }
+        FmuParams::of_rig(RigPlant::default())
     }
 }
 
 impl FmuParams {
-    /// The model a controller of these parameters is designed on: the drive model, or the
-    /// paper rig in its variant with its effects.
+    /// The plant FMU of the paper rig `rig`.
+    pub fn of_rig(rig: RigPlant) -> Self {
+        FmuParams { plant: Plant::PaperRig(rig), controller: None }
+    }
+
+    /// The plant FMU of the drive model `m`.
+    pub fn of_drive(m: DriveModel) -> Self {
+        FmuParams { plant: Plant::Drive(m), controller: None }
+    }
+
+    /// The model a controller of these parameters is designed on ([`Plant::design`]).
     pub fn design(&self) -> mpc::Design<'_> {
-        match &self.drive {
-            Some(m) => mpc::Design::Drive(m),
-            None => mpc::Design::Rig { rig: &self.powertrain, variant: self.variant, effects: &self.effects },
-        }
+        self.plant.design()
     }
 
     /// The default rig with the squeeze-film damper identified from `sfd_shake` (KCM, full
     /// coupling, IVFM; `tests/bearing.rs` re-identifies it and compares) as its bearing block.
     pub fn with_sfd_bearing() -> Self {
-        FmuParams { bearing: Some(sfd_bearing()), ..FmuParams::default() }
+        FmuParams::of_rig(RigPlant { bearing: Some(sfd_bearing()), ..RigPlant::default() })
     }
 }
 

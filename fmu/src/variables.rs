@@ -3,7 +3,7 @@
 
 use std::borrow::Cow;
 
-use crate::params::FmuParams;
+use crate::params::{FmuParams, Plant, RigPlant};
 use plant::{Dimension, Domain, DriveModel};
 
 /// Storage type of a variable.
@@ -122,9 +122,9 @@ pub struct RigParameter {
     /// Which parameter sets have it.
     pub present: Presence,
     /// Its value in a parameter set.
-    pub get: fn(&FmuParams) -> f64,
+    pub get: fn(&RigPlant) -> f64,
     /// Sets it in a parameter set.
-    pub set: fn(&mut FmuParams, f64),
+    pub set: fn(&mut RigPlant, f64),
 }
 
 /// Which of the rig's parameter sets have a parameter.
@@ -145,7 +145,7 @@ impl Presence {
     }
 
     /// Whether parameter set `p` has the row.
-    fn in_set(self, p: &FmuParams) -> bool {
+    fn in_set(self, p: &RigPlant) -> bool {
         match self {
             Presence::Always => true,
             Presence::Bearing => p.bearing.is_some(),
@@ -168,8 +168,8 @@ macro_rules! rig_param {
             description: $desc,
             constraint: Constraint::$c,
             present: Presence::Bearing,
-            get: |p: &FmuParams| p.bearing.as_ref().map_or(0.0, |$b| $field),
-            set: |p: &mut FmuParams, v: f64| {
+            get: |p: &RigPlant| p.bearing.as_ref().map_or(0.0, |$b| $field),
+            set: |p: &mut RigPlant, v: f64| {
                 if let Some($b) = p.bearing.as_mut() {
                     $field = v;
                 }
@@ -183,8 +183,8 @@ macro_rules! rig_param {
             description: $desc,
             constraint: Constraint::$c,
             present: Presence::Always,
-            get: |$p: &FmuParams| $field,
-            set: |$p: &mut FmuParams, v: f64| $field = v,
+            get: |$p: &RigPlant| $field,
+            set: |$p: &mut RigPlant, v: f64| $field = v,
         }
     };
     ($name:literal, $unit:literal, $desc:literal, $c:ident, if |$e:ident| $on:expr, |$p:ident| $field:expr) => {
@@ -194,8 +194,8 @@ macro_rules! rig_param {
             description: $desc,
             constraint: Constraint::$c,
             present: Presence::Effect(|$e: &plant::rig::DriveEffects| $on),
-            get: |$p: &FmuParams| $field,
-            set: |$p: &mut FmuParams, v: f64| $field = v,
+            get: |$p: &RigPlant| $field,
+            set: |$p: &mut RigPlant, v: f64| $field = v,
         }
     };
 }
@@ -452,17 +452,17 @@ pub fn powertrain_states(effects: &plant::rig::DriveEffects) -> Vec<usize> {
 impl Table {
     /// The table of the plant of parameter set `p`: the paper rig's, or a drive model's (a
     /// controller FMU's is [`Table::of_ports`]; `crate::table` chooses).
-    pub fn of_plant(p: &FmuParams) -> Table {
-        if let Some(m) = &p.drive {
-            return Table::of_drive(m);
+    pub fn of_plant(p: &Plant) -> Table {
+        match p {
+            Plant::PaperRig(r) => Table::of_rig(r),
+            Plant::Drive(m) => Table::of_drive(m),
         }
-        Table::of_rig(p)
     }
 
     /// The paper rig's table. The fixed rows keep their value references whether or not the
     /// parameter set has them (a rig without a bearing block leaves the bearing's free), so
     /// that a user's SSP file points at the same variables; the effects' rows follow.
-    fn of_rig(p: &FmuParams) -> Table {
+    fn of_rig(p: &RigPlant) -> Table {
         let e = &p.effects;
         let bearing = p.bearing.is_some();
         let compliant = e.compliance_stiffness_nm_per_rad > 0.0;
@@ -758,16 +758,16 @@ fn force_word(domain: Domain) -> &'static str {
     }
 }
 
-/// The float parameters of a parameter set: the rig's in [`PARAMETERS`] order, a drive
-/// model's in `plant::DriveModel::parameter_list` order.
+/// The float parameters of a parameter set: a controller's tunables, the rig's in
+/// [`PARAMETERS`] order, a drive model's in `plant::DriveModel::parameter_list` order.
 pub fn parameter_values(p: &FmuParams) -> Vec<f64> {
     if let Some(c) = &p.controller {
         return c.values.clone();
     }
-    if let Some(m) = &p.drive {
-        return m.parameter_list().iter().map(|q| q.value).collect();
+    match &p.plant {
+        Plant::PaperRig(r) => PARAMETERS.iter().map(|row| (row.get)(r)).collect(),
+        Plant::Drive(m) => m.parameter_list().iter().map(|q| q.value).collect(),
     }
-    PARAMETERS.iter().map(|r| (r.get)(p)).collect()
 }
 
 /// The parameter set of float parameters `v` and variant 1..=4, of the structure of `like`
@@ -777,10 +777,16 @@ pub fn parameter_set(like: &FmuParams, v: &[f64], variant: i32) -> Result<FmuPar
         let spec = crate::params::ControllerSpec { values: v.to_vec(), ..c.clone() };
         return Ok(FmuParams { controller: Some(spec), ..like.clone() });
     }
-    if let Some(m) = &like.drive {
-        let drive = m.with_parameter_values(v).map_err(|e| e.to_string())?;
-        return Ok(FmuParams { drive: Some(drive), ..like.clone() });
-    }
+    let plant = match &like.plant {
+        Plant::Drive(m) => Plant::Drive(m.with_parameter_values(v).map_err(|e| e.to_string())?),
+        Plant::PaperRig(r) => Plant::PaperRig(rig_parameter_set(r, v, variant)?),
+    };
+    Ok(FmuParams { plant, controller: None })
+}
+
+/// The rig of float parameters `v` ([`PARAMETERS`] order) and variant 1..=4, with the bearing
+/// block and effects of `like`.
+fn rig_parameter_set(like: &RigPlant, v: &[f64], variant: i32) -> Result<RigPlant, String> {
     if v.len() != PARAMETERS.len() {
         return Err(format!("{} parameter values for the rig's {}", v.len(), PARAMETERS.len()));
     }
@@ -792,14 +798,14 @@ pub fn parameter_set(like: &FmuParams, v: &[f64], variant: i32) -> Result<FmuPar
         4 => Variant::V4,
         other => return Err(format!("`variant` = {other}: expected 1, 2, 3 or 4")),
     };
-    let mut p = FmuParams { variant, drive: None, controller: None, ..like.clone() };
-    if let Some(b) = p.bearing.as_mut() {
+    let mut r = RigPlant { variant, ..like.clone() };
+    if let Some(b) = r.bearing.as_mut() {
         b.table = None;
     }
-    for (r, &value) in PARAMETERS.iter().zip(v) {
-        (r.set)(&mut p, value);
+    for (row, &value) in PARAMETERS.iter().zip(v) {
+        (row.set)(&mut r, value);
     }
-    Ok(p)
+    Ok(r)
 }
 
 /// 1..=4 for V1..V4.
@@ -818,7 +824,7 @@ mod tests {
 
     #[test]
     fn value_references_are_unique_and_all_found() {
-        let t = Table::of_plant(&FmuParams::with_sfd_bearing());
+        let t = Table::of_plant(&FmuParams::with_sfd_bearing().plant);
         assert_eq!(t.nx(), 10);
         for (i, v) in t.variables.iter().enumerate() {
             assert_eq!(v.vr as usize, i, "with a bearing block the value references are the table's indices");
@@ -842,8 +848,8 @@ mod tests {
     /// derivatives and forces are absent and every other variable keeps its value reference.
     #[test]
     fn a_rig_without_a_bearing_keeps_the_other_value_references() {
-        let with = Table::of_plant(&FmuParams::with_sfd_bearing());
-        let without = Table::of_plant(&FmuParams::default());
+        let with = Table::of_plant(&FmuParams::with_sfd_bearing().plant);
+        let without = Table::of_plant(&FmuParams::default().plant);
         assert_eq!(without.nx(), 6);
         assert_eq!(without.nu(), 5, "the forces' slots stay, unlisted");
         let kept: Vec<(u32, &str)> =
@@ -858,11 +864,11 @@ mod tests {
 
     #[test]
     fn effects_add_their_parameters_and_states_after_the_rest() {
-        let mut p = FmuParams::default();
-        let base = Table::of_plant(&p);
+        let mut p = RigPlant::default();
+        let base = Table::of_rig(&p);
         p.effects.actuator_lag_s = 0.004;
         p.effects.compliance_stiffness_nm_per_rad = 2000.0;
-        let t = Table::of_plant(&p);
+        let t = Table::of_rig(&p);
         assert_eq!(t.nx(), base.nx() + 3);
         assert_eq!(&t.variables[..base.variables.len()], &base.variables[..]);
         let names: Vec<&str> = t.variables[base.variables.len()..].iter().map(|v| v.name.as_ref()).collect();
@@ -892,11 +898,12 @@ mod tests {
     /// every other row; each row reads and writes its own field.
     #[test]
     fn friction_rows_come_last_and_round_trip() {
-        let mut p = FmuParams::default();
-        let base = Table::of_plant(&p);
-        p.effects.coulomb_friction_nm = [0.8, 0.0, 1.1];
-        p.effects.friction_smoothing_radps = 0.02;
-        let t = Table::of_plant(&p);
+        let mut r = RigPlant::default();
+        let base = Table::of_rig(&r);
+        r.effects.coulomb_friction_nm = [0.8, 0.0, 1.1];
+        r.effects.friction_smoothing_radps = 0.02;
+        let t = Table::of_rig(&r);
+        let p = FmuParams::of_rig(r);
         assert_eq!(&t.variables[..base.variables.len()], &base.variables[..]);
         let names: Vec<&str> = t.variables[base.variables.len()..].iter().map(|v| v.name.as_ref()).collect();
         assert_eq!(names, ["m2.coulomb_friction", "m3.coulomb_friction", "friction_smoothing_speed"]);
@@ -904,21 +911,23 @@ mod tests {
         values[rig_parameter("m3.coulomb_friction").unwrap()] = 2.5;
         values[rig_parameter("j_drive").unwrap()] = 0.6;
         let back = parameter_set(&p, &values, 1).unwrap();
-        assert_eq!(back.effects.coulomb_friction_nm, [0.8, 0.0, 2.5]);
-        assert_eq!(back.effects.friction_smoothing_radps, 0.02);
-        assert_eq!(back.powertrain.j_drive, 0.6);
+        let rig = back.plant.rig().unwrap();
+        assert_eq!(rig.effects.coulomb_friction_nm, [0.8, 0.0, 2.5]);
+        assert_eq!(rig.effects.friction_smoothing_radps, 0.02);
+        assert_eq!(rig.powertrain.j_drive, 0.6);
         assert_eq!(parameter_values(&back), values);
     }
 
     #[test]
     fn parameters_round_trip() {
-        let p = FmuParams::default();
-        let mut p = p;
-        p.effects.backlash_rad = 0.002;
-        let back = parameter_set(&p, &parameter_values(&p), variant_number(p.variant)).unwrap();
-        assert_eq!(back.effects, p.effects);
+        let mut r = RigPlant::default();
+        r.effects.backlash_rad = 0.002;
+        let p = FmuParams::of_rig(r.clone());
+        let back = parameter_set(&p, &parameter_values(&p), variant_number(r.variant)).unwrap();
         assert_eq!(parameter_values(&back), parameter_values(&p));
-        let a = p.powertrain.open_differential(p.variant).unwrap().stiffness_matrix();
+        let back = back.plant.rig().unwrap();
+        assert_eq!(back.effects, r.effects);
+        let a = r.powertrain.open_differential(r.variant).unwrap().stiffness_matrix();
         let b = back.powertrain.open_differential(back.variant).unwrap().stiffness_matrix();
         assert!((a - b).norm() < 1e-9);
     }

@@ -30,7 +30,7 @@ fn geared(effects: Vec<Effect>) -> DriveModel {
 }
 
 fn instance(m: DriveModel) -> Instance {
-    let p = FmuParams { drive: Some(m), ..FmuParams::default() };
+    let p = FmuParams::of_drive(m);
     Instance::new("t", Interface::CoSimulation, Box::new(Quiet), false, &p)
 }
 

@@ -5,7 +5,7 @@
 
 use rigtwin_fmu::instance::{Instance, Interface, Logger, Status};
 use rigtwin_fmu::variables::Slot;
-use rigtwin_fmu::FmuParams;
+use rigtwin_fmu::{FmuParams, RigPlant};
 
 struct Quiet;
 impl Logger for Quiet {
@@ -13,9 +13,9 @@ impl Logger for Quiet {
 }
 
 fn params(f: impl FnOnce(&mut plant::rig::DriveEffects)) -> FmuParams {
-    let mut p = FmuParams::default();
-    f(&mut p.effects);
-    p
+    let mut r = RigPlant::default();
+    f(&mut r.effects);
+    FmuParams::of_rig(r)
 }
 
 fn instance(p: &FmuParams, interface: Interface) -> Instance {

@@ -282,8 +282,9 @@ fn a_serialized_state_with_a_nan_or_infinite_state_value_is_refused() {
 fn the_state_of_another_model_with_the_same_dimensions_is_refused() {
     in_child("the_state_of_another_model_with_the_same_dimensions_is_refused", || unsafe {
         // another parameter set of the same structure: same states, inputs and parameters
-        let mut other = FmuParams::default();
-        other.powertrain.j_drive *= 1.5;
+        let mut rig = rigtwin_fmu::RigPlant::default();
+        rig.powertrain.j_drive *= 1.5;
+        let other = FmuParams::of_rig(rig);
         assert_ne!(rigtwin_fmu::token(&other), rigtwin_fmu::token(&FmuParams::default()));
         let dir = std::env::temp_dir().join(format!("rigtwin-misuse-other-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();

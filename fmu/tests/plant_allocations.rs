@@ -12,19 +12,19 @@ mod common;
 use common::Quiet;
 use rigtwin_fmu::instance::{Instance, Interface};
 use rigtwin_fmu::variables::{Causality, Slot};
-use rigtwin_fmu::FmuParams;
+use rigtwin_fmu::{FmuParams, RigPlant};
 
 fn rig(f: impl FnOnce(&mut plant::rig::DriveEffects)) -> FmuParams {
-    let mut p = FmuParams::default();
-    f(&mut p.effects);
-    p
+    let mut r = RigPlant::default();
+    f(&mut r.effects);
+    FmuParams::of_rig(r)
 }
 
 fn drive_model() -> FmuParams {
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../rigs/branched_gearbox.toml");
     let file = modelfile::read(&path).unwrap();
     let modelfile::Model::Drive(m) = file.model else { panic!("a drive model") };
-    FmuParams { drive: Some(m), ..FmuParams::default() }
+    FmuParams::of_drive(m)
 }
 
 /// Allocations of each of `steps` communication steps after `warm` steps.

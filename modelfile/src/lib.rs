@@ -38,6 +38,16 @@ pub enum Model {
     Drive(plant::DriveModel),
 }
 
+impl Model {
+    /// The model a controller of it is designed on.
+    pub fn design(&self) -> mpc::Design<'_> {
+        match self {
+            Model::Rig(rig) => mpc::Design::Rig { rig: &rig.model, variant: rig.variant, effects: &rig.effects },
+            Model::Drive(m) => mpc::Design::Drive(m),
+        }
+    }
+}
+
 /// A model file, read.
 #[derive(Debug, Clone)]
 pub struct ModelFile {

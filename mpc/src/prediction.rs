@@ -235,6 +235,15 @@ pub enum Design<'a> {
 }
 
 impl Design<'_> {
+    /// The prediction model sampled every `dt_s`: the rig's ([`prediction`]) or a drive
+    /// model's ([`drive_prediction`]).
+    pub fn prediction(&self, dt_s: f64) -> Result<Prediction> {
+        match *self {
+            Design::Rig { rig, variant, effects } => prediction(rig, variant, effects, dt_s),
+            Design::Drive(model) => drive_prediction(model, dt_s),
+        }
+    }
+
     /// The prediction model and the settings of `section` at horizon `horizon`: the rig's
     /// ([`MpcSection::rig_settings`], sampled every 1 ms) or a drive model's
     /// ([`MpcSection::drive_settings`] on its prediction's signals).

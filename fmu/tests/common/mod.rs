@@ -4,7 +4,7 @@
 use rigtwin_fmu::instance::{Instance, Interface, Logger, Status};
 use rigtwin_fmu::variables::Slot;
 use rigtwin_fmu::ControllerSpec;
-use rigtwin_fmu::FmuParams;
+use rigtwin_fmu::{FmuParams, RigPlant};
 
 pub struct Quiet;
 impl Logger for Quiet {
@@ -12,7 +12,7 @@ impl Logger for Quiet {
 }
 
 pub fn instance(effects: plant::rig::DriveEffects) -> (Instance, [u32; 6], [u32; 3]) {
-    let mut p = FmuParams { effects, ..FmuParams::default() };
+    let mut p = FmuParams::of_rig(RigPlant { effects, ..RigPlant::default() });
     let mut spec = ControllerSpec::new(50, 4);
     spec.values[8] = 1.0; // time limit: every solve runs to the end, whatever the machine's load
     p.controller = Some(spec);
