@@ -534,6 +534,13 @@ fn mechanics_box(c: Candidate, nbase: usize, len: usize) -> Vec<f64> {
     if matches!(c, Candidate::None) {
         return Vec::new();
     }
+    tolerance_box(nbase, len)
+}
+
+/// The box of parameters of `len` whose first `nbase` are the declared inertias and
+/// stiffnesses (logarithms of their ratio to the declared values): those within the tolerance
+/// factor, a billionth inside it; the rest free.
+fn tolerance_box(nbase: usize, len: usize) -> Vec<f64> {
     let inside = DeclaredSettings::default().tolerance_factor.ln() * (1.0 - 1e-9);
     (0..len).map(|i| if i < nbase { inside } else { f64::INFINITY }).collect()
 }
@@ -739,14 +746,21 @@ pub fn diagnose(rec: DriveRecord, progress: &(dyn Fn(&str) + Sync)) -> Result<Dr
     };
     let fit_all = |c: Candidate, x0: &[f64]| fit_from(c, x0, 0);
     // the re-fit starts from the better of the screen and, where the screen held the declared
-    // inertias and stiffnesses, the same size beside the declared model's re-fit (a play's or
-    // a friction's cost is too rough for the re-fit to walk from one to the other)
+    // inertias and stiffnesses, the same size beside the declared model's re-fit moved into the
+    // box the re-fit keeps them in (a play's or a friction's cost is too rough for the re-fit
+    // to walk from one to the other; compared where the re-fit would start, not outside it)
     let fit_one = |k: usize| -> (usize, Vec<f64>, f64) {
         let i = refit[k];
         let (_, x_screen, cost_screen) = screened.iter().find(|s| s.0 == i).expect("screened");
         let mut start = x_screen.clone();
         if !base_refitted && matches!(cands[i], Candidate::Effect(_)) {
-            let beside: Vec<f64> = [&declared_refit.0[..], &x_screen[nbase..]].concat();
+            let bounds = mechanics_box(cands[i], nbase, x_screen.len());
+            let beside: Vec<f64> = [&declared_refit.0[..], &x_screen[nbase..]]
+                .concat()
+                .iter()
+                .zip(&bounds)
+                .map(|(v, b)| v.clamp(-b, *b))
+                .collect();
             let cost = problem.residual(cands[i], &beside).map_or(f64::INFINITY, |r| r.iter().map(|v| v * v).sum());
             if cost < *cost_screen {
                 start = beside;
@@ -983,7 +997,13 @@ pub fn diagnose(rec: DriveRecord, progress: &(dyn Fn(&str) + Sync)) -> Result<Dr
         && scored[best].0.error_after > super::torsional::RESTART_LEFT_FRACTION * error_before
         && structured(&scored[best])
     {
-        let answer_parts = scored[best].0.parts.clone();
+        // the runner-up shares no effect and place with the answer, but for the second effect of
+        // a pair beside a nonlinear first one: that pair held the inertias and stiffnesses at
+        // the first's re-fit, and its second effect, as the first of a search, gets them re-fitted
+        let mut answer_parts = scored[best].0.parts.clone();
+        if matches!(scored[best].3, Candidate::Pair(first, _) if first.is_nonlinear()) {
+            answer_parts.truncate(1);
+        }
         let runner_up = (0..scored.len())
             .filter(|&i| matches!(scored[i].3, Candidate::Effect(_)) && i != best)
             .filter(|&i| !scored[i].0.parts.iter().any(|p| answer_parts.contains(p)))
@@ -1009,14 +1029,36 @@ pub fn diagnose(rec: DriveRecord, progress: &(dyn Fn(&str) + Sync)) -> Result<Dr
             }
         }
     }
+    // The declared model as the answer, its free re-fit beyond the tolerance: re-fitted within
+    // it. Where the record does not prefer the free re-fit strongly
+    // ([`super::verdict::moved_by_the_record`]), it does not determine what that moved, and
+    // the declared model within its tolerance is the answer (else it is distorted).
+    let free_moved = moved_declared(m0, &scored[none].1);
+    if best == none && !free_moved.is_empty() {
+        let bounds = tolerance_box(nbase, nbase);
+        let x0: Vec<f64> = scored[none].4.iter().zip(&bounds).map(|(v, b)| v.clamp(-b, *b)).collect();
+        let within = |x: &[f64]| problem.residual(Candidate::None, x);
+        let fit = lm::Fit::new(20, LM_REL_TOL).within(TRUST_RADIUS).boxed(&bounds);
+        let (x, cost) = lm::minimise(&within, &x0, fit);
+        if let Some(boxed) = score_fit(Candidate::None, x, cost, true) {
+            let evidence = boxed.0.score - scored[none].0.score;
+            let s = DeclaredSettings::default();
+            if !super::verdict::moved_by_the_record(scored[none].0.score, boxed.0.score, &s) {
+                search_notes.push(format!(
+                    "the declared model's free re-fit moved {}; within the factor it fits as well (error {:.4} against {:.4}, information criterion {evidence:.1} apart, less than the {} that shows the record demands the move): the record does not determine them",
+                    free_moved.join("; "),
+                    boxed.0.error_after,
+                    scored[none].0.error_after,
+                    s.min_evidence
+                ));
+                scored[none] = boxed;
+            }
+        }
+    }
     let (chosen, model, rho, chosen_candidate, chosen_x, base_fitted) = scored[best].clone();
     let none_moved = moved_declared(m0, &scored[none].1);
     let moved_declared = moved_declared(m0, &model);
-    let at_tolerance = if matches!(chosen_candidate, Candidate::None) {
-        Vec::new()
-    } else {
-        judge_declared(m0, &model, super::verdict::declared_at_tolerance)
-    };
+    let at_tolerance = judge_declared(m0, &model, super::verdict::declared_at_tolerance);
 
     // The answer on data its fit did not see ([`super::check_held_out`], as for the torsional
     // sweep): it and the re-fitted declared model (where its re-fit is plausible) fitted again

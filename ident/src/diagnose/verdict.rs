@@ -111,12 +111,28 @@ pub struct DeclaredSettings {
     /// measured modes; beyond it a re-fit imitates a missing effect). Applied to what each
     /// effect leaves unchanged ([`Moves`]), not to every raw parameter.
     pub tolerance_factor: f64,
+    /// How strongly the record must prefer the declared model's free re-fit over its re-fit
+    /// within the tolerance factor for the declared mechanics to be judged distorted: a
+    /// difference of information criterion ([`moved_by_the_record`]; default 6, the "strong"
+    /// evidence that names a finding, [`PlaceSettings::min_evidence`]). Below it the record does
+    /// not determine the quantities the free re-fit moved (a stiff coupling whose mode lies
+    /// above the excitation, an inertia no output sees), and the declared model within its
+    /// tolerance is the answer.
+    pub min_evidence: f64,
 }
 
 impl Default for DeclaredSettings {
     fn default() -> Self {
-        DeclaredSettings { tolerance_factor: 1.3 }
+        DeclaredSettings { tolerance_factor: 1.3, min_evidence: 6.0 }
     }
+}
+
+/// Whether the record demands the declared mechanics beyond their tolerance: the free re-fit of
+/// the declared model (`free_score`, information criterion) beats its re-fit kept within the
+/// tolerance factor (`boxed_score`, the same parameters) by at least
+/// [`DeclaredSettings::min_evidence`].
+pub fn moved_by_the_record(free_score: f64, boxed_score: f64, s: &DeclaredSettings) -> bool {
+    !(boxed_score - free_score < s.min_evidence)
 }
 
 pub use plant::drive::Moves;
@@ -403,6 +419,17 @@ mod tests {
         assert_eq!(declared_at_tolerance(&[j(edge), j(1.0 / edge), j(1.29), j(f64::NAN)], &s).len(), 2);
         // and a ratio beyond the factor is a move (`declared_moved`), not an edge
         assert!(declared_at_tolerance(&[j(2.0), j(0.4)], &s).is_empty());
+    }
+
+    /// The declared mechanics are distorted only where the record prefers the free re-fit by
+    /// the evidence that names a finding; a boxed re-fit that failed (no score) leaves them so.
+    #[test]
+    fn only_a_move_the_record_demands_distorts_the_declared_model() {
+        let s = DeclaredSettings::default();
+        assert!(!moved_by_the_record(-1000.0, -994.5, &s));
+        assert!(moved_by_the_record(-1000.0, -994.0, &s));
+        assert!(moved_by_the_record(-1000.0, f64::NAN, &s));
+        assert!(moved_by_the_record(-1000.0, f64::INFINITY, &s));
     }
 
     #[test]
