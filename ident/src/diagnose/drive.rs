@@ -692,7 +692,7 @@ pub fn diagnose(rec: DriveRecord, progress: &(dyn Fn(&str) + Sync)) -> Result<Dr
         let f = |x: &[f64]| problem.residual(Candidate::None, x);
         let zero = vec![0.0; nbase];
         let (x, cost) = if m0.effects.is_empty() {
-            let fit = lm::Fit::new(super::torsional::DECLARED_REFIT_ITERATIONS, LM_REL_TOL).smooth(true);
+            let fit = lm::Fit::new(super::torsional::DECLARED_REFIT_ITERATIONS, LM_REL_TOL).smooth(true).central();
             lm::minimise(&f, &zero, fit.within(TRUST_RADIUS))
         } else {
             lm::minimise(&f, &zero, lm::Fit::new(20, LM_REL_TOL).within(TRUST_RADIUS))
@@ -1032,7 +1032,8 @@ pub fn diagnose(rec: DriveRecord, progress: &(dyn Fn(&str) + Sync)) -> Result<Dr
     // The declared model as the answer, its free re-fit beyond the tolerance: re-fitted within
     // it. Where the record does not prefer the free re-fit strongly
     // ([`super::verdict::moved_by_the_record`]), it does not determine what that moved, and
-    // the declared model within its tolerance is the answer (else it is distorted).
+    // the declared model within its tolerance is the answer — where nothing ends at the
+    // tolerance's edge (else it is distorted).
     let free_moved = moved_declared(m0, &scored[none].1);
     if best == none && !free_moved.is_empty() {
         let bounds = tolerance_box(nbase, nbase);
@@ -1091,8 +1092,19 @@ pub fn diagnose(rec: DriveRecord, progress: &(dyn Fn(&str) + Sync)) -> Result<Dr
         .collect();
     let intervals = super::fold_intervals(&chosen.parameters, &fold_parameters);
 
-    let distorted = (chosen.effect == "none" && !moved_declared.is_empty())
-        .then(|| format!("the declared model fits only with its mechanics moved: {}", moved_declared.join("; ")));
+    // the declared model as the answer: its mechanics neither beyond the factor nor at its
+    // edge (re-fitted within it, where the record did not demand more: a quantity at the edge
+    // is at its bound, no finding)
+    let distorted = match (chosen.effect == "none", moved_declared.is_empty(), at_tolerance.is_empty()) {
+        (true, false, _) => {
+            Some(format!("the declared model fits only with its mechanics moved: {}", moved_declared.join("; ")))
+        }
+        (true, true, false) => Some(format!(
+            "the declared model fits only with its mechanics at the edge of their tolerance: {}",
+            at_tolerance.join("; ")
+        )),
+        _ => None,
+    };
     let structured_residual = super::verdict::ResidualSettings::default().structured(rho, chosen.error_after);
     let before = simulate_declared()?;
     let after = after.unwrap_or_else(|| before.clone());

@@ -30,7 +30,7 @@ pub struct Fit<'a> {
     /// beside one is moved on by the search's restarts, not by ever shorter steps), or without
     /// limit up to [`LAMBDA_MAX`] for a smooth cost ([`Fit::smooth`]).
     pub raises: usize,
-    /// Central differences for the Jacobian ([`Fit::smooth`]); forward differences otherwise.
+    /// Central differences for the Jacobian ([`Fit::central`]); forward differences otherwise.
     pub central: bool,
     /// The trust region's radius: no step longer than this (Euclidean, in the fit's
     /// parameters) is evaluated (∞: none; [`Fit::within`]).
@@ -47,18 +47,24 @@ impl<'a> Fit<'a> {
     }
 
     /// For a smooth cost (a linear model's: the declared model re-fitted): the damping is
-    /// raised until a step lowers the cost (up to [`LAMBDA_MAX`]), and the Jacobian's columns
-    /// are central differences. In a long curved valley, after a run of good steps has taken it
-    /// to its floor, eight raises leave it at 0.1, and the fit stopped at twice the minimum (a
-    /// survey record's declared model, `scripts/refit_check.py`). Where two parameters trade
-    /// against each other (two stiffnesses in series), the valley's direction is what the
-    /// Jacobian must get right: forward differences' error, of the order of their step (1e-3
-    /// of the column), left the Gauss–Newton steps gaining 0.3 % each, and a 9-parameter line's
-    /// re-fit stopped after 60 of them at 23 times the minimum scipy's `least_squares` reaches
-    /// (survey record 2100, `scripts/refit_check_lines.py`); with central differences (error
-    /// of the order of the step squared) it reaches that minimum in 7 iterations.
+    /// raised until a step lowers the cost (up to [`LAMBDA_MAX`]). In a long curved valley,
+    /// after a run of good steps has taken it to its floor, eight raises leave it at 0.1, and
+    /// the fit stopped at twice the minimum (a survey record's declared model,
+    /// `scripts/refit_check.py`).
     pub fn smooth(self, smooth: bool) -> Self {
-        Fit { raises: if smooth { usize::MAX } else { NOTCH_RAISES }, central: smooth, ..self }
+        Fit { raises: if smooth { usize::MAX } else { NOTCH_RAISES }, ..self }
+    }
+
+    /// The Jacobian's columns by central differences (twice the simulations), for a smooth cost
+    /// of many parameters some of which trade against each other (a drive line's stiffnesses
+    /// in series): the valley's direction is then what the Jacobian must get right. Forward
+    /// differences' error, of the order of their step (1e-3 of the column), left the
+    /// Gauss–Newton steps gaining 0.3 % each, and a 9-parameter line's re-fit stopped after 60
+    /// of them at 23 times the minimum scipy's `least_squares` reaches (survey record 2100,
+    /// `scripts/refit_check_lines.py`); with central differences (error of the order of the
+    /// step squared) it reaches that minimum in 7 iterations.
+    pub fn central(self) -> Self {
+        Fit { central: true, ..self }
     }
 
     /// Within a trust region: no step longer than `max_step` is evaluated; the damping is
@@ -226,7 +232,7 @@ fn runs(n: usize, groups: usize, group_of: &dyn Fn(usize) -> usize) -> Vec<(usiz
 }
 
 /// The Jacobian of `f` at `x` (where `f(x)` = `r`) by forward differences, or `central` ones
-/// ([`Fit::smooth`]: twice the simulations), column by column ([`Column`]); `None` where `f`
+/// ([`Fit::central`]: twice the simulations), column by column ([`Column`]); `None` where `f`
 /// cannot be evaluated beside `x`.
 fn jacobian_columns(
     f: &(dyn Fn(&[f64]) -> Option<Vec<f64>> + Sync),
@@ -366,7 +372,7 @@ mod tests {
     #[test]
     fn the_smooth_fit_reaches_the_end_of_a_curved_valley() {
         let f = |x: &[f64]| Some(vec![10.0 * (x[1] - x[0] * x[0]), 1.0 - x[0]]);
-        let (x, cost) = minimise(&f, &[-1.2, 1.0], Fit::new(60, 1e-12).smooth(true).within(1.0));
+        let (x, cost) = minimise(&f, &[-1.2, 1.0], Fit::new(60, 1e-12).smooth(true).central().within(1.0));
         assert!(cost < 1e-12, "cost {cost} at {x:?}");
         assert!((x[0] - 1.0).abs() < 1e-6 && (x[1] - 1.0).abs() < 1e-6, "{x:?}");
     }
