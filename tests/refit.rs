@@ -30,19 +30,22 @@ fn the_declared_model_is_refitted_to_the_least_squares_minimum() {
 /// every output high-passed and weighted as rigtwin's cost is; scipy's `least_squares` over the
 /// logarithms of every inertia and stiffness within rigtwin's bound). Seed 21: a 4-body line
 /// with two gear stages and no effect, whose re-fit moves a stiffness beyond the factor the
-/// declared model is trusted to. Not every line's re-fit reaches the minimum yet: seeds 28 (88×)
-/// and 2 (2.0×) do not (docs/validation.md), so this guards the line that does and the cost
-/// itself.
+/// declared model is trusted to. Seed 2100: a 5-body line with a gear stage whose two stiff,
+/// damped couplings in series trade against each other; with forward differences its re-fit
+/// stopped at 23 times the minimum (`lm::Fit::central`). A declared model that lacks the
+/// record's effect may have minima far apart (seed 2, docs/validation.md), so these guard lines
+/// without one, and the cost itself.
 #[test]
 fn a_declared_drive_line_is_refitted_to_the_least_squares_minimum() {
-    let v = common::survey_script("refit_check_lines.py", "21", "--json");
+    let v = common::survey_script("refit_check_lines.py", "21,2100", "--json");
     let rows = v.as_array().unwrap();
-    assert_eq!(rows.len(), 1, "one row per record: {v}");
-    let r = &rows[0];
-    // the same cost: both step the same linear model exactly from the same start and filter
-    // alike (1e-4: the matrix exponentials' and the pseudo-inverse's rounding)
-    let same = r["same_cost"].as_f64().unwrap();
-    assert!((same - 1.0).abs() < 1e-4, "the declared line's cost here / rigtwin's = {same}");
-    let ratio = r["ratio"].as_f64().unwrap();
-    assert!(ratio <= 1.01, "rigtwin's re-fit costs {ratio} × scipy's minimum");
+    assert_eq!(rows.len(), 2, "one row per record: {v}");
+    for r in rows {
+        // the same cost: both step the same linear model exactly from the same start and
+        // filter alike (1e-4: the matrix exponentials' and the pseudo-inverse's rounding)
+        let same = r["same_cost"].as_f64().unwrap();
+        assert!((same - 1.0).abs() < 1e-4, "seed {}: the declared line's cost here / rigtwin's = {same}", r["seed"]);
+        let ratio = r["ratio"].as_f64().unwrap();
+        assert!(ratio <= 1.01, "seed {}: rigtwin's re-fit costs {ratio} × scipy's minimum", r["seed"]);
+    }
 }

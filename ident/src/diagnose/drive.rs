@@ -76,7 +76,12 @@ type Scored = (CandidateScore, DriveModel, f64, Candidate, Vec<f64>, bool);
 /// the model it adds to: the re-fitted declared model for a single effect, the single effect
 /// for a pair.
 fn clearly_beats(challenger: &CandidateScore, incumbent: &CandidateScore, reference: &CandidateScore) -> bool {
-    super::clearly_beats(challenger.score, challenger.error_after, incumbent.score, reference.error_after)
+    super::clearly_beats(
+        challenger.score,
+        challenger.error_after,
+        incumbent.score,
+        (reference.score, reference.error_after),
+    )
 }
 
 /// Times an answer kept from the screen is re-fitted with everything and chosen again (each

@@ -74,10 +74,15 @@ pub fn bic(ssr: f64, n: usize, n_eff: f64, k: usize) -> f64 {
 }
 
 /// Whether a model of `score` and `error` beats another clearly — the rule of both engines: a
-/// lower score than `incumbent_score` and 10 % less error than `reference_error` (the model it
-/// adds to).
-pub(crate) fn clearly_beats(score: f64, error: f64, incumbent_score: f64, reference_error: f64) -> bool {
-    score < incumbent_score && error < 0.9 * reference_error
+/// lower score than `incumbent_score`, and against the model it adds to (`reference`: its
+/// score and error) the strong evidence that names a finding
+/// ([`verdict::PlaceSettings::min_evidence`]: an effect is named with the evidence its place
+/// is, over the declared model as over every other explanation) and 10 % less error.
+pub(crate) fn clearly_beats(score: f64, error: f64, incumbent_score: f64, reference: (f64, f64)) -> bool {
+    let (reference_score, reference_error) = reference;
+    score < incumbent_score
+        && score <= reference_score - verdict::PlaceSettings::default().min_evidence
+        && error < 0.9 * reference_error
 }
 
 /// The local minima of a profile's finite `costs` (a grid over one parameter), the deepest
@@ -469,6 +474,18 @@ pub fn jackknife_interval(estimate: f64, leave_outs: &[f64]) -> [f64; 2] {
 mod tests {
     use super::*;
     use rand::rngs::StdRng;
+
+    /// A model beats the one it adds to only with the strong evidence that names a place (6)
+    /// and a tenth less error, and it must score below the incumbent too.
+    #[test]
+    fn clearly_beating_needs_strong_evidence_and_a_tenth_less_error() {
+        let declared = (-1000.0, 0.10);
+        assert!(clearly_beats(-1006.0, 0.08, -1000.0, declared));
+        assert!(!clearly_beats(-1005.5, 0.08, -1000.0, declared), "5.5 apart: positive evidence only");
+        assert!(!clearly_beats(-1100.0, 0.091, -1000.0, declared), "9 % less error");
+        assert!(!clearly_beats(-1010.0, 0.05, -1020.0, declared), "worse than the incumbent");
+        assert!(!clearly_beats(f64::NAN, 0.05, -1000.0, declared));
+    }
     use rand::SeedableRng;
     use rand_distr::{Distribution, StandardNormal};
 

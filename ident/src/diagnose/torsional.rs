@@ -836,9 +836,9 @@ impl Fit {
         Fit { cost: f64::NAN, score: f64::NAN, ..self.reordered(&order) }
     }
 
-    /// Whether this fit beats `other` clearly: a lower score and 10 % less error.
+    /// Whether this fit beats `other` clearly ([`super::clearly_beats`]: strong evidence and 10 % less error).
     fn beats(&self, other: &Fit) -> bool {
-        super::clearly_beats(self.score, self.error(), other.score, other.error())
+        super::clearly_beats(self.score, self.error(), other.score, (other.score, other.error()))
     }
 }
 
