@@ -132,7 +132,8 @@ impl Default for DeclaredSettings {
 /// tolerance factor (`boxed_score`, the same parameters) by at least
 /// [`DeclaredSettings::min_evidence`].
 pub fn moved_by_the_record(free_score: f64, boxed_score: f64, s: &DeclaredSettings) -> bool {
-    !(boxed_score - free_score < s.min_evidence)
+    let gap = boxed_score - free_score;
+    gap.is_nan() || gap >= s.min_evidence
 }
 
 pub use plant::drive::Moves;
