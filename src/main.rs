@@ -571,7 +571,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             };
             let harness = mpc::closed_loop::HarnessSettings::DEFAULT;
             let allocations = Some(mpc::alloc_counter::allocations as fn() -> u64);
-            let design = p.design();
+            let design = p.plant.design();
             let (prediction, mut settings) =
                 design.controller(&section, horizon).map_err(|e| anyhow::anyhow!("{model_name}: {e}"))?;
             tuning.apply(&mut settings)?;
@@ -631,7 +631,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                 let (report, loops) = mpc::evaluation::rig(
                     &design,
                     &prediction,
-                    &truth.design(),
+                    &truth.plant.design(),
                     &settings,
                     &run,
                     &harness,

@@ -138,7 +138,7 @@ impl ControllerSpec {
         let (prediction, mut s) = match (&p.plant, &self.section) {
             (Plant::PaperRig(_), _) => {
                 let s = self.rig_settings();
-                (p.design().prediction(s.dt_s).map_err(|e| e.to_string())?, s)
+                (p.plant.design().prediction(s.dt_s).map_err(|e| e.to_string())?, s)
             }
             (Plant::Drive(m), Some(section)) => {
                 Design::Drive(m).controller(&self.drive_section(section), self.horizon).map_err(|e| e.to_string())?

@@ -169,7 +169,7 @@ fn controller_description(p: &FmuParams, c: &crate::params::ControllerSpec) -> S
         "rigtwin's model-predictive controller of the open-differential HIL rig (Clarabel QP, horizon {} steps of {} s, Kalman filter with input disturbances): the load machines hold their speed references, the drive follows its torque reference, the side-shaft oscillation is penalised",
         c.horizon, CONTROL_PERIOD_S
     );
-    if let Ok(pred) = p.design().prediction(CONTROL_PERIOD_S) {
+    if let Ok(pred) = p.plant.design().prediction(CONTROL_PERIOD_S) {
         for note in pred.notes {
             let _ = write!(d, "; {note}");
         }

@@ -135,11 +135,6 @@ impl FmuParams {
         FmuParams { plant: Plant::Drive(m), controller: None }
     }
 
-    /// The model a controller of these parameters is designed on ([`Plant::design`]).
-    pub fn design(&self) -> mpc::Design<'_> {
-        self.plant.design()
-    }
-
     /// The default rig with the squeeze-film damper identified from `sfd_shake` (KCM, full
     /// coupling, IVFM; `tests/bearing.rs` re-identifies it and compares) as its bearing block.
     pub fn with_sfd_bearing() -> Self {

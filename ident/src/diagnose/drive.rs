@@ -759,13 +759,8 @@ pub fn diagnose(rec: DriveRecord, progress: &(dyn Fn(&str) + Sync)) -> Result<Dr
         let (_, x_screen, cost_screen) = screened.iter().find(|s| s.0 == i).expect("screened");
         let mut start = x_screen.clone();
         if !base_refitted && matches!(cands[i], Candidate::Effect(_)) {
-            let bounds = mechanics_box(cands[i], nbase, x_screen.len());
-            let beside: Vec<f64> = [&declared_refit.0[..], &x_screen[nbase..]]
-                .concat()
-                .iter()
-                .zip(&bounds)
-                .map(|(v, b)| v.clamp(-b, *b))
-                .collect();
+            let mut beside: Vec<f64> = [&declared_refit.0[..], &x_screen[nbase..]].concat();
+            lm::into_box(&mut beside, &mechanics_box(cands[i], nbase, x_screen.len()));
             let cost = problem.residual(cands[i], &beside).map_or(f64::INFINITY, |r| r.iter().map(|v| v * v).sum());
             if cost < *cost_screen {
                 start = beside;
@@ -1041,11 +1036,11 @@ pub fn diagnose(rec: DriveRecord, progress: &(dyn Fn(&str) + Sync)) -> Result<Dr
     // tolerance's edge (else it is distorted).
     let free_moved = moved_declared(m0, &scored[none].1);
     if best == none && !free_moved.is_empty() {
+        // from the free re-fit, which the fit moves into the box
         let bounds = tolerance_box(nbase, nbase);
-        let x0: Vec<f64> = scored[none].4.iter().zip(&bounds).map(|(v, b)| v.clamp(-b, *b)).collect();
         let within = |x: &[f64]| problem.residual(Candidate::None, x);
         let fit = lm::Fit::new(20, LM_REL_TOL).within(TRUST_RADIUS).boxed(&bounds);
-        let (x, cost) = lm::minimise(&within, &x0, fit);
+        let (x, cost) = lm::minimise(&within, &scored[none].4, fit);
         if let Some(boxed) = score_fit(Candidate::None, x, cost, true) {
             let evidence = boxed.0.score - scored[none].0.score;
             let s = DeclaredSettings::default();

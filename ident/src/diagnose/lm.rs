@@ -8,7 +8,7 @@ use nalgebra::{DMatrix, DVector};
 pub const LAMBDA_MAX: f64 = 1e10;
 
 /// `x` moved into the box |x_i| ≤ `max_abs[i]` (empty: unchanged).
-fn into_box(x: &mut [f64], max_abs: &[f64]) {
+pub(crate) fn into_box(x: &mut [f64], max_abs: &[f64]) {
     for (v, m) in x.iter_mut().zip(max_abs) {
         *v = v.clamp(-m, *m);
     }

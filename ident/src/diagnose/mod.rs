@@ -474,6 +474,8 @@ pub fn jackknife_interval(estimate: f64, leave_outs: &[f64]) -> [f64; 2] {
 mod tests {
     use super::*;
     use rand::rngs::StdRng;
+    use rand::SeedableRng;
+    use rand_distr::{Distribution, StandardNormal};
 
     /// A model beats the one it adds to only with the strong evidence that names a place (6)
     /// and a tenth less error, and it must score below the incumbent too.
@@ -486,8 +488,6 @@ mod tests {
         assert!(!clearly_beats(-1010.0, 0.05, -1020.0, declared), "worse than the incumbent");
         assert!(!clearly_beats(f64::NAN, 0.05, -1000.0, declared));
     }
-    use rand::SeedableRng;
-    use rand_distr::{Distribution, StandardNormal};
 
     #[test]
     fn the_jackknife_interval_of_a_mean_covers_it_95_times_in_100() {
