@@ -30,6 +30,11 @@ pub struct DiagnosisReport {
     /// held-out fold (`ident::diagnose::jackknife_interval`; `torsional_sweep`, `drive_test`).
     #[serde(skip_serializing_if = "BTreeMap::is_empty")]
     pub intervals: BTreeMap<String, [f64; 2]>,
+    /// Keys of `parameters` (and of `effects`' parameters) whose interval spans more than
+    /// `ident::diagnose::HeldOutSettings::determined_within` either way: the record does not
+    /// determine them (the text says so in place of the value).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub not_determined: Vec<String>,
     /// The answer on the folds of the record its fit did not see (`torsional_sweep`,
     /// `drive_test`).
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -314,6 +319,7 @@ fn torsional(file: &Path, progress: &(dyn Fn(&str) + Sync)) -> anyhow::Result<Di
             at: d.at,
             parameters: d.parameters,
             intervals: d.intervals,
+            not_determined: d.not_determined,
             held_out: Some(d.held_out),
             equivalents: d.equivalents,
             effects: d.effects,
@@ -429,6 +435,7 @@ fn bearing(file: &Path, _progress: &(dyn Fn(&str) + Sync)) -> anyhow::Result<Dia
             at: None,
             parameters: d.parameters,
             intervals: BTreeMap::new(),
+            not_determined: Vec::new(),
             held_out: None,
             equivalents: Vec::new(),
             effects: vec![],
@@ -507,8 +514,15 @@ pub fn human(r: &DiagnosisReport) -> String {
     } else {
         format!("{kind}: the declared model lacks {}\n", named(&r.effect, r.at.as_ref()))
     };
+    let one = |k: &String, v: f64, interval: Option<&[f64; 2]>| {
+        if r.not_determined.contains(k) {
+            crate::units::display_not_determined(k, interval)
+        } else {
+            crate::units::display_within(k, v, interval)
+        }
+    };
     let show = |p: &mut dyn Iterator<Item = (&String, &f64)>, intervals: &BTreeMap<String, [f64; 2]>| {
-        p.map(|(k, v)| crate::units::display_within(k, *v, intervals.get(k))).collect::<Vec<_>>().join(", ")
+        p.map(|(k, v)| one(k, *v, intervals.get(k))).collect::<Vec<_>>().join(", ")
     };
     if explained && !r.equivalents.is_empty() {
         s += &format!(
@@ -530,7 +544,7 @@ pub fn human(r: &DiagnosisReport) -> String {
         }
     } else {
         for (k, v) in &r.parameters {
-            s += &format!("  {}\n", crate::units::display_within(k, *v, r.intervals.get(k)));
+            s += &format!("  {}\n", one(k, *v, r.intervals.get(k)));
         }
     }
     for e in r.equivalents.iter().filter(|_| explained) {
@@ -682,6 +696,7 @@ fn drive(file: &Path, progress: &(dyn Fn(&str) + Sync)) -> anyhow::Result<Diagno
             at: d.at.clone(),
             parameters: d.parameters.clone(),
             intervals: d.intervals.clone(),
+            not_determined: d.not_determined.clone(),
             held_out: Some(d.held_out.clone()),
             equivalents: Vec::new(),
             effects: d.effects.clone(),

@@ -335,6 +335,17 @@ pub fn display_within(key: &str, value: f64, interval: Option<&[f64; 2]>) -> Str
     }
 }
 
+/// A parameter the record does not determine: no value, only its 95 % interval (where finite).
+pub fn display_not_determined(key: &str, interval: Option<&[f64; 2]>) -> String {
+    let (name, unit) = name_and_unit(key);
+    match interval.filter(|i| i.iter().all(|v| v.is_finite())) {
+        Some([lo, hi]) => {
+            format!("{name} not determined by the record (95 %: {} … {})", quantity(*lo, unit), quantity(*hi, unit))
+        }
+        None => format!("{name} not determined by the record"),
+    }
+}
+
 /// A value with its unit in engineering form: a small time, angle or length with a prefix
 /// (ms, µs, mrad, mm, µm), four significant digits (five from 100 up), scientific notation only
 /// far from 1.

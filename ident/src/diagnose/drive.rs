@@ -173,8 +173,12 @@ pub struct DriveDiagnosis {
     /// The answer on data its fit did not see ([`HeldOutSettings`]).
     pub held_out: HeldOut,
     /// Why the answer is no finding although it fits the record: its effect does not predict
-    /// the held-out folds better than the re-fitted declared model (`None`: it does).
+    /// the held-out folds better than the re-fitted declared model — or the record does not determine a
+    /// size of it ([`super::sizes_not_determined`]; `None`: it does, and it determines them).
     pub unsupported: Option<String>,
+    /// The keys of `parameters` and of the effects' parameters the record does not determine
+    /// ([`super::not_determined`]): reported, never a finding.
+    pub not_determined: Vec<String>,
     /// Why the answer is no finding: the same effects elsewhere, or other effects, explain the
     /// record about as well ([`super::verdict::undetermined`]; `None`: the record tells what and
     /// where).
@@ -1138,6 +1142,10 @@ pub fn diagnose(rec: DriveRecord, progress: &(dyn Fn(&str) + Sync)) -> Result<Dr
     let mut candidates: Vec<CandidateScore> = scored.into_iter().map(|s| s.0).collect();
     candidates.sort_by(|a, b| a.score.total_cmp(&b.score));
     let undetermined = super::verdict::undetermined(&chosen, &candidates, &PlaceSettings::default());
+    // an effect whose size the record does not determine is no finding; every such value is said
+    let held_out_settings = super::HeldOutSettings::default();
+    let unsupported = check.unsupported.or_else(|| super::sizes_not_determined(&effects, &held_out_settings));
+    let not_determined = super::answer_not_determined(&chosen.parameters, &intervals, &effects, &held_out_settings);
     let mut d = DriveDiagnosis {
         effect: chosen_candidate.name().to_string(),
         at: effects.first().and_then(|e| e.at.clone()),
@@ -1146,7 +1154,8 @@ pub fn diagnose(rec: DriveRecord, progress: &(dyn Fn(&str) + Sync)) -> Result<Dr
         parameters: chosen.parameters,
         intervals,
         held_out: check.held_out,
-        unsupported: check.unsupported,
+        unsupported,
+        not_determined,
         undetermined,
         error_before,
         error_after: chosen.error_after,

@@ -201,11 +201,16 @@ pub struct HeldOutSettings {
     pub folds: usize,
     /// Most blocks of each fold (default 2: ten blocks, a 20 s record in 2 s blocks).
     pub max_blocks_per_fold: usize,
+    /// A parameter is determined by the record where its 95 % interval lies within this factor
+    /// of its value either way (default 10: the record gives at least its order of magnitude).
+    /// Beyond it the value is reported as not determined, and an effect with a parameter the
+    /// record does not determine is no finding ([`not_determined`]).
+    pub determined_within: f64,
 }
 
 impl Default for HeldOutSettings {
     fn default() -> Self {
-        HeldOutSettings { folds: 5, max_blocks_per_fold: 2 }
+        HeldOutSettings { folds: 5, max_blocks_per_fold: 2, determined_within: 10.0 }
     }
 }
 
@@ -413,8 +418,9 @@ pub(crate) fn check_held_out(
 
 /// 95 % intervals of the parameters `estimate` from their values `leave_outs` in the fits
 /// without each fold ([`jackknife_interval`]). A parameter without one is left out: a fold fit
-/// lacks it, or no fold moved it (one not fitted, such as a friction's smoothing speed, or every
-/// fold's step refused) — an interval of zero width would claim a precision nothing measured.
+/// lacks it, or no fold moved it beyond rounding (one not fitted, such as a friction's
+/// smoothing speed or an inertia held at the single effect's re-fit, or every fold's step
+/// refused) — an interval of zero width would claim a precision nothing measured.
 pub(crate) fn fold_intervals(
     estimate: &BTreeMap<String, f64>,
     leave_outs: &[BTreeMap<String, f64>],
@@ -424,9 +430,69 @@ pub(crate) fn fold_intervals(
         .filter_map(|(k, &v)| {
             let values: Vec<f64> = leave_outs.iter().map(|p| p.get(k).copied().unwrap_or(f64::NAN)).collect();
             let [lo, hi] = jackknife_interval(v, &values);
-            (lo.is_finite() && hi.is_finite() && lo < hi).then(|| (k.clone(), [lo, hi]))
+            let moved = hi - lo > ROUNDING * v.abs().max(f64::MIN_POSITIVE);
+            (lo.is_finite() && hi.is_finite() && moved).then(|| (k.clone(), [lo, hi]))
         })
         .collect()
+}
+
+/// Relative width below which an interval is rounding, not a spread ([`fold_intervals`]).
+const ROUNDING: f64 = 1e-9;
+
+/// The keys of `parameters` the record does not determine: their 95 % interval (`intervals`)
+/// reaches beyond `s.determined_within` times their value or below its inverse — or to zero
+/// or past it — so the record does not give even their order of magnitude. A parameter
+/// without an interval (nothing moved it) is not judged.
+pub fn not_determined(
+    parameters: &BTreeMap<String, f64>,
+    intervals: &BTreeMap<String, [f64; 2]>,
+    s: &HeldOutSettings,
+) -> Vec<String> {
+    let within = |ratio: f64| ratio.is_finite() && ratio >= 1.0 / s.determined_within && ratio <= s.determined_within;
+    parameters
+        .iter()
+        .filter(|(k, &v)| intervals.get(*k).is_some_and(|[lo, hi]| !(within(lo / v) && within(hi / v))))
+        .map(|(k, _)| k.clone())
+        .collect()
+}
+
+/// The keys of an answer's `parameters` (with their `intervals`) and of its `effects`' the
+/// record does not determine ([`not_determined`]), each once.
+pub(crate) fn answer_not_determined(
+    parameters: &BTreeMap<String, f64>,
+    intervals: &BTreeMap<String, [f64; 2]>,
+    effects: &[torsional::FoundEffect],
+    s: &HeldOutSettings,
+) -> Vec<String> {
+    let mut keys = not_determined(parameters, intervals, s);
+    for k in effects.iter().flat_map(|e| not_determined(&e.parameters, &e.intervals, s)) {
+        if !keys.contains(&k) {
+            keys.push(k);
+        }
+    }
+    keys
+}
+
+/// Why `effects` are no finding: a parameter of theirs the record does not determine
+/// ([`not_determined`]; `None`: it determines them all).
+pub(crate) fn sizes_not_determined(effects: &[torsional::FoundEffect], s: &HeldOutSettings) -> Option<String> {
+    let loose: Vec<String> = effects
+        .iter()
+        .flat_map(|e| {
+            not_determined(&e.parameters, &e.intervals, s).into_iter().map(move |k| {
+                let at = e.at.as_ref().map(|a| format!(" at {a}")).unwrap_or_default();
+                let [lo, hi] = e.intervals[&k];
+                format!("{k} = {:.3e} of {}{at} (95 %: {lo:.3e} … {hi:.3e})", e.parameters[&k], e.effect)
+            })
+        })
+        .collect();
+    (!loose.is_empty()).then(|| {
+        format!(
+            "the record does not determine {} to within a factor {} either way: no finding",
+            loose.join("; "),
+            s.determined_within
+        )
+    })
 }
 
 /// Why an answer with effects is no finding on data its fit did not see: its held-out error
@@ -520,7 +586,7 @@ mod tests {
 
     #[test]
     fn folds_spread_over_the_record_and_partition_it() {
-        let f = Folds::new(1000, 10, &HeldOutSettings { folds: 5, max_blocks_per_fold: 8 });
+        let f = Folds::new(1000, 10, &HeldOutSettings { folds: 5, max_blocks_per_fold: 8, ..Default::default() });
         assert_eq!(f.block_len(), 25);
         // two channels of 1000 samples: each fold holds a fifth of each (a sum of squares of
         // ones counts the samples), in 8 blocks spread out (samples of the first and of the
@@ -545,5 +611,60 @@ mod tests {
         assert_eq!(Folds::new(1000, 900, &HeldOutSettings::default()).block_len(), 200);
         assert!(jackknife_interval(1.0, &[1.0]).iter().all(|v| v.is_nan()));
         assert!(jackknife_interval(1.0, &[1.0, f64::NAN]).iter().all(|v| v.is_nan()));
+    }
+
+    /// A parameter no fold moved beyond rounding has no interval: a zero width would claim a
+    /// precision nothing measured. One the folds moved has one.
+    #[test]
+    fn a_parameter_no_fold_moved_has_no_interval() {
+        let estimate = BTreeMap::from([("held".to_string(), 0.020837716911036391), ("fitted".to_string(), 2.0)]);
+        let folds: Vec<BTreeMap<String, f64>> = [(0.020837716911036336, 1.9), (0.020837716911036447, 2.1)]
+            .iter()
+            .cycle()
+            .take(5)
+            .map(|&(h, f)| BTreeMap::from([("held".to_string(), h), ("fitted".to_string(), f)]))
+            .collect();
+        let intervals = fold_intervals(&estimate, &folds);
+        assert!(!intervals.contains_key("held"), "{intervals:?}");
+        let [lo, hi] = intervals["fitted"];
+        assert!(lo < 2.0 && hi > 2.0, "{lo} {hi}");
+    }
+
+    /// The record determines a value whose interval lies within the factor either way; one
+    /// reaching beyond it, or to zero, or spanning decades, it does not determine.
+    #[test]
+    fn a_value_known_to_less_than_its_order_of_magnitude_is_not_determined() {
+        let s = HeldOutSettings::default();
+        let parameters = BTreeMap::from([
+            ("two_either_way".to_string(), 1.0),
+            ("a_friction".to_string(), 0.013),
+            ("a_drag".to_string(), 2.2e-7),
+            ("to_zero".to_string(), 1.0),
+            ("negative".to_string(), -1.0),
+            ("no_interval".to_string(), 5.0),
+        ]);
+        let intervals = BTreeMap::from([
+            ("two_either_way".to_string(), [0.5, 2.0]),
+            // the survey's record 2229: a friction of 0.013 N m known within 8e-4 ... 0.21
+            ("a_friction".to_string(), [8.1e-4, 0.21]),
+            // record 2223: a drag of 2.2e-7 N m s/rad within 8e-33 ... 5.9e18
+            ("a_drag".to_string(), [8.1e-33, 5.9e18]),
+            ("to_zero".to_string(), [-0.2, 2.2]),
+            ("negative".to_string(), [-1.5, -0.7]),
+        ]);
+        let mut loose = not_determined(&parameters, &intervals, &s);
+        loose.sort();
+        assert_eq!(loose, ["a_drag", "a_friction", "to_zero"]);
+        // an effect with such a size is no finding; the sentence names it
+        let effect = |name: &str, key: &str| torsional::FoundEffect {
+            effect: name.into(),
+            at: Some("body b2".into()),
+            parameters: BTreeMap::from([(key.to_string(), parameters[key])]),
+            intervals: BTreeMap::from([(key.to_string(), intervals[key])]),
+            error_without: 0.1,
+        };
+        let why = sizes_not_determined(&[effect("backlash", "two_either_way"), effect("coulomb_friction", "a_friction")], &s);
+        assert!(why.as_ref().is_some_and(|w| w.contains("a_friction") && !w.contains("two_either_way")), "{why:?}");
+        assert_eq!(sizes_not_determined(&[effect("backlash", "two_either_way")], &s), None);
     }
 }

@@ -96,8 +96,12 @@ pub struct TorsionalDiagnosis {
     /// The answer on data its fit did not see ([`super::HeldOutSettings`]).
     pub held_out: HeldOut,
     /// Why the answer is no finding although it fits the record: its effects do not predict
-    /// the held-out folds better than the re-fitted declared model (`None`: they do).
+    /// the held-out folds better than the re-fitted declared model — or the record does not determine a
+    /// size of theirs ([`super::sizes_not_determined`]; `None`: they do, and it determines them).
     pub unsupported: Option<String>,
+    /// The keys of `parameters` and of the effects' parameters the record does not determine
+    /// ([`super::not_determined`]): reported, never a finding.
+    pub not_determined: Vec<String>,
     /// Why the answer is no finding: another effect, or the same elsewhere, explains the record
     /// about as well ([`verdict::undetermined`], the rule of every engine; `None`: the record
     /// tells what and where).
@@ -1593,6 +1597,10 @@ pub fn diagnose(
             p
         })
         .collect();
+    // an effect whose size the record does not determine is no finding; every such value is said
+    let held_out_settings = super::HeldOutSettings::default();
+    let unsupported = check.unsupported.or_else(|| super::sizes_not_determined(&effects, &held_out_settings));
+    let not_determined = super::answer_not_determined(&parameters, &intervals, &effects, &held_out_settings);
     let mut d = TorsionalDiagnosis {
         distorted,
         equivalents,
@@ -1601,7 +1609,8 @@ pub fn diagnose(
         parameters,
         intervals,
         held_out: check.held_out,
-        unsupported: check.unsupported,
+        unsupported,
+        not_determined,
         undetermined,
         effects,
         path,
