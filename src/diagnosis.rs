@@ -559,6 +559,12 @@ pub fn human(r: &DiagnosisReport) -> String {
             h.folds,
             crate::units::quantity(h.block_s, "s")
         );
+        if h.damped_folds > 0 {
+            s += &format!(
+                "  {} of the {} fits without a fold needed a damped step (the record hardly determines some parameters): no intervals\n",
+                h.damped_folds, h.folds
+            );
+        }
     }
     if explained && r.structured_residual {
         s += "  the residual is still structured: something the candidates do not describe remains\n";

@@ -1086,7 +1086,8 @@ pub fn diagnose(rec: DriveRecord, progress: &(dyn Fn(&str) + Sync)) -> Result<Dr
         error_before,
     );
     let fold_parameters: Vec<BTreeMap<String, f64>> = check
-        .answer_folds
+        .jackknife_folds()
+        .unwrap_or_default()
         .iter()
         .map(|f| {
             problem
