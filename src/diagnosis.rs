@@ -561,7 +561,7 @@ pub fn human(r: &DiagnosisReport) -> String {
         );
         if h.damped_folds > 0 {
             s += &format!(
-                "  {} of the {} fits without a fold needed a damped step (the record hardly determines some parameters): no intervals\n",
+                "  {} of the {} fits without a fold needed a damped step (an interval of a parameter the record hardly determines is then too narrow)\n",
                 h.damped_folds, h.folds
             );
         }

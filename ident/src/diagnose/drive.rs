@@ -1086,8 +1086,7 @@ pub fn diagnose(rec: DriveRecord, progress: &(dyn Fn(&str) + Sync)) -> Result<Dr
         error_before,
     );
     let fold_parameters: Vec<BTreeMap<String, f64>> = check
-        .jackknife_folds()
-        .unwrap_or_default()
+        .answer_folds
         .iter()
         .map(|f| {
             problem

@@ -229,8 +229,7 @@ pub struct HeldOut {
     /// error, fitted on nothing).
     pub declared_error_held_out: f64,
     /// Folds whose fit without them needed a damped step ([`FOLD_DAMPINGS`]): where there are
-    /// any, the answer's parameters get no intervals (a damped fit is no jackknife value; the
-    /// record hardly determines some of them).
+    /// any, the intervals of parameters the record hardly determines are too narrow.
     pub damped_folds: usize,
 }
 
@@ -279,8 +278,7 @@ impl Folds {
 pub(crate) struct FoldFit {
     pub(crate) x: Vec<f64>,
     pub(crate) held_ssr: f64,
-    /// Its step was damped ([`refit_without_folds`]): a fit without the fold for the held-out
-    /// error, but its parameters are no jackknife value.
+    /// Its step was damped ([`refit_without_folds`]).
     pub(crate) damped: bool,
 }
 
@@ -296,9 +294,11 @@ pub(crate) type ResidualFn<'a> = &'a (dyn Fn(&[f64]) -> Option<Vec<f64>> + Sync)
 /// of a rattling play), the step is halved until it does not raise the error outside the fold
 /// ([`STEP_HALVINGS`] times at most). Where even the eighth of it does — the step runs along a
 /// direction the record hardly determines (an inertia and a stiffness that trade against each
-/// other, a mode the record does not excite, a fit that ended on its box) — it is damped as a
-/// Levenberg–Marquardt fit's step is ([`FOLD_DAMPINGS`]): the fold's fit is then a fit without
-/// the fold, for the held-out error, but no jackknife value ([`FoldFit::damped`]). Where no
+/// other, a mode the record does not excite, a fit that ended on its box; or, at the minimum of
+/// a well determined fit, a gradient whose terms cancel to below the forward differences'
+/// precision) — it is damped as a Levenberg–Marquardt fit's step is ([`FOLD_DAMPINGS`]): a fit
+/// without the fold that moves less along what the record hardly determines, so the intervals
+/// of such parameters are too narrow where folds needed it ([`FoldFit::damped`]). Where no
 /// step lowers the error outside the fold, none is taken: the fit to all of the record is then
 /// (as far as the steps tell) a minimum without the fold too, and its own fit — a play's notch
 /// is the same in every fold. A fit's step, never a worse fit. The error on the fold is
@@ -439,14 +439,6 @@ pub(crate) fn check_held_out(
     };
     let unsupported = if has_effects { unsupported(&held_out) } else { None };
     HeldOutCheck { held_out, answer_folds, unsupported }
-}
-
-impl HeldOutCheck {
-    /// The answer's fits without each fold as jackknife values: `None` where one of them was
-    /// damped ([`FoldFit::damped`]).
-    pub(crate) fn jackknife_folds(&self) -> Option<&[FoldFit]> {
-        (!self.answer_folds.iter().any(|f| f.damped)).then_some(self.answer_folds.as_slice())
-    }
 }
 
 /// 95 % intervals of the parameters `estimate` from their values `leave_outs` in the fits
@@ -651,7 +643,7 @@ mod tests {
     /// the mean of the samples outside the fold, undamped. Where the step raises the error even
     /// at an eighth of it — Rosenbrock's valley from (−1.2, 1): 2342, 206, 42.7 and 24.9
     /// against 24.2 at the start, by hand — it is damped (λ = 0.01 lowers the cost to 4.2) and
-    /// taken: a fit without the fold, but no jackknife value.
+    /// taken.
     #[test]
     fn a_fold_step_that_raises_the_error_is_damped_not_dropped() {
         let n = 50;

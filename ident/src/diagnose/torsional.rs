@@ -1540,7 +1540,7 @@ pub fn diagnose(
         error_before,
     );
     let fold_models: Vec<TorsionalModel> =
-        check.jackknife_folds().unwrap_or_default().iter().map(|f| problem.build(&current.effects, &f.x)).collect();
+        check.answer_folds.iter().map(|f| problem.build(&current.effects, &f.x)).collect();
     let intervals_of = |of: &dyn Fn(&TorsionalModel) -> BTreeMap<String, f64>| {
         super::fold_intervals(&of(&model), &fold_models.iter().map(of).collect::<Vec<_>>())
     };
