@@ -30,9 +30,9 @@ pub struct DiagnosisReport {
     /// held-out fold (`ident::diagnose::jackknife_interval`; `torsional_sweep`, `drive_test`).
     #[serde(skip_serializing_if = "BTreeMap::is_empty")]
     pub intervals: BTreeMap<String, [f64; 2]>,
-    /// Keys of `parameters` (and of `effects`' parameters) whose interval spans more than
+    /// Keys of `parameters` whose interval spans more than
     /// `ident::diagnose::HeldOutSettings::determined_within` either way: the record does not
-    /// determine them (the text says so in place of the value).
+    /// determine them (the text says so in place of the value; each effect's are in `effects`).
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub not_determined: Vec<String>,
     /// The answer on the folds of the record its fit did not see (`torsional_sweep`,
@@ -514,16 +514,17 @@ pub fn human(r: &DiagnosisReport) -> String {
     } else {
         format!("{kind}: the declared model lacks {}\n", named(&r.effect, r.at.as_ref()))
     };
-    let one = |k: &String, v: f64, interval: Option<&[f64; 2]>| {
-        if r.not_determined.contains(k) {
+    let one = |k: &String, v: f64, interval: Option<&[f64; 2]>, loose: &[String]| {
+        if loose.contains(k) {
             crate::units::display_not_determined(k, interval)
         } else {
             crate::units::display_within(k, v, interval)
         }
     };
-    let show = |p: &mut dyn Iterator<Item = (&String, &f64)>, intervals: &BTreeMap<String, [f64; 2]>| {
-        p.map(|(k, v)| one(k, *v, intervals.get(k))).collect::<Vec<_>>().join(", ")
-    };
+    let show =
+        |p: &mut dyn Iterator<Item = (&String, &f64)>, intervals: &BTreeMap<String, [f64; 2]>, loose: &[String]| {
+            p.map(|(k, v)| one(k, *v, intervals.get(k), loose)).collect::<Vec<_>>().join(", ")
+        };
     if explained && !r.equivalents.is_empty() {
         s += &format!(
             "  the record does NOT DETERMINE the parameters: {} other fit(s) as good (BIC within {}); one solution:\n",
@@ -535,20 +536,24 @@ pub fn human(r: &DiagnosisReport) -> String {
         // no parameter of an unexplained record is shown as a finding
     } else if r.effects.len() > 1 {
         for e in &r.effects {
-            s += &format!("  {}: {}\n", named(&e.effect, e.at.as_ref()), show(&mut e.parameters.iter(), &e.intervals));
+            s += &format!(
+                "  {}: {}\n",
+                named(&e.effect, e.at.as_ref()),
+                show(&mut e.parameters.iter(), &e.intervals, &e.not_determined)
+            );
         }
         let of_effects = |k: &String| r.effects.iter().any(|e| e.parameters.contains_key(k));
         let rest: Vec<(&String, &f64)> = r.parameters.iter().filter(|(k, _)| !of_effects(k)).collect();
         if !rest.is_empty() {
-            s += &format!("  declared, re-fitted: {}\n", show(&mut rest.into_iter(), &r.intervals));
+            s += &format!("  declared, re-fitted: {}\n", show(&mut rest.into_iter(), &r.intervals, &r.not_determined));
         }
     } else {
         for (k, v) in &r.parameters {
-            s += &format!("  {}\n", one(k, *v, r.intervals.get(k)));
+            s += &format!("  {}\n", one(k, *v, r.intervals.get(k), &r.not_determined));
         }
     }
     for e in r.equivalents.iter().filter(|_| explained) {
-        s += &format!("  as good: {}\n", show(&mut e.iter(), &BTreeMap::new()));
+        s += &format!("  as good: {}\n", show(&mut e.iter(), &BTreeMap::new(), &[]));
     }
     s += &format!("  error {:.4} → {:.4}  ({})\n", r.error_before, r.error_after, r.error_definition);
     if let Some(h) = &r.held_out {

@@ -176,8 +176,8 @@ pub struct DriveDiagnosis {
     /// the held-out folds better than the re-fitted declared model — or the record does not determine a
     /// size of it ([`super::sizes_not_determined`]; `None`: it does, and it determines them).
     pub unsupported: Option<String>,
-    /// The keys of `parameters` and of the effects' parameters the record does not determine
-    /// ([`super::not_determined`]): reported, never a finding.
+    /// The keys of `parameters` the record does not determine ([`super::not_determined`];
+    /// each effect's are in `effects`): reported, never a finding.
     pub not_determined: Vec<String>,
     /// Why the answer is no finding: the same effects elsewhere, or other effects, explain the
     /// record about as well ([`super::verdict::undetermined`]; `None`: the record tells what and
@@ -1130,13 +1130,7 @@ pub fn diagnose(rec: DriveRecord, progress: &(dyn Fn(&str) + Sync)) -> Result<Dr
             let intervals = parameters.keys().filter_map(|k| intervals.get(k).map(|v| (k.clone(), *v))).collect();
             let other = own.iter().find(|o| *o != placed).copied();
             let error_without = other.and_then(error_alone).unwrap_or(scored[none].0.error_after);
-            FoundEffect {
-                effect: sized.name().into(),
-                at: Some(sized.element(&model)),
-                parameters,
-                intervals,
-                error_without,
-            }
+            FoundEffect::new(sized.name().into(), Some(sized.element(&model)), parameters, intervals, error_without)
         })
         .collect();
     let mut candidates: Vec<CandidateScore> = scored.into_iter().map(|s| s.0).collect();
@@ -1145,7 +1139,7 @@ pub fn diagnose(rec: DriveRecord, progress: &(dyn Fn(&str) + Sync)) -> Result<Dr
     // an effect whose size the record does not determine is no finding; every such value is said
     let held_out_settings = super::HeldOutSettings::default();
     let unsupported = check.unsupported.or_else(|| super::sizes_not_determined(&effects, &held_out_settings));
-    let not_determined = super::answer_not_determined(&chosen.parameters, &intervals, &effects, &held_out_settings);
+    let not_determined = super::not_determined(&chosen.parameters, &intervals, &held_out_settings);
     let mut d = DriveDiagnosis {
         effect: chosen_candidate.name().to_string(),
         at: effects.first().and_then(|e| e.at.clone()),

@@ -300,8 +300,8 @@ pub(crate) type ResidualFn<'a> = &'a (dyn Fn(&[f64]) -> Option<Vec<f64>> + Sync)
 /// without the fold that moves less along what the record hardly determines, so the intervals
 /// of such parameters are too narrow where folds needed it ([`FoldFit::damped`]). Where no
 /// step lowers the error outside the fold, none is taken: the fit to all of the record is then
-/// (as far as the steps tell) a minimum without the fold too, and its own fit — a play's notch
-/// is the same in every fold. A fit's step, never a worse fit. The error on the fold is
+/// (as far as the steps tell) a minimum without the fold too — a play's notch is the same in
+/// every fold. A fit's step, never a worse fit. The error on the fold is
 /// simulated.
 fn refit_without_folds(folds: &Folds, fits: &[(ResidualFn, &[f64])]) -> Vec<Vec<FoldFit>> {
     let k = folds.count();
@@ -481,33 +481,17 @@ pub fn not_determined(
         .collect()
 }
 
-/// The keys of an answer's `parameters` (with their `intervals`) and of its `effects`' the
-/// record does not determine ([`not_determined`]), each once.
-pub(crate) fn answer_not_determined(
-    parameters: &BTreeMap<String, f64>,
-    intervals: &BTreeMap<String, [f64; 2]>,
-    effects: &[torsional::FoundEffect],
-    s: &HeldOutSettings,
-) -> Vec<String> {
-    let mut keys = not_determined(parameters, intervals, s);
-    for k in effects.iter().flat_map(|e| not_determined(&e.parameters, &e.intervals, s)) {
-        if !keys.contains(&k) {
-            keys.push(k);
-        }
-    }
-    keys
-}
-
 /// Why `effects` are no finding: a parameter of theirs the record does not determine
-/// ([`not_determined`]; `None`: it determines them all).
+/// ([`torsional::FoundEffect::not_determined`]; `None`: it determines them all; `s` names the
+/// factor).
 pub(crate) fn sizes_not_determined(effects: &[torsional::FoundEffect], s: &HeldOutSettings) -> Option<String> {
     let loose: Vec<String> = effects
         .iter()
         .flat_map(|e| {
-            not_determined(&e.parameters, &e.intervals, s).into_iter().map(move |k| {
+            e.not_determined.iter().map(move |k| {
                 let at = e.at.as_ref().map(|a| format!(" at {a}")).unwrap_or_default();
-                let [lo, hi] = e.intervals[&k];
-                format!("{k} = {:.3e} of {}{at} (95 %: {lo:.3e} … {hi:.3e})", e.parameters[&k], e.effect)
+                let [lo, hi] = e.intervals[k];
+                format!("{k} = {:.3e} of {}{at} (95 %: {lo:.3e} … {hi:.3e})", e.parameters[k], e.effect)
             })
         })
         .collect();
@@ -718,12 +702,14 @@ mod tests {
         loose.sort();
         assert_eq!(loose, ["a_drag", "a_friction", "to_zero"]);
         // an effect with such a size is no finding; the sentence names it
-        let effect = |name: &str, key: &str| torsional::FoundEffect {
-            effect: name.into(),
-            at: Some("body b2".into()),
-            parameters: BTreeMap::from([(key.to_string(), parameters[key])]),
-            intervals: BTreeMap::from([(key.to_string(), intervals[key])]),
-            error_without: 0.1,
+        let effect = |name: &str, key: &str| {
+            torsional::FoundEffect::new(
+                name.into(),
+                Some("body b2".into()),
+                BTreeMap::from([(key.to_string(), parameters[key])]),
+                BTreeMap::from([(key.to_string(), intervals[key])]),
+                0.1,
+            )
         };
         let why =
             sizes_not_determined(&[effect("backlash", "two_either_way"), effect("coulomb_friction", "a_friction")], &s);

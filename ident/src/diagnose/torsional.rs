@@ -99,8 +99,8 @@ pub struct TorsionalDiagnosis {
     /// the held-out folds better than the re-fitted declared model — or the record does not determine a
     /// size of theirs ([`super::sizes_not_determined`]; `None`: they do, and it determines them).
     pub unsupported: Option<String>,
-    /// The keys of `parameters` and of the effects' parameters the record does not determine
-    /// ([`super::not_determined`]): reported, never a finding.
+    /// The keys of `parameters` the record does not determine ([`super::not_determined`];
+    /// each effect's are in `effects`): reported, never a finding.
     pub not_determined: Vec<String>,
     /// Why the answer is no finding: another effect, or the same elsewhere, explains the record
     /// about as well ([`verdict::undetermined`], the rule of every engine; `None`: the record
@@ -788,6 +788,25 @@ pub struct FoundEffect {
     /// The answer's error with this effect left out and the others re-fitted (the declared
     /// model re-fitted for a single effect): what the effect explains.
     pub error_without: f64,
+    /// Its parameters the record does not determine ([`super::not_determined`]): with one, the
+    /// effect is no finding ([`super::sizes_not_determined`]).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub not_determined: Vec<String>,
+}
+
+impl FoundEffect {
+    /// An effect found with its `parameters` and their `intervals`, judged by
+    /// [`super::HeldOutSettings`]' defaults for what the record does not determine.
+    pub(crate) fn new(
+        effect: String,
+        at: Option<String>,
+        parameters: BTreeMap<String, f64>,
+        intervals: BTreeMap<String, [f64; 2]>,
+        error_without: f64,
+    ) -> FoundEffect {
+        let not_determined = super::not_determined(&parameters, &intervals, &super::HeldOutSettings::default());
+        FoundEffect { effect, at, parameters, intervals, error_without, not_determined }
+    }
 }
 
 /// One step of the forward selection.
@@ -1557,13 +1576,7 @@ pub fn diagnose(
                     .find(|f| !f.effects.contains(c) && f.effects.len() + 1 == current.effects.len())
                     .map_or(f64::NAN, |f| f.error())
             };
-            FoundEffect {
-                effect: c.name().into(),
-                at: c.at(),
-                parameters: c.report(&model),
-                intervals: intervals_of(&|m| c.report(m)),
-                error_without,
-            }
+            FoundEffect::new(c.name().into(), c.at(), c.report(&model), intervals_of(&|m| c.report(m)), error_without)
         })
         .collect();
     let mut parameters = declared_keys(&model);
@@ -1600,7 +1613,7 @@ pub fn diagnose(
     // an effect whose size the record does not determine is no finding; every such value is said
     let held_out_settings = super::HeldOutSettings::default();
     let unsupported = check.unsupported.or_else(|| super::sizes_not_determined(&effects, &held_out_settings));
-    let not_determined = super::answer_not_determined(&parameters, &intervals, &effects, &held_out_settings);
+    let not_determined = super::not_determined(&parameters, &intervals, &held_out_settings);
     let mut d = TorsionalDiagnosis {
         distorted,
         equivalents,
