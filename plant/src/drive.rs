@@ -492,9 +492,31 @@ impl DriveModel {
         initial_speed: f64,
         outputs: &[(Quantity, usize)],
     ) -> Result<Vec<Vec<f64>>> {
-        let p = Dynamics::new(self)?;
-        p.simulate(inputs, dt_s, initial_speed, outputs)
+        let len = inputs.first().map_or(0, Vec::len);
+        Ok(split_outputs(self.simulate_flat(inputs, dt_s, initial_speed, outputs)?, len))
     }
+
+    /// [`DriveModel::simulate`] with the outputs one after another in one vector, each as long
+    /// as the inputs: no per-output buffers beside it (a diagnosis forms its residual in place).
+    pub fn simulate_flat(
+        &self,
+        inputs: &[Vec<f64>],
+        dt_s: f64,
+        initial_speed: f64,
+        outputs: &[(Quantity, usize)],
+    ) -> Result<Vec<f64>> {
+        let p = Dynamics::new(self)?;
+        p.simulate_flat(inputs, dt_s, initial_speed, outputs)
+    }
+}
+
+/// The outputs of a flat simulation ([`Dynamics::simulate_flat_from`]), one vector each of
+/// `len` samples.
+pub fn split_outputs(flat: Vec<f64>, len: usize) -> Vec<Vec<f64>> {
+    if len == 0 {
+        return Vec::new();
+    }
+    flat.chunks(len).map(<[f64]>::to_vec).collect()
 }
 
 /// The model's right-hand side, outputs, linearisation and RK4 step, in flat arrays: what the
@@ -1098,27 +1120,22 @@ impl Dynamics {
         }
     }
 
-    fn simulate(
+    fn simulate_flat(
         &self,
         inputs: &[Vec<f64>],
         dt: f64,
         initial_speed: f64,
         outputs: &[(Quantity, usize)],
-    ) -> Result<Vec<Vec<f64>>> {
+    ) -> Result<Vec<f64>> {
         // rigid motion at the initial speed; lagged inputs start at their first value
         let first: Vec<f64> = inputs.iter().map(|u| u.first().copied().unwrap_or(0.0)).collect();
         let x0 = self.initial_state(initial_speed, &first);
         let signals: Vec<&[f64]> = inputs.iter().map(Vec::as_slice).collect();
-        self.simulate_from(x0, &signals, dt, outputs)
+        self.simulate_flat_from(x0, &signals, dt, outputs)
     }
 
-    /// Simulates the model from state `x0` under the sampled `inputs` (one signal per input,
-    /// sample time `dt`, each held over a sample and shifted by its input's dead time, the
-    /// first value held before the start) and returns the `outputs` at the sample instants.
-    /// A linear model is stepped exactly (ZOH of each piece of a sample between the dead
-    /// times' fractions); a nonlinear one by [`PiecewiseRk4`] with [`Dynamics::rk4_steps_s`],
-    /// the pieces of a play that is its only nonlinearity exactly, a friction that is while
-    /// it slides whole ([`Dynamics::exact_steps`]).
+    /// Simulates the model from state `x0` under the sampled `inputs` and returns the
+    /// `outputs` at the sample instants, one vector each ([`Dynamics::simulate_flat_from`]).
     pub fn simulate_from(
         &self,
         x0: Vec<f64>,
@@ -1126,6 +1143,25 @@ impl Dynamics {
         dt: f64,
         outputs: &[(Quantity, usize)],
     ) -> Result<Vec<Vec<f64>>> {
+        let len = inputs.first().map_or(0, |u| u.len());
+        Ok(split_outputs(self.simulate_flat_from(x0, inputs, dt, outputs)?, len))
+    }
+
+    /// Simulates the model from state `x0` under the sampled `inputs` (one signal per input,
+    /// sample time `dt`, each held over a sample and shifted by its input's dead time, the
+    /// first value held before the start) and returns the `outputs` at the sample instants, one
+    /// after another in one vector (output o's sample k at o·len + k, len the inputs' length).
+    /// A linear model is stepped exactly (ZOH of each piece of a sample between the dead
+    /// times' fractions); a nonlinear one by [`PiecewiseRk4`] with [`Dynamics::rk4_steps_s`],
+    /// the pieces of a play that is its only nonlinearity exactly, a friction that is while
+    /// it slides whole ([`Dynamics::exact_steps`]).
+    pub fn simulate_flat_from(
+        &self,
+        x0: Vec<f64>,
+        inputs: &[&[f64]],
+        dt: f64,
+        outputs: &[(Quantity, usize)],
+    ) -> Result<Vec<f64>> {
         let (n, ns, m) = (self.n, self.nstates, self.inputs.len());
         if x0.len() != ns {
             return Err(PlantError::Invalid(format!(
@@ -1173,7 +1209,7 @@ impl Dynamics {
             starts.iter().enumerate().map(|(p, &s)| (s, starts.get(p + 1).copied().unwrap_or(1.0) - s)).collect();
 
         let mut x = x0;
-        let mut y: Vec<Vec<f64>> = outputs.iter().map(|_| Vec::with_capacity(len)).collect();
+        let mut y = vec![0.0; outputs.len() * len];
         let mut u = vec![0.0; m];
         // per piece, how many samples back each input's value lies
         let backs: Vec<Vec<usize>> = pieces
@@ -1194,12 +1230,12 @@ impl Dynamics {
                 Quantity::CouplingForce => None,
             })
             .collect();
-        let record = |y: &mut Vec<Vec<f64>>, x: &[f64]| {
-            for ((yo, &o), source) in y.iter_mut().zip(outputs).zip(&sources) {
-                yo.push(match *source {
+        let record = |y: &mut [f64], x: &[f64], k: usize| {
+            for (j, (&o, source)) in outputs.iter().zip(&sources).enumerate() {
+                y[j * len + k] = match *source {
                     Some(i) => x[i],
                     None => self.output(x, o),
-                });
+                };
             }
         };
         // the state checked for divergence every this many samples and at the last
@@ -1221,7 +1257,7 @@ impl Dynamics {
             }
             let mut next = vec![0.0; ns];
             for k in 0..len {
-                record(&mut y, &x);
+                record(&mut y, &x, k);
                 for (p, map) in maps.iter().enumerate() {
                     input_at(&mut u, k, p);
                     map.apply(&x, &u, &mut next);
@@ -1254,7 +1290,7 @@ impl Dynamics {
         let exact = self.exact_steps(&lengths);
         let mut piece = None;
         for k in 0..len {
-            record(&mut y, &x);
+            record(&mut y, &x, k);
             for (p, &(_, frac)) in pieces.iter().enumerate() {
                 input_at(&mut u, k, p);
                 let maps = exact.as_ref().and_then(|maps| maps.get(p));

@@ -403,31 +403,49 @@ impl Problem<'_> {
         ([held, &s].concat(), cost)
     }
 
-    /// The model's outputs, high-passed as the measurement is.
-    fn simulate(&self, m: &DriveModel) -> Option<Vec<Vec<f64>>> {
-        let mut y = m.simulate(self.rec.inputs, self.rec.dt_s, self.initial_speed, self.rec.outputs).ok()?;
+    /// The model's outputs, high-passed as the measurement is, one after another in one vector
+    /// (`DriveModel::simulate_flat`: the residual is then formed in place, and a fit holds one
+    /// record-sized buffer per evaluation, not two).
+    fn simulate(&self, m: &DriveModel) -> Option<Vec<f64>> {
+        let mut y = m.simulate_flat(self.rec.inputs, self.rec.dt_s, self.initial_speed, self.rec.outputs).ok()?;
+        let len = self.rec.inputs.first().map_or(0, Vec::len);
+        if len == 0 {
+            return None;
+        }
         // two outputs at a time (the filter's recurrences interleaved)
-        for pair in y.chunks_mut(2) {
-            match pair {
-                [a, b] => filtfilt_high_pass_pair(a, b, self.rec.dt_s, self.high_pass_hz),
-                [a] => filtfilt_high_pass_in_place(a, self.rec.dt_s, self.high_pass_hz),
+        for pair in y.chunks_mut(2 * len) {
+            match pair.len() / len {
+                2 => {
+                    let (a, b) = pair.split_at_mut(len);
+                    filtfilt_high_pass_pair(a, b, self.rec.dt_s, self.high_pass_hz)
+                }
+                1 => filtfilt_high_pass_in_place(pair, self.rec.dt_s, self.high_pass_hz),
                 _ => {}
             }
         }
-        y.iter().all(|s| s.iter().all(|v| v.is_finite())).then_some(y)
+        y.iter().all(|v| v.is_finite()).then_some(y)
     }
 
-    fn residual_of(&self, y: &[Vec<f64>]) -> Vec<f64> {
-        let mut r = Vec::with_capacity(y.len() * y.first().map_or(0, Vec::len));
-        for ((s, m), w) in y.iter().zip(&self.measured).zip(&self.weights) {
-            r.extend(s.iter().zip(m).map(|(s, m)| (m - s) * w));
+    /// The residual (measured − simulated, weighted per output) of the outputs `y` of
+    /// [`Problem::simulate`], formed in their place.
+    fn residual_of(&self, mut y: Vec<f64>) -> Vec<f64> {
+        let len = self.rec.inputs.first().map_or(0, Vec::len).max(1);
+        for ((s, m), w) in y.chunks_mut(len).zip(&self.measured).zip(&self.weights) {
+            for (s, m) in s.iter_mut().zip(m) {
+                *s = (m - *s) * w;
+            }
         }
-        r
+        y
     }
 
     fn residual(&self, c: Candidate, x: &[f64]) -> Option<Vec<f64>> {
         let m = self.build(c, x)?;
-        Some(self.residual_of(&self.simulate(&m)?))
+        Some(self.residual_of(self.simulate(&m)?))
+    }
+
+    /// The outputs `y` of [`Problem::simulate`], one vector each (the traces).
+    fn per_output(&self, y: Vec<f64>) -> Vec<Vec<f64>> {
+        plant::drive::split_outputs(y, self.rec.inputs.first().map_or(0, Vec::len))
     }
 
     /// Starting values of the candidate's own parameters to grid over.
@@ -663,15 +681,13 @@ pub fn diagnose(rec: DriveRecord, progress: &(dyn Fn(&str) + Sync)) -> Result<Dr
             .simulate(m0)
             .ok_or_else(|| IdentError::Data("the declared model cannot be simulated (check its parameters)".into()))
     };
-    let sim0 = simulate_declared()?;
-    let r0 = problem.residual_of(&sim0);
+    let r0 = problem.residual_of(simulate_declared()?);
     let error_before = r0.iter().map(|v| v * v).sum::<f64>().sqrt();
     let nres = r0.len();
     let n_eff = effective_count(nres, lag1_autocorrelation(&r0));
     // the fits run without the declared model's signals (memory: a few record-sized buffers
     // per worker); its outputs are simulated again for the traces
     drop(r0);
-    drop(sim0);
 
     // the vocabulary at every element where it can act and the data can show it
     let mut cands = vec![Candidate::None, Candidate::Damping];
@@ -811,7 +827,7 @@ pub fn diagnose(rec: DriveRecord, progress: &(dyn Fn(&str) + Sync)) -> Result<Dr
             return None;
         }
         let m = problem.build(c, &x)?;
-        let rho = problem.simulate(&m).map_or(0.0, |s| lag1_autocorrelation(&problem.residual_of(&s)));
+        let rho = problem.simulate(&m).map_or(0.0, |s| lag1_autocorrelation(&problem.residual_of(s)));
         let own = c.effects();
         let parts: Vec<(String, String)> = if own.is_empty() {
             vec![(c.name().to_string(), String::new())]
@@ -1071,7 +1087,8 @@ pub fn diagnose(rec: DriveRecord, progress: &(dyn Fn(&str) + Sync)) -> Result<Dr
     // the screen has the declared inertias and stiffnesses held), each scored on the fold it did
     // not see.
     let after = problem.simulate(&model);
-    let answer_residual = after.as_ref().map(|y| problem.residual_of(y));
+    let answer_residual = after.clone().map(|y| problem.residual_of(y));
+    let after = after.map(|y| problem.per_output(y));
     let free_from = if base_fitted { 0 } else { nbase };
     let answer = |s: &[f64]| problem.residual(chosen_candidate, &[&chosen_x[..free_from], s].concat());
     let declared = |x: &[f64]| problem.residual(Candidate::None, x);
@@ -1110,7 +1127,7 @@ pub fn diagnose(rec: DriveRecord, progress: &(dyn Fn(&str) + Sync)) -> Result<Dr
         _ => None,
     };
     let structured_residual = super::verdict::ResidualSettings::default().structured(rho, chosen.error_after);
-    let before = simulate_declared()?;
+    let before = problem.per_output(simulate_declared()?);
     let after = after.unwrap_or_else(|| before.clone());
     let traces = DriveTraces {
         time_s: (0..len).map(|k| k as f64 * dt).collect(),
