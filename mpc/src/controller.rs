@@ -9,9 +9,9 @@ use crate::error::{setting, MpcError, Result};
 use crate::estimator::Estimator;
 use crate::model::PredictionModel;
 use crate::qp::{ParametricQp, QpSnapshot, Weights};
-use crate::riccati::dare;
 use crate::settings::{MpcSettings, SolverSettings};
 use crate::solver::{QpSolver, SolveInfo};
+use plant::riccati::dare;
 
 /// What one controller step did.
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -3,7 +3,7 @@
 use nalgebra::{DMatrix, DVector};
 
 use crate::error::Result;
-use crate::riccati::dare;
+use plant::riccati::dare;
 
 /// x̂ = [x; d] with x[k+1] = A x + B (u + E d), d[k+1] = d (+ noise), y = C_meas x (+ noise),
 /// E selecting the inputs that carry a disturbance. The gain comes from the filter Riccati

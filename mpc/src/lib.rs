@@ -15,7 +15,6 @@
 //! - [`closed_loop`]: simulation against a plant, the PI baseline, step figures.
 //! - [`evaluation`]: how `rigtwin mpc` judges a controller on any model: its closed loop, its
 //!   timing and allocations, its first input against the exact optimum; the report.
-//! - [`riccati`]: the discrete Riccati equation (`dare`).
 //! - [`prediction`]: any model (the paper rig with its effects, a drive model) as a
 //!   prediction model with its `[mpc]` section's settings.
 //! - [`realtime`]: the core a real-time target runs (the C library, the controller FMU).
@@ -32,7 +31,6 @@ pub mod model;
 pub mod prediction;
 pub mod qp;
 pub mod realtime;
-pub mod riccati;
 pub mod settings;
 pub mod solver;
 

@@ -1162,6 +1162,47 @@ impl Dynamics {
         dt: f64,
         outputs: &[(Quantity, usize)],
     ) -> Result<Vec<f64>> {
+        self.run(x0, inputs, dt, outputs, None)
+    }
+
+    /// The one-step-ahead prediction of the `outputs` (the `predictor` module): as
+    /// [`Dynamics::simulate_flat_from`], the state corrected after each sample k by `gain`
+    /// (states × outputs, a `Predictor`'s) times the `measured` outputs' (one signal per output,
+    /// as long as the inputs) departure from sample k's prediction, which is what is returned.
+    pub fn predict_flat_from(
+        &self,
+        x0: Vec<f64>,
+        inputs: &[&[f64]],
+        dt: f64,
+        outputs: &[(Quantity, usize)],
+        measured: &[&[f64]],
+        gain: &DMatrix<f64>,
+    ) -> Result<Vec<f64>> {
+        let len = inputs.first().map_or(0, |u| u.len());
+        if measured.len() != outputs.len() || measured.iter().any(|y| y.len() != len) {
+            return Err(PlantError::Invalid("one measured signal per output, as long as the inputs".into()));
+        }
+        if gain.shape() != (self.nstates, outputs.len()) {
+            return Err(PlantError::Invalid(format!(
+                "a predictor of {:?} gains for a model of {} states and {} outputs",
+                gain.shape(),
+                self.nstates,
+                outputs.len()
+            )));
+        }
+        self.run(x0, inputs, dt, outputs, Some((measured, gain)))
+    }
+
+    /// The simulation of [`Dynamics::simulate_flat_from`], corrected after each sample where
+    /// `correction` gives the measured outputs and the gain ([`Dynamics::predict_flat_from`]).
+    fn run(
+        &self,
+        x0: Vec<f64>,
+        inputs: &[&[f64]],
+        dt: f64,
+        outputs: &[(Quantity, usize)],
+        correction: Option<(&[&[f64]], &DMatrix<f64>)>,
+    ) -> Result<Vec<f64>> {
         let (n, ns, m) = (self.n, self.nstates, self.inputs.len());
         if x0.len() != ns {
             return Err(PlantError::Invalid(format!(
@@ -1238,6 +1279,17 @@ impl Dynamics {
                 };
             }
         };
+        // the state moved toward sample k's measurement, x += L (y_k − ŷ_k)
+        let correct = |x: &mut [f64], y: &[f64], k: usize| {
+            if let Some((measured, gain)) = correction {
+                for (o, signal) in measured.iter().enumerate() {
+                    let innovation = signal[k] - y[o * len + k];
+                    for (i, xi) in x.iter_mut().enumerate() {
+                        *xi += gain[(i, o)] * innovation;
+                    }
+                }
+            }
+        };
         // the state checked for divergence every this many samples and at the last
         const CHECK_EVERY: usize = 64;
         let diverged =
@@ -1258,6 +1310,7 @@ impl Dynamics {
             let mut next = vec![0.0; ns];
             for k in 0..len {
                 record(&mut y, &x, k);
+                correct(&mut x, &y, k);
                 for (p, map) in maps.iter().enumerate() {
                     input_at(&mut u, k, p);
                     map.apply(&x, &u, &mut next);
@@ -1291,6 +1344,11 @@ impl Dynamics {
         let mut piece = None;
         for k in 0..len {
             record(&mut y, &x, k);
+            if correction.is_some() {
+                correct(&mut x, &y, k);
+                // the correction may have moved the state into another piece
+                piece = None;
+            }
             for (p, &(_, frac)) in pieces.iter().enumerate() {
                 input_at(&mut u, k, p);
                 let maps = exact.as_ref().and_then(|maps| maps.get(p));

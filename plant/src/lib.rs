@@ -20,6 +20,10 @@
 //! - **Bearing block** ([`bearing`]): K/C/M force coefficients on a soft support, impedance
 //!   H = (K + Kh) − ω²(M + Mh) + iω(C + Ch), flexibility G = H⁻¹, state space (San Andrés 2011).
 //!
+//! - **Predictor** ([`predictor`]): a drive model's one-step-ahead predictor, the simulation
+//!   held to the measured outputs by the steady-state Kalman gain of its linear part
+//!   ([`riccati`]: the discrete Riccati equation).
+//!
 //! No I/O: file formats live in the `rigtwin` package.
 #![warn(missing_docs)]
 
@@ -34,8 +38,10 @@ pub mod line;
 pub mod mechanical;
 pub mod modal;
 pub mod paper;
+pub mod predictor;
 pub mod preset;
 pub mod reduce;
+pub mod riccati;
 pub mod rig;
 pub mod segment;
 pub mod shuffle;

@@ -1,8 +1,9 @@
-//! The discrete algebraic Riccati equation (python-control `dare`).
+//! The discrete algebraic Riccati equation (python-control `dare`): the MPC's terminal cost and
+//! Kalman filter, and a drive model's one-step-ahead predictor ([`crate::predictor`]).
 
 use nalgebra::DMatrix;
 
-use crate::error::{MpcError, Result};
+use crate::error::{PlantError, Result};
 
 /// Solution of X = AᵀXA − AᵀXB(R + BᵀXB)⁻¹BᵀXA + Q with its gain K = (R + BᵀXB)⁻¹BᵀXA
 /// (u = −K x is the infinite-horizon LQR law).
@@ -22,7 +23,7 @@ pub struct Dare {
 pub fn dare(a: &DMatrix<f64>, b: &DMatrix<f64>, q: &DMatrix<f64>, r: &DMatrix<f64>) -> Result<Dare> {
     let n = a.nrows();
     let rinv =
-        r.clone().cholesky().ok_or_else(|| MpcError::Numerical("dare: R is not positive definite".into()))?.inverse();
+        r.clone().cholesky().ok_or_else(|| PlantError::Numerical("dare: R is not positive definite".into()))?.inverse();
     let mut ak = a.clone();
     let mut g = b * &rinv * b.transpose();
     let mut h = q.clone();
@@ -32,7 +33,7 @@ pub fn dare(a: &DMatrix<f64>, b: &DMatrix<f64>, q: &DMatrix<f64>, r: &DMatrix<f6
         let w = (&eye + &g * &h)
             .lu()
             .try_inverse()
-            .ok_or_else(|| MpcError::Numerical("dare: I + G H is singular".into()))?;
+            .ok_or_else(|| PlantError::Numerical("dare: I + G H is singular".into()))?;
         let winv_a = &w * &ak;
         let h_next = &h + ak.transpose() * &h * &winv_a;
         let g_next = &g + &ak * &w * &g * ak.transpose();
@@ -49,7 +50,7 @@ pub fn dare(a: &DMatrix<f64>, b: &DMatrix<f64>, q: &DMatrix<f64>, r: &DMatrix<f6
         }
     }
     if !converged {
-        return Err(MpcError::Numerical(
+        return Err(PlantError::Numerical(
             "dare: doubling did not converge ((A, B) not stabilisable or (A, Q) not detectable)".into(),
         ));
     }
@@ -57,11 +58,11 @@ pub fn dare(a: &DMatrix<f64>, b: &DMatrix<f64>, q: &DMatrix<f64>, r: &DMatrix<f6
     let btx = b.transpose() * &x;
     let k = (r + &btx * b)
         .cholesky()
-        .ok_or_else(|| MpcError::Numerical("dare: R + BᵀXB is not positive definite".into()))?
+        .ok_or_else(|| PlantError::Numerical("dare: R + BᵀXB is not positive definite".into()))?
         .solve(&(&btx * a));
     let residual = a.transpose() * &x * a - a.transpose() * &x * b * &k + q - &x;
     if residual.norm() > 1e-8 * x.norm().max(1.0) {
-        return Err(MpcError::Numerical(format!("dare: residual {:.3e} too large", residual.norm())));
+        return Err(PlantError::Numerical(format!("dare: residual {:.3e} too large", residual.norm())));
     }
     Ok(Dare { x, k })
 }
