@@ -718,11 +718,19 @@ fn drive(file: &Path, progress: &(dyn Fn(&str) + Sync)) -> anyhow::Result<Diagno
             candidates: d.candidates.clone(),
             kind: "drive_test".into(),
             error_definition: format!(
-                "RMS over the outputs of ‖y_meas − y_model‖/‖y_meas‖, each output below {:.3} Hz removed",
-                d.high_pass_hz
+                "RMS over the outputs of ‖y_meas − y_model‖/‖y_meas‖, each output below {:.3} Hz removed{}",
+                d.high_pass_hz,
+                if d.scored_by_prediction {
+                    "; y_model the one-step-ahead prediction (the model held to the measured outputs after each sample)"
+                } else {
+                    ""
+                }
             ),
             structured_residual: d.structured_residual,
-            evidence: serde_json::json!({ "high_pass_hz": d.high_pass_hz }),
+            evidence: serde_json::json!({
+                "high_pass_hz": d.high_pass_hz,
+                "scored_by": if d.scored_by_prediction { "one_step_prediction" } else { "simulation" },
+            }),
             notes: d.notes.clone(),
             conversions: b.conversions.clone(),
         },
