@@ -3,8 +3,8 @@
 //! each output high-passed and weighted as `rigtwin diagnose` does (docs/validation.md, step 14).
 //! Shared by `examples/predictor_play.rs` and `tests/predictor.rs`.
 
-use plant::predictor::Predictor;
-use plant::{Backlash, Dynamics, Effect, Quantity};
+use plant::predictor::Noise;
+use plant::{Backlash, Effect, Quantity};
 
 /// An encoder's speed noise in the survey (`scripts/survey.py`'s `measured`): white and
 /// coloured 2 mrad/s each, 1 mrad/s quantisation, rad/s.
@@ -44,27 +44,23 @@ pub fn play_errors(
         }
         sum.sqrt()
     };
-    let output_sd: Vec<f64> =
-        outputs.iter().map(|o| if o.0 == Quantity::Speed { ENCODER_SD } else { input_sd }).collect();
+    let noise = Noise {
+        inputs_sd: vec![input_sd; b.input_data.len()],
+        disturbance_sd,
+        outputs_sd: outputs.iter().map(|o| if o.0 == Quantity::Speed { ENCODER_SD } else { input_sd }).collect(),
+    };
     // the first body's mean speed over the quiet start (the survey's first output)
     let quiet = 100.min(len);
     let speed0 = b.output_data[0][..quiet].iter().sum::<f64>() / quiet as f64;
-    let inputs: Vec<&[f64]> = b.input_data.iter().map(Vec::as_slice).collect();
-    let raw: Vec<&[f64]> = b.output_data.iter().map(Vec::as_slice).collect();
-    let first: Vec<f64> = inputs.iter().map(|u| u[0]).collect();
     let mut rows = Vec::new();
     for &factor in factors {
         let mut m = b.model.clone();
         if factor > 0.0 {
             m.effects.push(Effect::Backlash(Backlash { coupling, backlash: factor * play }));
         }
-        let d = Dynamics::new(&m).map_err(|e| e.to_string())?;
-        let x0 = d.initial_state(speed0, &first);
-        let simulated = d.simulate_flat_from(x0.clone(), &inputs, dt, &outputs).map_err(|e| e.to_string())?;
-        let predictor = Predictor::new(&m, dt, &outputs, &vec![input_sd; inputs.len()], disturbance_sd, &output_sd)
-            .map_err(|e| e.to_string())?;
+        let simulated = m.simulate_flat(&b.input_data, dt, speed0, &outputs).map_err(|e| e.to_string())?;
         let predicted =
-            d.predict_flat_from(x0, &inputs, dt, &outputs, &raw, &predictor.gain).map_err(|e| e.to_string())?;
+            m.predict_flat(&b.input_data, dt, speed0, &outputs, &b.output_data, &noise).map_err(|e| e.to_string())?;
         rows.push((factor, error(&simulated), error(&predicted)));
     }
     Ok(rows)

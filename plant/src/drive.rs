@@ -492,8 +492,7 @@ impl DriveModel {
         initial_speed: f64,
         outputs: &[(Quantity, usize)],
     ) -> Result<Vec<Vec<f64>>> {
-        let len = inputs.first().map_or(0, Vec::len);
-        Ok(split_outputs(self.simulate_flat(inputs, dt_s, initial_speed, outputs)?, len))
+        Ok(split_outputs(self.simulate_flat(inputs, dt_s, initial_speed, outputs)?, outputs.len()))
     }
 
     /// [`DriveModel::simulate`] with the outputs one after another in one vector, each as long
@@ -510,13 +509,11 @@ impl DriveModel {
     }
 }
 
-/// The outputs of a flat simulation ([`Dynamics::simulate_flat_from`]), one vector each of
-/// `len` samples.
-pub fn split_outputs(flat: Vec<f64>, len: usize) -> Vec<Vec<f64>> {
-    if len == 0 {
-        return Vec::new();
-    }
-    flat.chunks(len).map(<[f64]>::to_vec).collect()
+/// The `count` outputs of a flat simulation ([`Dynamics::simulate_flat_from`]), one vector
+/// each (empty ones for a record without samples).
+pub fn split_outputs(flat: Vec<f64>, count: usize) -> Vec<Vec<f64>> {
+    let len = flat.len() / count.max(1);
+    (0..count).map(|o| flat[o * len..(o + 1) * len].to_vec()).collect()
 }
 
 /// The model's right-hand side, outputs, linearisation and RK4 step, in flat arrays: what the
@@ -1127,11 +1124,15 @@ impl Dynamics {
         initial_speed: f64,
         outputs: &[(Quantity, usize)],
     ) -> Result<Vec<f64>> {
-        // rigid motion at the initial speed; lagged inputs start at their first value
-        let first: Vec<f64> = inputs.iter().map(|u| u.first().copied().unwrap_or(0.0)).collect();
-        let x0 = self.initial_state(initial_speed, &first);
         let signals: Vec<&[f64]> = inputs.iter().map(Vec::as_slice).collect();
-        self.simulate_flat_from(x0, &signals, dt, outputs)
+        self.simulate_flat_from(self.record_start(inputs, initial_speed), &signals, dt, outputs)
+    }
+
+    /// The state a record starts from: rigid motion at `initial_speed` of the first body,
+    /// lagged inputs at their first value.
+    pub(crate) fn record_start(&self, inputs: &[Vec<f64>], initial_speed: f64) -> Vec<f64> {
+        let first: Vec<f64> = inputs.iter().map(|u| u.first().copied().unwrap_or(0.0)).collect();
+        self.initial_state(initial_speed, &first)
     }
 
     /// Simulates the model from state `x0` under the sampled `inputs` and returns the
@@ -1143,8 +1144,7 @@ impl Dynamics {
         dt: f64,
         outputs: &[(Quantity, usize)],
     ) -> Result<Vec<Vec<f64>>> {
-        let len = inputs.first().map_or(0, |u| u.len());
-        Ok(split_outputs(self.simulate_flat_from(x0, inputs, dt, outputs)?, len))
+        Ok(split_outputs(self.simulate_flat_from(x0, inputs, dt, outputs)?, outputs.len()))
     }
 
     /// Simulates the model from state `x0` under the sampled `inputs` (one signal per input,
@@ -1592,6 +1592,14 @@ mod tests {
 
     /// The controller's state space equals the mechanical model's (`Line::state_space`, built
     /// from J, C, D matrices), speeds and coupling forces; a dead time is reported beside it.
+    /// A record without samples gives one empty signal per output, as many as were asked for.
+    #[test]
+    fn a_flat_simulation_splits_into_one_signal_per_output() {
+        assert_eq!(split_outputs(Vec::new(), 3), vec![Vec::<f64>::new(); 3]);
+        assert_eq!(split_outputs(vec![1.0, 2.0, 3.0, 4.0], 2), vec![vec![1.0, 2.0], vec![3.0, 4.0]]);
+        assert!(split_outputs(Vec::new(), 0).is_empty());
+    }
+
     #[test]
     fn control_state_space_is_the_mechanical_one() {
         let line = gear_line();

@@ -25,6 +25,17 @@ use crate::statespace::zoh;
 use crate::stepper::{coordinates, Coordinate};
 use crate::{DriveModel, Dynamics};
 
+/// The noise a predictor's gain is built for: standard deviations in the signals' units.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Noise {
+    /// Each input's noise, held over a sample (≥ 0).
+    pub inputs_sd: Vec<f64>,
+    /// A torque (force) on every body that the model lacks (≥ 0).
+    pub disturbance_sd: f64,
+    /// Each output's noise (> 0).
+    pub outputs_sd: Vec<f64>,
+}
+
 /// The steady-state Kalman gain of a drive model for its sampled outputs.
 #[derive(Debug, Clone)]
 pub struct Predictor {
@@ -32,20 +43,38 @@ pub struct Predictor {
     pub gain: DMatrix<f64>,
 }
 
-impl Predictor {
-    /// The gain of model `m` sampled every `dt_s` for `outputs`, with `input_sd` the standard
-    /// deviation of each input's noise (held over a sample; ≥ 0), `disturbance_sd` that of a
-    /// torque (force) on every body that the model lacks (≥ 0), and `output_sd` each output's
-    /// (> 0), in the outputs' units.
-    pub fn new(
-        m: &DriveModel,
+impl DriveModel {
+    /// The one-step-ahead prediction of the `outputs` from rest as [`DriveModel::simulate_flat`]
+    /// starts (every body at `initial_speed` of the first), held to the `measured` outputs (one
+    /// signal per output, as long as the inputs) by the gain of [`Predictor::new`] for `noise`:
+    /// [`Dynamics::predict_flat_from`].
+    pub fn predict_flat(
+        &self,
+        inputs: &[Vec<f64>],
         dt_s: f64,
+        initial_speed: f64,
         outputs: &[(Quantity, usize)],
-        input_sd: &[f64],
-        disturbance_sd: f64,
-        output_sd: &[f64],
-    ) -> Result<Predictor> {
-        let d = Dynamics::new(m)?;
+        measured: &[Vec<f64>],
+        noise: &Noise,
+    ) -> Result<Vec<f64>> {
+        let d = Dynamics::new(self)?;
+        let p = Predictor::of(self, &d, dt_s, outputs, noise)?;
+        let signals: Vec<&[f64]> = inputs.iter().map(Vec::as_slice).collect();
+        let measured: Vec<&[f64]> = measured.iter().map(Vec::as_slice).collect();
+        d.predict_flat_from(d.record_start(inputs, initial_speed), &signals, dt_s, outputs, &measured, &p.gain)
+    }
+}
+
+impl Predictor {
+    /// The gain of model `m` sampled every `dt_s` for `outputs` and `noise`.
+    pub fn new(m: &DriveModel, dt_s: f64, outputs: &[(Quantity, usize)], noise: &Noise) -> Result<Predictor> {
+        Predictor::of(m, &Dynamics::new(m)?, dt_s, outputs, noise)
+    }
+
+    /// [`Predictor::new`] with `d` the dynamics of `m`.
+    fn of(m: &DriveModel, d: &Dynamics, dt_s: f64, outputs: &[(Quantity, usize)], noise: &Noise) -> Result<Predictor> {
+        let Noise { inputs_sd: input_sd, disturbance_sd, outputs_sd: output_sd } = noise;
+        let disturbance_sd = *disturbance_sd;
         let (ns, nu, ny) = (d.nstates(), d.ninputs(), outputs.len());
         if input_sd.len() != nu || input_sd.iter().any(|s| !(s.is_finite() && *s >= 0.0)) {
             return Err(PlantError::Invalid(format!("one finite input noise ≥ 0 per input ({nu})")));
@@ -60,7 +89,7 @@ impl Predictor {
             return Err(PlantError::Invalid(format!("sample time {dt_s} s")));
         }
         let (a, b) = d.linear();
-        let c = output_rows(m, &d, outputs)?;
+        let c = output_rows(m, d, outputs)?;
         let (s, s_inv) = observed_coordinates(m, ns, outputs)?;
         let n = m.line.bodies.len();
         // the inputs, then a torque on every body (what the model lacks: its effects' forces
@@ -155,6 +184,10 @@ mod tests {
     use crate::line::{Coupling, Domain, Line, LineBody};
     use crate::Effect;
 
+    fn noise(inputs_sd: &[f64], disturbance_sd: f64, outputs_sd: &[f64]) -> Noise {
+        Noise { inputs_sd: inputs_sd.to_vec(), disturbance_sd, outputs_sd: outputs_sd.to_vec() }
+    }
+
     fn one_body(inertia: f64, drag: f64) -> DriveModel {
         DriveModel {
             line: Line {
@@ -178,7 +211,7 @@ mod tests {
         let (su, sy) = (0.3, 0.02);
         let m = one_body(j, d);
         let outputs = [(Quantity::Speed, 0)];
-        let pred = Predictor::new(&m, h, &outputs, &[su], 0.0, &[sy]).unwrap();
+        let pred = Predictor::new(&m, h, &outputs, &noise(&[su], 0.0, &[sy])).unwrap();
         let phi = (-d * h / j).exp();
         let gamma = (1.0 - phi) / d;
         let (q, r) = (gamma * gamma * su * su, sy * sy);
@@ -218,13 +251,13 @@ mod tests {
         };
         let m = DriveModel { line, inputs: vec![0], effects: vec![] };
         let outputs = [(Quantity::Speed, 0), (Quantity::Speed, 1)];
-        let pred = Predictor::new(&m, 1e-3, &outputs, &[0.5], 0.01, &[1e-3, 1e-3]).unwrap();
+        let pred = Predictor::new(&m, 1e-3, &outputs, &noise(&[0.5], 0.01, &[1e-3, 1e-3])).unwrap();
         for o in 0..2 {
             let (ga, gb) = (pred.gain[(0, o)], pred.gain[(1, o)]);
             assert!(ga.abs() > 1e-9, "output {o} corrects the twist");
             approx::assert_relative_eq!(ga, -gb, max_relative = 1e-9);
         }
-        let quiet = Predictor::new(&m, 1e-3, &outputs, &[0.5], 0.01, &[1e9, 1e9]).unwrap();
+        let quiet = Predictor::new(&m, 1e-3, &outputs, &noise(&[0.5], 0.01, &[1e9, 1e9])).unwrap();
         let u: Vec<f64> = (0..300).map(|k| (k as f64 * 0.02).sin()).collect();
         let y = vec![5.0; 300];
         let d = Dynamics::new(&m).unwrap();

@@ -294,38 +294,30 @@ struct Problem<'a> {
     twist_rms: Vec<f64>,
     /// Fastest rate of the declared model's linear part, 1/s.
     rate: f64,
-    /// Where the models are scored by their one-step-ahead prediction, its noise levels
-    /// ([`diagnose`]); `None`: by their simulation over the whole record.
-    predictor: Option<PredictorNoise>,
+    /// Where the models are scored by their one-step-ahead prediction, the noise its gain is
+    /// built for ([`diagnose`], [`record_noise`]); `None`: by their simulation over the whole
+    /// record.
+    predictor: Option<plant::predictor::Noise>,
 }
 
-/// The noise levels a drive model's one-step-ahead predictor (`plant::predictor`) is built with,
-/// estimated from the record ([`crate::signal::noise_sd`]): each input's and each output's, and
-/// a torque on every body as large as the largest input's noise (what the model may lack
-/// there).
-#[derive(Debug, Clone)]
-struct PredictorNoise {
-    inputs: Vec<f64>,
-    disturbance: f64,
-    outputs: Vec<f64>,
-}
-
-impl PredictorNoise {
-    fn of(rec: &DriveRecord) -> PredictorNoise {
-        let inputs: Vec<f64> = rec.inputs.iter().map(|u| crate::signal::noise_sd(u)).collect();
-        let disturbance = inputs.iter().copied().fold(0.0, f64::max);
-        // an output without measurable noise (a clean synthetic record) is trusted to a
-        // millionth of its own size: the Riccati equation needs a positive one
-        let outputs = rec
-            .measured
-            .iter()
-            .map(|y| {
-                let rms = (y.iter().map(|v| v * v).sum::<f64>() / y.len().max(1) as f64).sqrt();
-                crate::signal::noise_sd(y).max(1e-6 * rms).max(f64::MIN_POSITIVE)
-            })
-            .collect();
-        PredictorNoise { inputs, disturbance, outputs }
-    }
+/// The noise of `rec`'s signals as a drive model's one-step-ahead predictor needs it
+/// (`plant::predictor`), estimated from the record ([`crate::signal::noise_sd`]): each input's
+/// and each output's, and a torque on every body as large as the largest input's noise (what
+/// the model may lack there).
+fn record_noise(rec: &DriveRecord) -> plant::predictor::Noise {
+    let inputs_sd: Vec<f64> = rec.inputs.iter().map(|u| crate::signal::noise_sd(u)).collect();
+    let disturbance_sd = inputs_sd.iter().copied().fold(0.0, f64::max);
+    // an output without measurable noise (a clean synthetic record) is trusted to a millionth
+    // of its own size: the Riccati equation needs a positive one
+    let outputs_sd = rec
+        .measured
+        .iter()
+        .map(|y| {
+            let rms = (y.iter().map(|v| v * v).sum::<f64>() / y.len().max(1) as f64).sqrt();
+            crate::signal::noise_sd(y).max(1e-6 * rms).max(f64::MIN_POSITIVE)
+        })
+        .collect();
+    plant::predictor::Noise { inputs_sd, disturbance_sd, outputs_sd }
 }
 
 impl Problem<'_> {
@@ -446,22 +438,8 @@ impl Problem<'_> {
         match &self.predictor {
             None => self.simulate_open(m),
             Some(noise) => {
-                let d = plant::Dynamics::new(m).ok()?;
-                let first: Vec<f64> = self.rec.inputs.iter().map(|u| u.first().copied().unwrap_or(0.0)).collect();
-                let x0 = d.initial_state(self.initial_speed, &first);
-                let p = plant::predictor::Predictor::new(
-                    m,
-                    self.rec.dt_s,
-                    self.rec.outputs,
-                    &noise.inputs,
-                    noise.disturbance,
-                    &noise.outputs,
-                )
-                .ok()?;
-                let inputs: Vec<&[f64]> = self.rec.inputs.iter().map(Vec::as_slice).collect();
-                let measured: Vec<&[f64]> = self.rec.measured.iter().map(Vec::as_slice).collect();
-                let y = d.predict_flat_from(x0, &inputs, self.rec.dt_s, self.rec.outputs, &measured, &p.gain).ok()?;
-                self.high_passed(y)
+                let (rec, speed) = (&self.rec, self.initial_speed);
+                self.high_passed(m.predict_flat(rec.inputs, rec.dt_s, speed, rec.outputs, rec.measured, noise).ok()?)
             }
         }
     }
@@ -513,7 +491,7 @@ impl Problem<'_> {
 
     /// The outputs `y` of [`Problem::simulate`], one vector each (the traces).
     fn per_output(&self, y: Vec<f64>) -> Vec<Vec<f64>> {
-        plant::drive::split_outputs(y, self.rec.inputs.first().map_or(0, Vec::len))
+        plant::drive::split_outputs(y, self.rec.outputs.len())
     }
 
     /// Starting values of the candidate's own parameters to grid over.
@@ -663,7 +641,7 @@ pub fn diagnose(rec: DriveRecord, progress: &(dyn Fn(&str) + Sync)) -> Result<Dr
     if simulated.verdict != super::verdict::Verdict::NotExplained {
         return Ok(simulated);
     }
-    match diagnose_scored(rec, progress, Some(PredictorNoise::of(&rec))) {
+    match diagnose_scored(rec, progress, Some(record_noise(&rec))) {
         Ok(mut predicted) if predicted.verdict == super::verdict::Verdict::Explained => {
             predicted.notes.push(format!(
                 "scored by the one-step-ahead prediction (the simulation held to the measured outputs after each \
@@ -682,7 +660,7 @@ pub fn diagnose(rec: DriveRecord, progress: &(dyn Fn(&str) + Sync)) -> Result<Dr
 fn diagnose_scored(
     rec: DriveRecord,
     progress: &(dyn Fn(&str) + Sync),
-    predictor: Option<PredictorNoise>,
+    predictor: Option<plant::predictor::Noise>,
 ) -> Result<DriveDiagnosis> {
     let m0 = rec.model;
     m0.validate()?;
@@ -781,12 +759,8 @@ fn diagnose_scored(
         rate,
         predictor,
     };
-    let simulate_declared = || {
-        problem
-            .simulate(m0)
-            .ok_or_else(|| IdentError::Data("the declared model cannot be simulated (check its parameters)".into()))
-    };
-    let r0 = problem.residual_of(simulate_declared()?);
+    let cannot_simulate = || IdentError::Data("the declared model cannot be simulated (check its parameters)".into());
+    let r0 = problem.residual_of(problem.simulate(m0).ok_or_else(cannot_simulate)?);
     let error_before = r0.iter().map(|v| v * v).sum::<f64>().sqrt();
     let nres = r0.len();
     let n_eff = effective_count(nres, lag1_autocorrelation(&r0));
@@ -1191,9 +1165,12 @@ fn diagnose_scored(
     // without each fold, from their own parameters (those the answer fitted: an effect kept from
     // the screen has the declared inertias and stiffnesses held), each scored on the fold it did
     // not see.
-    let answer_residual = problem.simulate(&model).map(|y| problem.residual_of(y));
-    // the traces are simulations over the whole record (the answer's FMU replays them)
-    let after = problem.simulate_open(&model).map(|y| problem.per_output(y));
+    // the traces are simulations over the whole record (the answer's FMU replays them); the
+    // residual is the score's, the same simulation where no predictor is set
+    let after = problem.simulate_open(&model);
+    let scored_after = if problem.predictor.is_some() { problem.simulate(&model) } else { after.clone() };
+    let answer_residual = scored_after.map(|y| problem.residual_of(y));
+    let after = after.map(|y| problem.per_output(y));
     let free_from = if base_fitted { 0 } else { nbase };
     let answer = |s: &[f64]| problem.residual(chosen_candidate, &[&chosen_x[..free_from], s].concat());
     let declared = |x: &[f64]| problem.residual(Candidate::None, x);
@@ -1232,11 +1209,7 @@ fn diagnose_scored(
         _ => None,
     };
     let structured_residual = super::verdict::ResidualSettings::default().structured(rho, chosen.error_after);
-    let before = problem.per_output(
-        problem
-            .simulate_open(m0)
-            .ok_or_else(|| IdentError::Data("the declared model cannot be simulated (check its parameters)".into()))?,
-    );
+    let before = problem.per_output(problem.simulate_open(m0).ok_or_else(cannot_simulate)?);
     let after = after.unwrap_or_else(|| before.clone());
     let traces = DriveTraces {
         time_s: (0..len).map(|k| k as f64 * dt).collect(),
