@@ -56,7 +56,7 @@ mod tests {
         // Without `Counting` installed the count stays 0 on every thread: what this checks is that
         // the count is read from the calling thread's own slot.
         let before = allocations();
-        std::thread::spawn(|| count()).join().unwrap();
+        std::thread::spawn(count).join().unwrap();
         assert_eq!(allocations(), before);
         count();
         assert_eq!(allocations(), before + 1);
