@@ -12,10 +12,14 @@ speed), about a set point near or far from zero.
     python scripts/survey_lines.py --rigtwin target/release/rigtwin --seeds 0-34 --out /tmp/lines
 
 writes one `drive_test` bundle per seed, diagnoses it, and prints the verdict matrix, the
-parameter errors and run times as the markdown of docs/validation.md. Seeds 0-999 are the
+parameter errors and run times as the markdown of docs/validation.md. An effect of the truth
+that cannot act on its record (a friction whose body never turns slower than 0.25 rad/s, a play
+whose coupling never leaves contact: `not_acting`, judged on the true states and kept beside the
+bundle as `.truth.json`) is scored as absent and marked "(cannot act)" in the log. Seeds 0-999 are the
 survey's tuning part; seeds from 1000 on are held out (run once after a change, never tuned on).
 """
 
+import json
 import os
 
 import numpy as np
@@ -237,6 +241,12 @@ class Line:
 
 def simulate(t, rng):
     """The inputs' commanded torques (samples x inputs) and the outputs' true values."""
+    u, outputs, _ = simulate_states(t, rng)
+    return u, outputs
+
+
+def simulate_states(t, rng):
+    """`simulate`'s torques and outputs, and the true states (samples x states: q, w, lags)."""
     steps = int(DURATION_S / DT)
     line = Line(t)
     a, sp = t["amplitude"], t["set_point_nm"]
@@ -287,12 +297,62 @@ def simulate(t, rng):
         else:
             torques = np.array([line.coupling_torques(s[:n], s[n:2 * n]) for s in states])
             outputs.append(torques[:, at])
-    return u, outputs
+    return u, outputs, states
+
+
+# A friction's torque is constant where its body's speed keeps one sign beyond this: the truth's
+# Stribeck rise (below 0.05 rad/s) is then below 1e-10 of it and its sign's smoothing (5 mrad/s)
+# gone.
+FRICTION_CONSTANT_BEYOND_RADPS = 0.25
+
+
+def not_acting(t, states):
+    """The truth's effects that cannot act on the record (their indices in t["effects"], each with
+    why), judged on the true states: a friction whose body's speed keeps one sign beyond
+    FRICTION_CONSTANT_BEYOND_RADPS (its torque is then a constant, which the record cannot tell
+    from an offset of the input torque, and which every diagnosis's high-pass removes with the
+    offsets), a play whose coupling never leaves contact on one side (the coupling is then
+    linear, the play a constant twist). No record can show such an effect; the survey scores
+    the record without it."""
+    n = len(t["line"]["inertia"])
+    elong = elongations(t["line"])
+    found = []
+    for i, e in enumerate(t["effects"]):
+        if e["effect"] == "coulomb_friction":
+            w = states[:, n + e["body"]]
+            if np.all(w > FRICTION_CONSTANT_BEYOND_RADPS) or np.all(w < -FRICTION_CONSTANT_BEYOND_RADPS):
+                found.append(dict(index=i, why=f"its body turns at {w.min():.3g}-{w.max():.3g} rad/s throughout: "
+                                                "a constant torque"))
+        elif e["effect"] == "backlash":
+            twist = states[:, :n] @ elong[e["coupling"]]
+            half = e["size"] / 2
+            if np.all(twist > half) or np.all(twist < -half):
+                found.append(dict(index=i, why="its coupling never leaves contact"))
+    return found
+
+
+def truth_file(bundle):
+    """Where a bundle's record of the effects that cannot act (`not_acting`) is kept."""
+    return os.path.splitext(bundle)[0] + ".truth.json"
+
+
+def effects_not_acting(t, bundle):
+    """`not_acting` of the record at `bundle`, read from beside it — or, for a record written
+    before it was kept, from the record simulated again (the same seeds give the same states)."""
+    path = truth_file(bundle)
+    if not os.path.exists(path):
+        if not any(e["effect"] in ("backlash", "coulomb_friction") for e in t["effects"]):
+            return []
+        _, _, states = simulate_states(t, np.random.default_rng(t["noise_seed"]))
+        with open(path, "w") as f:
+            json.dump(not_acting(t, states), f)
+    with open(path) as f:
+        return json.load(f)
 
 
 def write_bundle(folder, t):
     rng = np.random.default_rng(t["noise_seed"])
-    u, outputs = simulate(t, rng)
+    u, outputs, states = simulate_states(t, rng)
     steps = u.shape[0]
     name = f"line_{t['seed']:04d}"
     columns = {"time_s": np.arange(steps) * DT}
@@ -329,6 +389,8 @@ def write_bundle(folder, t):
     bundle = os.path.join(folder, name + ".toml")
     with open(bundle, "w") as f:
         f.write("\n".join(lines) + "\n")
+    with open(truth_file(bundle), "w") as f:
+        json.dump(not_acting(t, states), f)
     return bundle
 
 
@@ -356,14 +418,16 @@ def score(t, report):
     verdict = report.get("verdict")
     if verdict == "not_explained":
         return "not explained", None, None
-    truth = sorted((e["effect"], place(e)) for e in t["effects"])
+    silent = {d["index"] for d in t.get("not_acting", [])}
+    acting = [e for i, e in enumerate(t["effects"]) if i not in silent]
+    truth = sorted((e["effect"], place(e)) for e in acting)
     if not truth:
         return ("right" if verdict == "declared_model_fits" else "wrong"), None, None
     if verdict != "explained" or found_effects(report) != truth:
         return "wrong", None, None
-    if len(t["effects"]) != 1:
+    if len(acting) != 1:
         return "right", None, None
-    e = t["effects"][0]
+    e = acting[0]
     key = SCORED[e["effect"]]
     params = report.get("parameters") or report["effects"][0]["parameters"]
     value = params.get(key)
@@ -376,7 +440,9 @@ def score(t, report):
 
 def describe(t, report):
     """A record's line and truth and rigtwin's answer, for the log."""
-    truth = "+".join(f"{e['effect']}@{place(e)}" for e in t["effects"]) or "none"
+    silent = {d["index"] for d in t.get("not_acting", [])}
+    truth = "+".join(f"{e['effect']}@{place(e)}" + ("(cannot act)" if i in silent else "")
+                     for i, e in enumerate(t["effects"])) or "none"
     found = "+".join(f"{e}@{a}" for e, a in found_effects(report)) or "none"
     return (f"{len(t['line']['inertia'])} bodies {int(sum(t['line']['ratio'] > 1))} gears {truth:45s} "
             f"{t['excitation']:11s} -> {report.get('verdict'):20s} {found:40s}")
@@ -388,6 +454,8 @@ def main():
     seeds = parse_seeds(args.seeds)
     truths = [truth_of(seed) for seed in seeds]
     bundles = bundles_of(args, truths, write_bundle, lambda seed: f"line_{seed:04d}.toml")
+    for t, bundle in zip(truths, bundles):
+        t["not_acting"] = effects_not_acting(t, bundle)
     rows = diagnose_all(args.rigtwin, seeds, truths, bundles, score, describe)
     groups = [("none", lambda t: not t["effects"])]
     groups += [(k, lambda t, k=k: [e["effect"] for e in t["effects"]] == [k]) for k in KINDS]
