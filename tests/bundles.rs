@@ -1,6 +1,8 @@
 //! The measurement bundles of ../shared/data end to end, and bad bundles.
 
-use std::path::{Path, PathBuf};
+mod common;
+
+use std::path::Path;
 use std::process::{Command, Output};
 
 use serde_json::Value;
@@ -111,10 +113,8 @@ fn design_spring_reports_the_paper_spring_as_too_stiff() {
     assert_eq!(rec["meets_target"], true);
 }
 
-fn tempdir(tag: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("rigtwin-bundles-{}-{tag}", std::process::id()));
-    std::fs::create_dir_all(&d).unwrap();
-    d
+fn tempdir(tag: &str) -> common::Scratch {
+    common::scratch("bundles", tag)
 }
 
 const TOML: &str = "kind = \"torsional_sweep\"\ndata = \"s.csv\"\nvariant = \"V1\"\n[model]\nj_m2 = 0.9\nj_drive = 0.5\nj_m3 = 0.9\nc_short = 1500.0\nc_delta = 6e4\n";
@@ -192,8 +192,7 @@ fn drive_test_bundles_load_with_their_signals_resolved() {
 
 #[test]
 fn bad_drive_test_bundles_name_the_key() {
-    let d = std::env::temp_dir().join(format!("rigtwin-drive-{}", std::process::id()));
-    std::fs::create_dir_all(&d).unwrap();
+    let d = common::scratch("bundles", "drive");
     std::fs::copy(data("bench_gear.csv"), d.join("bench_gear.csv")).unwrap();
     let toml = std::fs::read_to_string(data("bench_gear.toml")).unwrap();
     let refused = |text: String| {

@@ -122,10 +122,8 @@ fn damped_rig_reports_poles() {
     assert!(z > 0.001 && z < 0.05, "{z}");
 }
 
-fn tempdir() -> std::path::PathBuf {
-    let d = std::env::temp_dir().join(format!("rigtwin-cli-{}-{:?}", std::process::id(), std::thread::current().id()));
-    std::fs::create_dir_all(&d).unwrap();
-    d
+fn tempdir() -> common::Scratch {
+    common::scratch("cli", &format!("{:?}", std::thread::current().id()))
 }
 
 /// Writes `text` as a rig file, runs `modal` (or `reduce`) on it and returns stderr; asserts failure and no stdout.

@@ -462,8 +462,7 @@ fn bundle(name: &str) -> String {
 }
 
 fn diagnose_bundle(name: &str) -> serde_json::Value {
-    let dir = std::env::temp_dir().join(format!("rigtwin-diagnose-{}-{name}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = common::scratch("diagnose", name);
     let (json, svg, model) = (dir.join("d.json"), dir.join("d.svg"), dir.join("model.toml"));
     let out = rigtwin(&[
         "diagnose",
@@ -573,7 +572,7 @@ fn speed_error(measured: [&[f64]; 2], model: [&[f64]; 2], dt: f64) -> f64 {
 fn fmu_reproduces_the_diagnosis(truth: Truth, seed: u64, effect: &str) {
     let fmu_lib_built = common::fmu_dir(); // builds the FMU's shared library
     let _ = fmu_lib_built;
-    let dir = std::env::temp_dir().join(format!("rigtwin-diagnose-fmu-{}-{effect}", std::process::id()));
+    let dir = common::scratch("diagnose-fmu", effect);
     let s = sweep(&declared(), truth, seed);
     let bundle = write_bundle(&dir, &s, &declared());
     let (json, model, fmus) = (dir.join("d.json"), dir.join("model.toml"), dir.join("fmus"));
@@ -774,8 +773,7 @@ fn rig_file(path: &std::path::Path, rig: &RigParams, truth: &Truth) {
 /// the declared-model controller; backlash is named as left out of the prediction.
 #[test]
 fn controller_on_the_diagnosed_model() {
-    let dir = std::env::temp_dir().join(format!("rigtwin-closed-loop-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = common::scratch("diagnose", "closed-loop");
     let cases = [
         ("time_delay", Truth { delay_s: 0.0063, set_point_nm: 40.0, ..Default::default() }, 31),
         ("actuator_lag", Truth { lag_s: 0.008, set_point_nm: 40.0, ..Default::default() }, 32),

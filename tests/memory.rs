@@ -12,8 +12,7 @@ use std::process::Command;
 
 #[test]
 fn an_mdf_record_is_read_in_memory_proportional_to_the_selected_channels() {
-    let dir = std::env::temp_dir().join(format!("rigtwin-memory-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = common::scratch("memory", "mdf");
     let n = 500_000;
     let t: Vec<f64> = (0..n).map(|k| k as f64 * 1e-4).collect();
     let mut w = falcon_mdf::Mf4Writer::new();

@@ -164,8 +164,7 @@ fn closed_loop_with_the_fmu_matches_the_plant() {
 /// real-time Clarabel first input is within the 1e-2 Nm of DAQP's.
 #[test]
 fn osqp_and_daqp_solve_the_same_qps() {
-    let dir = std::env::temp_dir().join(format!("rigtwin-mpc-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = common::scratch("mpc", "qps");
     let (qps, rep) = (dir.join("qps.json"), dir.join("compare.json"));
     let out = rigtwin(&["mpc", "--export-qp", qps.to_str().unwrap()]);
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
@@ -186,8 +185,7 @@ fn osqp_and_daqp_solve_the_same_qps() {
 /// mpc` assembles it, the plant as the FMU integrates it) to the 1e-6.
 #[test]
 fn controller_fmu_closes_the_loop_in_fmpy() {
-    let dir = std::env::temp_dir().join(format!("rigtwin-ctrl-fmu-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = common::scratch("mpc", "ctrl-fmu");
     let rig = dir.join("rig.toml");
     let paper = include_str!("../rigs/paper.toml");
     std::fs::write(&rig, format!("{paper}\n[effects]\ntime_delay_s = 0.0043\n")).unwrap();
@@ -314,8 +312,7 @@ fn check_fmus_against(
 /// integrates it).
 #[test]
 fn drive_controller_fmu_closes_the_loop_in_fmpy_and_libcosim() {
-    let dir = std::env::temp_dir().join(format!("rigtwin-drive-ctrl-fmu-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = common::scratch("mpc", "drive-ctrl-fmu");
     let bench = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/gear_bench/bench.toml");
     let (plant_dir, ctrl_dir) = (dir.join("plant"), dir.join("controller"));
     for (args, out) in [(vec!["fmu"], &plant_dir), (vec!["fmu", "--controller"], &ctrl_dir)] {
@@ -383,8 +380,7 @@ fn a_drive_test_without_mpc_bounds_is_controlled_within_its_records_peaks() {
     assert_eq!(v["verdict"], "valid");
     let bound = v["signals"]["input_max"][0].as_f64().unwrap();
     assert!((bound - peak).abs() < 1e-12, "bound {bound} vs the record's peak {peak}");
-    let dir = std::env::temp_dir().join(format!("rigtwin-bench-ctrl-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = common::scratch("mpc", "bench-ctrl");
     let out = rigtwin(&["fmu", "--controller", "--params", bench.to_str().unwrap(), "--out", dir.to_str().unwrap()]);
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     assert!(dir.join("rigtwin-mpc-fmi3.fmu").exists() && dir.join("rigtwin-closed-loop.ssp").exists());

@@ -4,7 +4,9 @@
 //! or repeated, numbers replaced by NaN, inf, 1e308, -1, 0 or text, delimiters changed,
 //! files truncated. A fixed number of cases per property (see CASES) runs in CI.
 
-use std::path::{Path, PathBuf};
+mod common;
+
+use std::path::Path;
 
 use proptest::prelude::*;
 
@@ -16,13 +18,10 @@ fn shared(name: &str) -> String {
     std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/data").join(name)).unwrap()
 }
 
-fn scratch() -> PathBuf {
+fn scratch() -> common::Scratch {
     static N: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
     let n = N.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-    let d = std::env::temp_dir().join(format!("rigtwin-fuzz-{}-{n}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
+    common::scratch("fuzz", &n.to_string())
 }
 
 /// One mutation of a text.

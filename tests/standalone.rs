@@ -1,15 +1,14 @@
 //! The `rigtwin` binary is the product: copied alone into an empty folder it writes both FMUs,
 //! with the stripped FMU library it carries, and `run` and `fmu` write the same parameter set.
 
+mod common;
+
 use std::io::Read;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::Command;
 
-fn scratch(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("rigtwin-standalone-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
+fn scratch(name: &str) -> common::Scratch {
+    common::scratch("standalone", name)
 }
 
 fn entry(fmu: &Path, name: &str) -> Vec<u8> {
