@@ -336,6 +336,12 @@ def truth_file(bundle):
     return os.path.splitext(bundle)[0] + ".truth.json"
 
 
+def keep_not_acting(t, states, bundle):
+    """Writes `not_acting` of the record of `t` beside its `bundle`."""
+    with open(truth_file(bundle), "w") as f:
+        json.dump(not_acting(t, states), f)
+
+
 def effects_not_acting(t, bundle):
     """`not_acting` of the record at `bundle`, read from beside it — or, for a record written
     before it was kept, from the record simulated again (the same seeds give the same states)."""
@@ -344,10 +350,14 @@ def effects_not_acting(t, bundle):
         if not any(e["effect"] in ("backlash", "coulomb_friction") for e in t["effects"]):
             return []
         _, _, states = simulate_states(t, np.random.default_rng(t["noise_seed"]))
-        with open(path, "w") as f:
-            json.dump(not_acting(t, states), f)
+        keep_not_acting(t, states, bundle)
     with open(path) as f:
         return json.load(f)
+
+
+def silent(t):
+    """The indices in t["effects"] of those that cannot act on the record (`effects_not_acting`)."""
+    return {d["index"] for d in t.get("not_acting", [])}
 
 
 def write_bundle(folder, t):
@@ -389,8 +399,7 @@ def write_bundle(folder, t):
     bundle = os.path.join(folder, name + ".toml")
     with open(bundle, "w") as f:
         f.write("\n".join(lines) + "\n")
-    with open(truth_file(bundle), "w") as f:
-        json.dump(not_acting(t, states), f)
+    keep_not_acting(t, states, bundle)
     return bundle
 
 
@@ -418,8 +427,7 @@ def score(t, report):
     verdict = report.get("verdict")
     if verdict == "not_explained":
         return "not explained", None, None
-    silent = {d["index"] for d in t.get("not_acting", [])}
-    acting = [e for i, e in enumerate(t["effects"]) if i not in silent]
+    acting = [e for i, e in enumerate(t["effects"]) if i not in silent(t)]
     truth = sorted((e["effect"], place(e)) for e in acting)
     if not truth:
         return ("right" if verdict == "declared_model_fits" else "wrong"), None, None
@@ -440,8 +448,8 @@ def score(t, report):
 
 def describe(t, report):
     """A record's line and truth and rigtwin's answer, for the log."""
-    silent = {d["index"] for d in t.get("not_acting", [])}
-    truth = "+".join(f"{e['effect']}@{place(e)}" + ("(cannot act)" if i in silent else "")
+    quiet = silent(t)
+    truth = "+".join(f"{e['effect']}@{place(e)}" + ("(cannot act)" if i in quiet else "")
                      for i, e in enumerate(t["effects"])) or "none"
     found = "+".join(f"{e}@{a}" for e, a in found_effects(report)) or "none"
     return (f"{len(t['line']['inertia'])} bodies {int(sum(t['line']['ratio'] > 1))} gears {truth:45s} "

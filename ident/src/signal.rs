@@ -475,6 +475,9 @@ pub fn filtfilt_high_pass_pair(x: &mut [f64], y: &mut [f64], dt_s: f64, cutoff_h
 
 #[cfg(test)]
 mod tests {
+    use super::*;
+    use approx::assert_relative_eq;
+    use std::f64::consts::PI;
 
     /// White noise of a known deviation on a 5 Hz sine sampled at 1 kHz, and on a PRBS of ±1
     /// held 20 ms: the estimate holds it to 5 % beside the sine (its own standard error over
@@ -508,9 +511,6 @@ mod tests {
         assert_eq!(noise_sd(&sine[..3]), 0.0);
         assert!(noise_sd(&sine) < 1e-3 * sigma, "a noise-free sine: {}", noise_sd(&sine));
     }
-    use super::*;
-    use approx::assert_relative_eq;
-    use std::f64::consts::PI;
 
     #[test]
     fn the_correlation_lag_of_white_noise_is_short_and_of_an_ar1_series_its_decay() {

@@ -86,16 +86,12 @@ fn clearly_beats(
     reference: &CandidateScore,
     predicted: bool,
 ) -> bool {
-    if predicted {
-        return challenger.score < incumbent.score
-            && challenger.score <= reference.score - super::verdict::PlaceSettings::default().min_evidence
-            && challenger.error_after < reference.error_after;
-    }
-    super::clearly_beats(
+    super::clearly_beats_with(
         challenger.score,
         challenger.error_after,
         incumbent.score,
         (reference.score, reference.error_after),
+        if predicted { 1.0 } else { super::CLEARLY_LESS_ERROR },
     )
 }
 
@@ -1185,7 +1181,7 @@ fn diagnose_scored(
     // the traces are simulations over the whole record (the answer's FMU replays them); the
     // residual is the score's, the same simulation where no predictor is set
     let after = problem.simulate_open(&model);
-    let scored_after = if problem.predictor.is_some() { problem.simulate(&model) } else { after.clone() };
+    let scored_after = if predicted { problem.simulate(&model) } else { after.clone() };
     let answer_residual = scored_after.map(|y| problem.residual_of(y));
     let after = after.map(|y| problem.per_output(y));
     let free_from = if base_fitted { 0 } else { nbase };
@@ -1275,7 +1271,7 @@ fn diagnose_scored(
         at_tolerance,
         distorted,
         high_pass_hz,
-        scored_by_prediction: problem.predictor.is_some(),
+        scored_by_prediction: predicted,
         model,
         verdict: super::verdict::Verdict::NotExplained,
         verdict_reasons: Vec::new(),

@@ -79,10 +79,25 @@ pub fn bic(ssr: f64, n: usize, n_eff: f64, k: usize) -> f64 {
 /// ([`verdict::PlaceSettings::min_evidence`]: an effect is named with the evidence its place
 /// is, over the declared model as over every other explanation) and 10 % less error.
 pub(crate) fn clearly_beats(score: f64, error: f64, incumbent_score: f64, reference: (f64, f64)) -> bool {
+    clearly_beats_with(score, error, incumbent_score, reference, CLEARLY_LESS_ERROR)
+}
+
+/// The error ratio to the reference below which [`clearly_beats`] counts an error as clearly
+/// less (10 % less).
+pub(crate) const CLEARLY_LESS_ERROR: f64 = 0.9;
+
+/// [`clearly_beats`] with the error asked to be below `less_error` times the reference's.
+pub(crate) fn clearly_beats_with(
+    score: f64,
+    error: f64,
+    incumbent_score: f64,
+    reference: (f64, f64),
+    less_error: f64,
+) -> bool {
     let (reference_score, reference_error) = reference;
     score < incumbent_score
         && score <= reference_score - verdict::PlaceSettings::default().min_evidence
-        && error < 0.9 * reference_error
+        && error < less_error * reference_error
 }
 
 /// The local minima of a profile's finite `costs` (a grid over one parameter), the deepest
