@@ -638,26 +638,32 @@ fn gear_to(m: &DriveModel, b: usize) -> f64 {
 /// Diagnoses `rec`. `progress` is told each candidate's name as it finishes.
 ///
 /// The models are scored by their simulation over the whole record. Where that leaves the
-/// record *not explained*, they are scored again by their one-step-ahead prediction
+/// record *not explained*, or its answer leaves a structured residual (it explains only part of
+/// the record: a poorly simulated play lets a wrong second effect win 10 % of a large error),
+/// they are scored again by their one-step-ahead prediction
 /// (`plant::predictor`: the simulation held to the measured outputs after each sample), and
 /// an *explained* answer of that search is the answer. A simulation over the whole record
 /// drifts where nothing holds the bodies together — a play that rattles about zero torque: the
 /// input's noise, integrated twice, moves when the bodies strike, and the truth itself then
 /// errs 0.3–0.9 where the record's noise floor is 0.001–0.004 — while the prediction restarts
 /// from the measurement at every sample (docs/validation.md, steps 13 and 14). Where the
-/// simulation explains the record its answer stands: the prediction's correction takes up part
+/// simulation explains the record with a white residual its answer stands: the prediction's correction takes up part
 /// of what a friction does, and its friction levels were a few per cent low.
 pub fn diagnose(rec: DriveRecord, progress: &(dyn Fn(&str) + Sync)) -> Result<DriveDiagnosis> {
     let simulated = diagnose_scored(rec, progress, None)?;
-    if simulated.verdict != super::verdict::Verdict::NotExplained {
+    if simulated.verdict != super::verdict::Verdict::NotExplained && !simulated.structured_residual {
         return Ok(simulated);
     }
     match diagnose_scored(rec, progress, Some(record_noise(&rec))) {
         Ok(mut predicted) if predicted.verdict == super::verdict::Verdict::Explained => {
+            let why = if simulated.verdict == super::verdict::Verdict::NotExplained {
+                "no model explained the record"
+            } else {
+                "the best model left a structured residual"
+            };
             predicted.notes.push(format!(
                 "scored by the one-step-ahead prediction (the simulation held to the measured outputs after each \
-                 sample): scored by their simulation over the whole record, no model explained the record (best: {}, \
-                 error {:.3})",
+                 sample): scored by their simulation over the whole record, {why} (best: {}, error {:.3})",
                 simulated.effect, simulated.error_after
             ));
             Ok(predicted)
@@ -1048,7 +1054,24 @@ fn diagnose_scored(
         };
         let mut screened2 = super::on_two_workers(seconds.len(), &screen_second);
         screened2.sort_by(|a, b| a.2.total_cmp(&b.2));
-        screened2.truncate(SCREEN_KEEP);
+        // the SCREEN_KEEP best, and the best place of every other kind: the screens held the
+        // mechanics at the single effect's re-fit, which bent them to stand in for what the
+        // second effect does — alike for every place of one kind but not across kinds (as the
+        // first step's screens held at an implausible declared re-fit)
+        let mut kept2: Vec<(usize, Vec<f64>, f64)> = Vec::new();
+        for (rank, s) in screened2.into_iter().enumerate() {
+            if rank < SCREEN_KEEP || !kept2.iter().any(|k| seconds[k.0].name() == seconds[s.0].name()) {
+                kept2.push(s);
+            }
+        }
+        let screened2 = kept2;
+        // the second effect as it was fitted alone (its size, and the mechanics of its fit): a
+        // dead time's or a play's cost is rough, and beside the first effect's mechanics its
+        // screen may stop in another valley
+        let alone =
+            |e: Effect| -> Option<&Vec<f64>> { scored.iter().find(|s| s.3 == Candidate::Effect(e)).map(|s| &s.4) };
+        let pair_cost =
+            |c: Candidate, x: &[f64]| problem.residual(c, x).map_or(f64::INFINITY, |r| r.iter().map(|v| v * v).sum());
         // the pair's re-fit: everything within the mechanics' tolerance, as a single effect's —
         // the single effect's re-fit moved the inertias and stiffnesses to stand in for what the
         // second effect does, and held there the pair could hardly beat it (a friction beside a
@@ -1057,9 +1080,19 @@ fn diagnose_scored(
         // of a play or a friction is rough: the sizes are found where the mechanics are known),
         // and everything from there.
         let fit_pair = |k: usize| -> (usize, Vec<f64>, f64) {
-            let (j, x0, _) = &screened2[k];
+            let (j, x0, cost0) = &screened2[k];
             let c = Candidate::Pair(first, seconds[*j]);
-            let start = if nonlinear_first { fit_from(c, x0, nbase).0 } else { x0.clone() };
+            let mut x0 = x0.clone();
+            if let Some(xs) = alone(seconds[*j]).filter(|xs| xs.len() == nbase + 1 && x0.len() == nbase + 2) {
+                let (mut cost, size) = (*cost0, xs[nbase]);
+                for start in [[&x0[..nbase + 1], &[size]].concat(), [&xs[..nbase], &[x0[nbase], size]].concat()] {
+                    let c_start = pair_cost(c, &start);
+                    if c_start < cost {
+                        (x0, cost) = (start, c_start);
+                    }
+                }
+            }
+            let start = if nonlinear_first { fit_from(c, &x0, nbase).0 } else { x0 };
             let (x, cost) = fit_all(c, &start);
             (*j, x, cost)
         };
