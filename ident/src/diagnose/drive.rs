@@ -647,14 +647,28 @@ fn gear_to(m: &DriveModel, b: usize) -> f64 {
 /// input's noise, integrated twice, moves when the bodies strike, and the truth itself then
 /// errs 0.3–0.9 where the record's noise floor is 0.001–0.004 — while the prediction restarts
 /// from the measurement at every sample (docs/validation.md, steps 13 and 14). Where the
-/// simulation explains the record with a white residual its answer stands: the prediction's correction takes up part
+/// simulation explains the record with a white residual, or the prediction finds the same effects
+/// at the same places, the simulation's answer stands: the prediction's correction takes up part
 /// of what a friction does, and its friction levels were a few per cent low.
 pub fn diagnose(rec: DriveRecord, progress: &(dyn Fn(&str) + Sync)) -> Result<DriveDiagnosis> {
     let simulated = diagnose_scored(rec, progress, None)?;
     if simulated.verdict != super::verdict::Verdict::NotExplained && !simulated.structured_residual {
         return Ok(simulated);
     }
+    // what each answer found, where: effects and places
+    let found = |d: &DriveDiagnosis| -> Vec<(String, Option<String>)> {
+        let mut f: Vec<_> = d.effects.iter().map(|e| (e.effect.clone(), e.at.clone())).collect();
+        f.sort();
+        f
+    };
     match diagnose_scored(rec, progress, Some(record_noise(&rec))) {
+        // the same effects at the same places: the simulation's sizes stand (the prediction's
+        // correction takes up part of what an effect does)
+        Ok(predicted)
+            if simulated.verdict == super::verdict::Verdict::Explained && found(&predicted) == found(&simulated) =>
+        {
+            Ok(simulated)
+        }
         Ok(mut predicted) if predicted.verdict == super::verdict::Verdict::Explained => {
             let why = if simulated.verdict == super::verdict::Verdict::NotExplained {
                 "no model explained the record"
