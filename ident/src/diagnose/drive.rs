@@ -414,7 +414,7 @@ impl Problem<'_> {
     /// parameter vector and its cost (`held` and its cost for a candidate without a size).
     fn screen(&self, c: Candidate, held: &[f64]) -> (Vec<f64>, f64) {
         let own = |s: &[f64]| self.residual(c, &[held, s].concat());
-        let cost_of = |s: &Vec<f64>| own(s).map_or(f64::INFINITY, |r| r.iter().map(|v| v * v).sum::<f64>());
+        let cost_of = |s: &Vec<f64>| self.cost(c, &[held, s].concat());
         let best = self
             .starts(c)
             .into_iter()
@@ -498,6 +498,12 @@ impl Problem<'_> {
     fn residual(&self, c: Candidate, x: &[f64]) -> Option<Vec<f64>> {
         let m = self.build(c, x)?;
         Some(self.residual_of(self.simulate(&m)?))
+    }
+
+    /// The squared norm of [`Problem::residual`]; infinite where the model cannot be built or
+    /// simulated.
+    fn cost(&self, c: Candidate, x: &[f64]) -> f64 {
+        self.residual(c, x).map_or(f64::INFINITY, |r| r.iter().map(|v| v * v).sum())
     }
 
     /// The outputs `y` of [`Problem::simulate`], one vector each (the traces).
@@ -892,7 +898,7 @@ fn diagnose_scored(
         if !base_refitted && matches!(cands[i], Candidate::Effect(_)) {
             let mut beside: Vec<f64> = [&declared_refit.0[..], &x_screen[nbase..]].concat();
             lm::into_box(&mut beside, &mechanics_box(cands[i], nbase, x_screen.len()));
-            let cost = problem.residual(cands[i], &beside).map_or(f64::INFINITY, |r| r.iter().map(|v| v * v).sum());
+            let cost = problem.cost(cands[i], &beside);
             if cost < *cost_screen {
                 start = beside;
             }
@@ -1084,8 +1090,6 @@ fn diagnose_scored(
         // screen may stop in another valley
         let alone =
             |e: Effect| -> Option<&Vec<f64>> { scored.iter().find(|s| s.3 == Candidate::Effect(e)).map(|s| &s.4) };
-        let pair_cost =
-            |c: Candidate, x: &[f64]| problem.residual(c, x).map_or(f64::INFINITY, |r| r.iter().map(|v| v * v).sum());
         // the pair's re-fit: everything within the mechanics' tolerance, as a single effect's —
         // the single effect's re-fit moved the inertias and stiffnesses to stand in for what the
         // second effect does, and held there the pair could hardly beat it (a friction beside a
@@ -1100,7 +1104,7 @@ fn diagnose_scored(
             if let Some(xs) = alone(seconds[*j]).filter(|xs| xs.len() == nbase + 1 && x0.len() == nbase + 2) {
                 let (mut cost, size) = (*cost0, xs[nbase]);
                 for start in [[&x0[..nbase + 1], &[size]].concat(), [&xs[..nbase], &[x0[nbase], size]].concat()] {
-                    let c_start = pair_cost(c, &start);
+                    let c_start = problem.cost(c, &start);
                     if c_start < cost {
                         (x0, cost) = (start, c_start);
                     }
