@@ -95,6 +95,21 @@ fn clearly_beats(
     )
 }
 
+/// Whether the pair `first` + `second` in `m0` is stepped whole (`plant::Dynamics::has_exact_steps`):
+/// the structure decides, not the sizes (every parameter at 1). Two nonlinear effects without
+/// whole steps take RK4's fine steps throughout: minutes per record.
+fn stepped_whole(m0: &DriveModel, first: Effect, second: Effect) -> bool {
+    if !(first.is_nonlinear() && second.is_nonlinear()) {
+        return true;
+    }
+    let mut m = m0.clone();
+    for mut e in [first, second] {
+        e.set_values(&vec![1.0; e.values().len()]);
+        m.effects.push(e);
+    }
+    plant::Dynamics::new(&m).is_ok_and(|d| d.has_exact_steps())
+}
+
 /// Times an answer kept from the screen is re-fitted with everything and chosen again (each
 /// round may bring up another candidate only screened).
 const ANSWER_REFITS: usize = 2;
@@ -1038,15 +1053,7 @@ fn diagnose_scored(
         // play that engages at once; elsewhere RK4's fine steps throughout take minutes per
         // record)
         let nonlinear_first = first.is_nonlinear();
-        let stepped_whole = |second: Effect| {
-            let mut m = m0.clone();
-            for mut e in [first, second] {
-                // the structure decides, not the sizes: every parameter at 1
-                e.set_values(&vec![1.0; e.values().len()]);
-                m.effects.push(e);
-            }
-            plant::Dynamics::new(&m).is_ok_and(|d| d.has_exact_steps())
-        };
+        let stepped_whole = |second: Effect| stepped_whole(m0, first, second);
         let x1 = scored[best].4.clone();
         let others: Vec<Effect> = cands
             .iter()
@@ -1055,8 +1062,7 @@ fn diagnose_scored(
                 _ => None,
             })
             .collect();
-        let (seconds, not_stepped): (Vec<Effect>, Vec<Effect>) =
-            others.into_iter().partition(|&e| !(nonlinear_first && e.is_nonlinear()) || stepped_whole(e));
+        let (seconds, not_stepped): (Vec<Effect>, Vec<Effect>) = others.into_iter().partition(|&e| stepped_whole(e));
         if !not_stepped.is_empty() {
             search_notes.push(format!(
                 "beside {} {} not searched for: the pair has no whole steps in this model (minutes per record)",
@@ -1143,6 +1149,74 @@ fn diagnose_scored(
         }
         best
     };
+    // The answer `best` with one effect moved to each other place of its kind (beside the
+    // answer's other parameters held): screened, the best of each effect's places re-fitted with
+    // everything and kept in `scored` (an entry of that candidate replaced where the fit is
+    // better); returns that entry where it is plausible and scores better than the answer.
+    let swap_step = |best: usize, scored: &mut Vec<Scored>| -> Option<usize> {
+        let (c, x) = (scored[best].3, scored[best].4.clone());
+        // (the effect kept, the effect moved, the parameters held: the mechanics then the kept
+        // effect's size)
+        let moves: Vec<(Option<Effect>, Effect, Vec<f64>)> = match c {
+            Candidate::Effect(e) if x.len() == nbase + 1 => vec![(None, e, x[..nbase].to_vec())],
+            Candidate::Pair(a, b) if x.len() == nbase + 2 => {
+                vec![(Some(a), b, x[..nbase + 1].to_vec()), (Some(b), a, [&x[..nbase], &x[nbase + 1..]].concat())]
+            }
+            _ => return None,
+        };
+        let mut trials: Vec<(Candidate, Vec<f64>)> = Vec::new();
+        for (kept, moved, held) in &moves {
+            for alt in cands.iter().filter_map(|c| match *c {
+                Candidate::Effect(e) if e.name() == moved.name() && e != *moved => Some(e),
+                _ => None,
+            }) {
+                match kept {
+                    None => trials.push((Candidate::Effect(alt), held.clone())),
+                    Some(k) if alt.at() != k.at() && stepped_whole(m0, *k, alt) => {
+                        trials.push((Candidate::Pair(*k, alt), held.clone()))
+                    }
+                    Some(_) => {}
+                }
+            }
+        }
+        let screened = super::on_two_workers(trials.len(), &|t| {
+            let (x, cost) = problem.screen(trials[t].0, &trials[t].1);
+            (t, x, cost)
+        });
+        let mut found = None;
+        for (kept, moved, _) in &moves {
+            // the best screen of this effect's places
+            let of_this = |t: &usize| match trials[*t].0 {
+                Candidate::Effect(e) => kept.is_none() && e.name() == moved.name(),
+                Candidate::Pair(k, e) => Some(k) == *kept && e.name() == moved.name(),
+                _ => false,
+            };
+            let Some((t, x0, _)) =
+                screened.iter().filter(|s| of_this(&s.0) && s.2.is_finite()).min_by(|a, b| a.2.total_cmp(&b.2))
+            else {
+                continue;
+            };
+            let alt = trials[*t].0;
+            let (x, cost) = fit_all(alt, x0);
+            let Some(entry) = score_fit(alt, x, cost, true) else { continue };
+            let i = match scored.iter().position(|s| s.3 == alt) {
+                Some(i) if scored[i].0.error_after <= entry.0.error_after => i,
+                Some(i) => {
+                    scored[i] = entry;
+                    i
+                }
+                None => {
+                    scored.push(entry);
+                    scored.len() - 1
+                }
+            };
+            let incumbent = found.unwrap_or(best);
+            if !scored[i].0.implausible && scored[i].0.score < scored[incumbent].0.score {
+                found = Some(i);
+            }
+        }
+        found
+    };
     let structured = |s: &Scored| s.2.abs() >= WHITE_RESIDUAL_LAG1;
     if matches!(scored[best].3, Candidate::Effect(_)) && structured(&scored[best]) {
         best = second_step(best, &mut scored, &mut search_notes);
@@ -1190,6 +1264,27 @@ fn diagnose_scored(
             if kept {
                 best = alternative;
             }
+        }
+    }
+    // The swap step (the torsional engine's, for places): each effect of the answer is tried at
+    // every other place where an effect of its kind can act, beside the answer's other
+    // parameters — its mechanics and the pair's other effect. The places were ranked by screens
+    // that held other mechanics (the declared ones where their re-fit was implausible, the single
+    // effect's re-fit for a pair's second effect), and two places of one kind differ by little
+    // beside mechanics bent to stand in for the other. The best place's screen is re-fitted with
+    // everything, and it replaces the answer where it scores better, plausibly; where the two
+    // explain the record alike, the verdict says the record does not tell where
+    // (`verdict::undetermined`).
+    if best != none && scored[best].5 {
+        if let Some(swapped) = swap_step(best, &mut scored) {
+            search_notes.push(format!(
+                "swap: {} rather than {} (error {:.4} against {:.4}; the places compared beside the answer's re-fitted mechanics)",
+                label(scored[swapped].3),
+                label(scored[best].3),
+                scored[swapped].0.error_after,
+                scored[best].0.error_after
+            ));
+            best = swapped;
         }
     }
     // The declared model as the answer, its free re-fit beyond the tolerance: re-fitted within
