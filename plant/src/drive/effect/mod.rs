@@ -143,7 +143,7 @@ pub struct Search {
 }
 
 /// Where a record can show an effect, judged on the declared model's own motion under the
-/// recorded inputs.
+/// recorded inputs and, where the record measures that speed or force, on the measurement.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Shows {
     /// Anywhere.
