@@ -1179,39 +1179,35 @@ fn diagnose_scored(
             }
             _ => return None,
         };
-        let mut trials: Vec<(Candidate, Vec<f64>)> = Vec::new();
-        for (kept, moved, held) in &moves {
+        // (the move, the candidate, its held parameters)
+        let mut trials: Vec<(usize, Candidate, Vec<f64>)> = Vec::new();
+        for (m, (kept, moved, held)) in moves.iter().enumerate() {
             for alt in cands.iter().filter_map(|c| match *c {
                 Candidate::Effect(e) if e.name() == moved.name() && e != *moved => Some(e),
                 _ => None,
             }) {
                 match kept {
-                    None => trials.push((Candidate::Effect(alt), held.clone())),
+                    None => trials.push((m, Candidate::Effect(alt), held.clone())),
                     Some(k) if alt.at() != k.at() && stepped_whole(m0, *k, alt) => {
-                        trials.push((Candidate::Pair(*k, alt), held.clone()))
+                        trials.push((m, Candidate::Pair(*k, alt), held.clone()))
                     }
                     Some(_) => {}
                 }
             }
         }
         let screened = super::on_two_workers(trials.len(), &|t| {
-            let (x, cost) = problem.screen(trials[t].0, &trials[t].1);
+            let (x, cost) = problem.screen(trials[t].1, &trials[t].2);
             (t, x, cost)
         });
         let mut found = None;
-        for (kept, moved, _) in &moves {
-            // the best screen of this effect's places
-            let of_this = |t: &usize| match trials[*t].0 {
-                Candidate::Effect(e) => kept.is_none() && e.name() == moved.name(),
-                Candidate::Pair(k, e) => Some(k) == *kept && e.name() == moved.name(),
-                _ => false,
-            };
+        for m in 0..moves.len() {
+            // the best screen of this move's places
             let Some((t, x0, _)) =
-                screened.iter().filter(|s| of_this(&s.0) && s.2.is_finite()).min_by(|a, b| a.2.total_cmp(&b.2))
+                screened.iter().filter(|s| trials[s.0].0 == m && s.2.is_finite()).min_by(|a, b| a.2.total_cmp(&b.2))
             else {
                 continue;
             };
-            let alt = trials[*t].0;
+            let alt = trials[*t].1;
             let (x, cost) = fit_all(alt, x0);
             let Some(entry) = score_fit(alt, x, cost, true) else { continue };
             let i = match scored.iter().position(|s| s.3 == alt) {
