@@ -25,7 +25,7 @@ fn main() {
                     m.effects.insert(0, friction);
                 }
                 let t0 = Instant::now();
-                let y = m.simulate(&[u.clone()], dt, 0.0, &common::OUTPUTS);
+                let y = m.simulate(std::slice::from_ref(&u), dt, 0.0, &common::OUTPUTS);
                 let ms = t0.elapsed().as_secs_f64() * 1e3;
                 let d = Dynamics::new(&m).unwrap();
                 let mut rk = d.integrator();
