@@ -167,10 +167,13 @@ pub const MAX_SPLIT_LEVELS: usize = 16;
 
 /// How many step lengths h, h/2, h/4, … a system stepping `h` whole keeps maps for, so that
 /// [`split`] can locate a crossing of pieces: every halving longer than
-/// `fine_s`/[`SPLIT_BELOW_FINE`], at most [`MAX_SPLIT_LEVELS`] (h itself included).
+/// `fine_s`/[`SPLIT_BELOW_FINE`], at most [`MAX_SPLIT_LEVELS`] (h itself included). Longer by
+/// more than rounding: the rig's fine step is an eighth of its sample, so a halving meets the
+/// bound exactly, and an importer's step one ulp off the sample must get the same depth (it
+/// did not, and a rattling play's FMU parted from the diagnosis it replays).
 pub fn split_levels(h: f64, fine_s: f64) -> usize {
     let (mut levels, mut len) = (1, 0.5 * h);
-    while levels < MAX_SPLIT_LEVELS && len > fine_s / SPLIT_BELOW_FINE {
+    while levels < MAX_SPLIT_LEVELS && len > fine_s / SPLIT_BELOW_FINE * (1.0 + 1e-9) {
         levels += 1;
         len *= 0.5;
     }
