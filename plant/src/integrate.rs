@@ -10,10 +10,9 @@
 //! otherwise it is taken again in fine sub-steps. A rattling shaft crosses the play twice a
 //! period, so most of a record is stepped coarsely. Where the pieces are linear (backlash
 //! alone) the system may step a piece exactly instead, kept when the end lies in the start's
-//! piece, else halved until each part is ([`split`]: the crossing located by whole steps, and
-//! crossed by one short RK4 step); where friction is the only nonlinearity, a sample while
-//! every body with friction slides is stepped whole with the linear part exact and the
-//! frictions as forces ([`ForcedMaps`]), RK4 taking over where one comes near zero speed.
+//! piece; where friction is the only nonlinearity, a sample while every body with friction
+//! slides is stepped whole with the linear part exact and the frictions as forces
+//! ([`ForcedMaps`]), RK4 taking over where one comes near zero speed.
 
 use nalgebra::DMatrix;
 
@@ -91,9 +90,12 @@ impl PiecewiseRk4 {
                 x.copy_from_slice(end);
                 return (0, Some(piece));
             }
-            // the piece was left: the interval halved until each part stays in one piece
-            let (taken, end) = split(sys, x, h, piece, self.fine_s, &mut self.work);
-            return (taken, Some(end));
+            // the piece was left: the whole interval in fine sub-steps
+            let n = coarse * fine;
+            for _ in 0..n {
+                rk4(sys, x, h / n as f64, &mut self.work, None);
+            }
+            return (n, Some(sys.piece(x)));
         }
         let hc = h / coarse as f64;
         let mut taken = 0;
@@ -116,81 +118,6 @@ impl PiecewiseRk4 {
         }
         (taken, Some(start_piece))
     }
-}
-
-/// Steps `x` over `h` from piece `piece` where the whole step left it: each half is stepped
-/// whole where it stays in one piece, else halved again, down to the lengths the system has no
-/// whole step for ([`split_levels`]); those, and a half the system does not step whole (a
-/// friction in its steep band), RK4 takes in sub-steps of at most `fine_s`. A crossing of
-/// pieces is so located within h·2^-levels at the cost of two whole steps per level, where
-/// stepping the whole interval in fine RK4 sub-steps took h/`fine_s` of them. Returns the RK4
-/// sub-steps taken and the end's piece.
-fn split(
-    sys: &mut impl PiecewiseSmooth,
-    x: &mut [f64],
-    h: f64,
-    piece: u64,
-    fine_s: f64,
-    work: &mut [Vec<f64>; 6],
-) -> (usize, u64) {
-    let half = 0.5 * h;
-    let (mut taken, mut piece) = (0, piece);
-    for _ in 0..2 {
-        let [.., end] = &mut *work;
-        if sys.exact(piece, x, half, end) {
-            if sys.piece(end) == piece {
-                x.copy_from_slice(end);
-                continue;
-            }
-            let (t, p) = split(sys, x, half, piece, fine_s, work);
-            (taken, piece) = (taken + t, p);
-        } else {
-            let n = (half / fine_s - 1e-9).ceil().max(1.0) as usize;
-            for _ in 0..n {
-                rk4(sys, x, half / n as f64, work, None);
-            }
-            (taken, piece) = (taken + n, sys.piece(x));
-        }
-    }
-    (taken, piece)
-}
-
-/// Where a whole step leaves its piece, [`split`] halves it down to steps this many times
-/// shorter than the fine RK4 step across pieces: the kink is then crossed by a step of at
-/// most `fine_s`/4, where RK4 at `fine_s` loses its order. Measured on the rattling play of
-/// `drive::tests` against a 10 µs RK4 reference: 1.95 / 0.27 / 0.23 % of the peak speed at 1, 4
-/// and 16 (2.7 % with fine RK4 sub-steps over each crossing sample); each halving more costs
-/// two whole steps per crossing.
-pub const SPLIT_BELOW_FINE: f64 = 4.0;
-/// Most step lengths h, h/2, h/4, … a whole-step system keeps ([`split_levels`]).
-pub const MAX_SPLIT_LEVELS: usize = 16;
-
-/// How many step lengths h, h/2, h/4, … a system stepping `h` whole keeps maps for, so that
-/// [`split`] can locate a crossing of pieces: every halving longer than
-/// `fine_s`/[`SPLIT_BELOW_FINE`], at most [`MAX_SPLIT_LEVELS`] (h itself included). Longer by
-/// more than rounding: the rig's fine step is an eighth of its sample, so a halving meets the
-/// bound exactly, and an importer's step one ulp off the sample must get the same depth (it
-/// did not, and a rattling play's FMU parted from the diagnosis it replays).
-pub fn split_levels(h: f64, fine_s: f64) -> usize {
-    let (mut levels, mut len) = (1, 0.5 * h);
-    while levels < MAX_SPLIT_LEVELS && len > fine_s / SPLIT_BELOW_FINE * (1.0 + 1e-9) {
-        levels += 1;
-        len *= 0.5;
-    }
-    levels
-}
-
-/// The level k of step length `h` among `levels` lengths h0·2^-k ([`split_levels`]; the
-/// halvings are exact in floating point); `None` for another length.
-pub fn split_level(h0: f64, levels: usize, h: f64) -> Option<usize> {
-    let mut len = h0;
-    for k in 0..levels {
-        if len == h {
-            return Some(k);
-        }
-        len *= 0.5;
-    }
-    None
 }
 
 /// RK4 sub-step bound: h·|λ|max ≤ this (RK4 is stable to 2.8 on both axes; 0.5 keeps the
@@ -327,43 +254,20 @@ fn rk4(
 #[derive(Debug, Clone)]
 pub struct PieceMaps {
     h: f64,
-    /// The maps of h·2^-k, k = 0, 1, … ([`split_levels`]).
-    levels: Vec<[AffineStep; 3]>,
+    maps: [AffineStep; 3],
 }
 
 impl PieceMaps {
-    /// The maps of `h` and its `levels` − 1 halvings ([`split_levels`]) for the three pieces'
-    /// systems (A, B), each B's last column the piece's offset, an input held at 1
-    /// (`Dynamics::play_pieces`): x⁺ = Φ x + Γ u + e per piece.
-    pub fn new(h: f64, levels: usize, pieces: &[(DMatrix<f64>, DMatrix<f64>); 3]) -> Option<PieceMaps> {
-        let levels = levels.max(1);
-        // a piece's maps, longest first: the whole step's exponential, its halvings' from the
-        // shortest's by squaring ([Φ Γ; 0 I]² = [Φ² ΦΓ + Γ; 0 I]: a product, not an exponential,
-        // per halving)
-        let maps = |(a, b): &(DMatrix<f64>, DMatrix<f64>)| -> Option<Vec<AffineStep>> {
+    /// The maps of `h` for the three pieces' systems (A, B), each B's last column the piece's
+    /// offset, an input held at 1 (`Dynamics::play_pieces`): x⁺ = Φ x + Γ u + e per piece.
+    pub fn new(h: f64, pieces: &[(DMatrix<f64>, DMatrix<f64>); 3]) -> Option<PieceMaps> {
+        let map = |(a, b): &(DMatrix<f64>, DMatrix<f64>)| -> Option<AffineStep> {
             let (ns, m) = (a.nrows(), b.ncols().checked_sub(1)?);
-            let affine = |phi: &DMatrix<f64>, gamma: &DMatrix<f64>| {
-                let g = gamma.as_slice();
-                AffineStep::new(phi.as_slice(), &g[..ns * m], &g[ns * m..])
-            };
-            let mut out = Vec::with_capacity(levels);
-            if levels > 1 {
-                let shortest = (1..levels).fold(h, |len, _| 0.5 * len);
-                let (mut phi, mut gamma) = crate::statespace::zoh(a, b, shortest).ok()?;
-                for _ in 1..levels {
-                    out.push(affine(&phi, &gamma)?);
-                    gamma = &phi * &gamma + &gamma;
-                    phi = &phi * &phi;
-                }
-            }
             let (phi, gamma) = crate::statespace::zoh(a, b, h).ok()?;
-            out.push(affine(&phi, &gamma)?);
-            out.reverse();
-            Some(out)
+            let g = gamma.as_slice();
+            AffineStep::new(phi.as_slice(), &g[..ns * m], &g[ns * m..])
         };
-        let [inside, beyond, below] = [maps(&pieces[0])?, maps(&pieces[1])?, maps(&pieces[2])?];
-        let levels = inside.into_iter().zip(beyond).zip(below).map(|((i, a), b)| [i, a, b]).collect();
-        Some(PieceMaps { h, levels })
+        Some(PieceMaps { h, maps: [map(&pieces[0])?, map(&pieces[1])?, map(&pieces[2])?] })
     }
 
     /// The step length, s.
@@ -371,11 +275,10 @@ impl PieceMaps {
         self.h
     }
 
-    /// x⁺ of piece `piece` under the inputs `u` held over `h` (the step length or one of its
-    /// halvings); false for another step length or an unknown piece.
+    /// x⁺ of piece `piece` under the inputs `u` held over `h`; false for another step length or
+    /// an unknown piece.
     pub fn step(&self, piece: u64, x: &[f64], u: &[f64], h: f64, out: &mut [f64]) -> bool {
-        let Some(level) = split_level(self.h, self.levels.len(), h) else { return false };
-        let Some(m) = self.levels[level].get(piece as usize) else { return false };
+        let Some(m) = self.maps.get(piece as usize).filter(|_| h == self.h) else { return false };
         m.apply(x, u, out);
         true
     }
