@@ -23,7 +23,8 @@ import time
 from concurrent.futures import ProcessPoolExecutor
 
 import numpy as np
-from scipy.integrate import solve_ivp
+from numba import njit
+from scipy.integrate import odeint
 from scipy.signal import lfilter
 
 # the declared model (DATA.md), SI
@@ -106,61 +107,74 @@ def simulate(t, u):
         dr = dl * cr / cl
     ds = dl * (cr / (cl + cr)) ** 2 + dr * (cl / (cl + cr)) ** 2
     b = t.get("backlash_rad", 0.0)
-    delay = t.get("delay_s", 0.0)
-    lag = t.get("lag_s", 0.0)
     k = t.get("stiffness", 0.0)
     fr = t.get("motor_fraction", 0.5)
-    j_cage = (1 - fr) * d["j_drive"] if k > 0 else d["j_drive"]
-    j_motor = fr * d["j_drive"]
     tc = t.get("friction_nm", 0.0)
-    fric_m2 = tc if t.get("friction_at") == "M2" else 0.0
-    fric_m3 = tc if t.get("friction_at") == "M3" else 0.0
-    n = u.size
-
-    def held(time):
-        i = int(np.floor((time - delay) / DT + 1e-9))
-        return u[min(max(i, 0), n - 1)]
-
-    def friction(tc_, w):
-        # Stribeck: 1.3 T_c near rest falling to T_c above 0.05 rad/s, its sign smoothed over 5 mrad/s
-        if tc_ == 0.0:
-            return 0.0
-        return np.tanh(w / 0.005) * tc_ * (1.0 + 0.3 * np.exp(-(w / 0.05) ** 2))
-
-    def rhs(time, x):
-        q2, qc, q3, qm, w2, wc, w3, wm, z = x
-        s = 2 * qc - q2 - q3
-        sd = 2 * wc - w2 - w3
-        if s > b:
-            shaft = cs * (s - b) + ds * sd
-        elif s < -b:
-            shaft = cs * (s + b) + ds * sd
-        else:
-            shaft = 0.0  # inside the play: no spring, no damper
-        drive = z if lag > 0 else held(time)
-        dz = (held(time) - z) / lag if lag > 0 else 0.0
-        a2 = (shaft - d["load_drag"] * w2 - friction(fric_m2, w2)) / d["j_m2"]
-        a3 = (shaft - d["load_drag"] * w3 - friction(fric_m3, w3)) / d["j_m3"]
-        if k > 0:
-            inner = k * (qm - qc) + ds / cs * k * (wm - wc)
-            ac = (-2 * shaft + inner) / j_cage
-            am = (drive - inner) / j_motor
-        else:
-            ac = (-2 * shaft + drive) / j_cage
-            am = 0.0
-        return [w2, wc, w3, wm, a2, ac, a3, am, dz]
-
+    p = np.array([cs, ds, b, t.get("delay_s", 0.0), t.get("lag_s", 0.0), k,
+                  (1 - fr) * d["j_drive"] if k > 0 else d["j_drive"], fr * d["j_drive"],
+                  tc if t.get("friction_at") == "M2" else 0.0, tc if t.get("friction_at") == "M3" else 0.0,
+                  d["load_drag"], d["j_m2"], d["j_m3"]])
     # start at the set point's steady state: the speeds T0/(2 drag), the shafts twisted to carry it
     t0 = u[0]
     w0 = t0 / (2 * d["load_drag"])
     shaft0 = t0 / 2
     s0 = shaft0 / cs + b * np.sign(shaft0)
     x0 = [0.0, s0 / 2, 0.0, s0 / 2 + (t0 / k if k > 0 else 0.0), w0, w0, w0, w0, t0]
-    sol = solve_ivp(rhs, (0.0, n * DT), x0, method="LSODA", t_eval=np.arange(n) * DT, max_step=DT / 2,
-                    rtol=1e-7, atol=1e-9)
-    if not sol.success:
-        raise RuntimeError(f"seed {t['seed']}: {sol.message}")
-    return sol.y[4], sol.y[6]
+    y = lsoda(rig_rhs, x0, np.arange(u.size) * DT, (p, np.ascontiguousarray(u, dtype=float)), t["seed"])
+    return y[:, 4], y[:, 6]
+
+
+def lsoda(rhs, x0, times, args, seed, atol=1e-9):
+    """The states at `times` (samples x states): scipy's LSODA (ODEPACK, through `odeint`) on the
+    compiled right-hand side `rhs(time, x, *args)`, steps of at most half a sample (the inputs
+    are held over a sample) and none beyond the last time (a closed loop has not yet chosen the
+    next input), relative tolerance 1e-7, absolute `atol`."""
+    y, info = odeint(rhs, np.asarray(x0, dtype=float), times, args=args, tfirst=True, rtol=1e-7, atol=atol,
+                     hmax=DT / 2, tcrit=times[-1:], mxstep=10 ** 7, full_output=True)
+    if info["message"] != "Integration successful.":
+        raise RuntimeError(f"seed {seed}: {info['message']}")
+    return y
+
+
+@njit(cache=True)
+def rig_rhs(time, x, p, u):
+    """The rig's right-hand side, states [q2, q_cage, q3, q_motor, w2, w_cage, w3, w_motor, z]
+    (z the lagged drive torque); p as `simulate` packs it, u the commanded torque per sample."""
+    cs, ds, b, delay, lag, k, j_cage, j_motor = p[0], p[1], p[2], p[3], p[4], p[5], p[6], p[7]
+    fric_m2, fric_m3, load_drag, j_m2, j_m3 = p[8], p[9], p[10], p[11], p[12]
+    q2, qc, q3, qm, w2, wc, w3, wm, z = x[0], x[1], x[2], x[3], x[4], x[5], x[6], x[7], x[8]
+    s = 2 * qc - q2 - q3
+    sd = 2 * wc - w2 - w3
+    if s > b:
+        shaft = cs * (s - b) + ds * sd
+    elif s < -b:
+        shaft = cs * (s + b) + ds * sd
+    else:
+        shaft = 0.0  # inside the play: no spring, no damper
+    # the drive torque commanded a dead time ago, held over its sample
+    i = int(np.floor((time - delay) / DT + 1e-9))
+    held = u[min(max(i, 0), u.size - 1)]
+    drive = z if lag > 0 else held
+    dz = (held - z) / lag if lag > 0 else 0.0
+    a2 = (shaft - load_drag * w2 - stribeck(fric_m2, w2)) / j_m2
+    a3 = (shaft - load_drag * w3 - stribeck(fric_m3, w3)) / j_m3
+    if k > 0:
+        inner = k * (qm - qc) + ds / cs * k * (wm - wc)
+        ac = (-2 * shaft + inner) / j_cage
+        am = (drive - inner) / j_motor
+    else:
+        ac = (-2 * shaft + drive) / j_cage
+        am = 0.0
+    return np.array([w2, wc, w3, wm, a2, ac, a3, am, dz])
+
+
+@njit(cache=True)
+def stribeck(tc, w):
+    """Coulomb friction tc at speed w with a Stribeck rise: 1.3 tc near rest falling to tc above
+    0.05 rad/s, its sign smoothed over 5 mrad/s."""
+    if tc == 0.0:
+        return 0.0
+    return np.tanh(w / 0.005) * tc * (1.0 + 0.3 * np.exp(-(w / 0.05) ** 2))
 
 
 def measured(w, rng):

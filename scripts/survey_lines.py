@@ -23,9 +23,9 @@ import json
 import os
 
 import numpy as np
-from scipy.integrate import solve_ivp
+from numba import njit
 
-from survey import arguments, bundles_of, diagnose_all, measured, parse_seeds, table, write_summary
+from survey import arguments, bundles_of, diagnose_all, lsoda, measured, parse_seeds, table, write_summary
 
 DT = 1e-3
 DURATION_S = 10.0
@@ -191,34 +191,21 @@ class Line:
                 self.lag[e["input"]] = e["size"]
         self.u = None  # commanded torques, samples x inputs, filled as the record runs
 
-    def held(self, time, k):
-        i = int(np.floor((time - self.delay[k]) / DT + 1e-9))
-        return self.u[min(max(i, 0), self.u.shape[0] - 1), k]
+    def args(self):
+        """`line_rhs`'s arguments after the time and the state."""
+        ln = self.t["line"]
+        return (self.e, self.half, *(np.asarray(ln[k], dtype=float) for k in ("stiffness", "damping", "drag", "inertia")),
+                self.friction, np.asarray(self.t["inputs"], dtype=np.int64), self.delay, self.lag,
+                np.ascontiguousarray(self.u, dtype=float))
 
     def coupling_torques(self, q, w):
         ln = self.t["line"]
-        s, sd = self.e @ q, self.e @ w
-        beyond = np.where(s > self.half, s - self.half, np.where(s < -self.half, s + self.half, 0.0))
-        contact = np.abs(s) > self.half
-        return np.where(contact, ln["stiffness"] * beyond + ln["damping"] * sd, 0.0)
+        return coupling_torques(self.e, self.half, np.asarray(ln["stiffness"], dtype=float),
+                                np.asarray(ln["damping"], dtype=float), np.asarray(q, dtype=float),
+                                np.asarray(w, dtype=float))
 
     def rhs(self, time, x):
-        n, ln = self.n, self.t["line"]
-        q, w, z = x[:n], x[n:2 * n], x[2 * n:]
-        force = -ln["drag"] * w
-        # Stribeck: 1.3 T_c near rest falling to T_c above 0.05 rad/s, the sign smoothed over 5 mrad/s
-        force -= np.tanh(w / 0.005) * self.friction * (1.0 + 0.3 * np.exp(-(w / 0.05) ** 2))
-        if n > 1:
-            force -= self.e.T @ self.coupling_torques(q, w)
-        dz = np.zeros(len(z))
-        for k, body in enumerate(self.t["inputs"]):
-            held = self.held(time, k)
-            if self.lag[k] > 0:
-                dz[k] = (held - z[k]) / self.lag[k]
-                force[body] += z[k]
-            else:
-                force[body] += held
-        return np.concatenate([w, force / ln["inertia"], dz])
+        return line_rhs(time, np.asarray(x, dtype=float), *self.args())
 
     def start(self, torques):
         """Rest or steady rotation under constant `torques` (one per input), friction aside."""
@@ -239,6 +226,47 @@ class Line:
         return np.concatenate([q, w, torques])
 
 
+@njit(cache=True)
+def coupling_torques(e, half, stiffness, damping, q, w):
+    """Each coupling's torque: spring and damper beyond its half play `half` (a dead zone, the
+    damper too acting only in contact). e: the elongations (twist = e q)."""
+    torque = np.zeros(e.shape[0])
+    for c in range(e.shape[0]):
+        s, sd = 0.0, 0.0
+        for j in range(e.shape[1]):
+            s += e[c, j] * q[j]
+            sd += e[c, j] * w[j]
+        if s > half[c]:
+            torque[c] = stiffness[c] * (s - half[c]) + damping[c] * sd
+        elif s < -half[c]:
+            torque[c] = stiffness[c] * (s + half[c]) + damping[c] * sd
+    return torque
+
+
+@njit(cache=True)
+def line_rhs(time, x, e, half, stiffness, damping, drag, inertia, friction, inputs, delay, lag, u):
+    """The line's right-hand side (states q, w, one lagged torque per input); u the commanded
+    torques (samples x inputs), each input's held over its sample and read a dead time late."""
+    n = inertia.size
+    q, w, z = x[:n], x[n:2 * n], x[2 * n:]
+    # Stribeck: 1.3 T_c near rest falling to T_c above 0.05 rad/s, the sign smoothed over 5 mrad/s
+    force = -drag * w - np.tanh(w / 0.005) * friction * (1.0 + 0.3 * np.exp(-(w / 0.05) ** 2))
+    torque = coupling_torques(e, half, stiffness, damping, q, w)
+    for j in range(n):
+        for c in range(n - 1):
+            force[j] -= e[c, j] * torque[c]
+    dz = np.zeros(z.size)
+    for k in range(inputs.size):
+        i = int(np.floor((time - delay[k]) / DT + 1e-9))
+        held = u[min(max(i, 0), u.shape[0] - 1), k]
+        if lag[k] > 0:
+            dz[k] = (held - z[k]) / lag[k]
+            force[inputs[k]] += z[k]
+        else:
+            force[inputs[k]] += held
+    return np.concatenate((w, force / inertia, dz))
+
+
 def simulate(t, rng):
     """The inputs' commanded torques (samples x inputs) and the outputs' true values."""
     u, outputs, _ = simulate_states(t, rng)
@@ -256,17 +284,13 @@ def simulate_states(t, rng):
     # at half the amplitude
     gear = torque_scale(t["line"], line.n - 1)
     second = [-sp * gear] if ninputs > 1 else []
-    options = dict(method="LSODA", max_step=DT / 2, rtol=1e-7, atol=1e-10)
     x = line.start(np.array([sp] + second))
     if t["excitation"] != "closed_loop":
         u[:, 0] = sp + a * open_loop(t["excitation"], rng, steps)
         if ninputs > 1:
             u[:, 1] = second[0] + 0.5 * a * gear * open_loop("multisine", rng, steps)
         line.u = u
-        sol = solve_ivp(line.rhs, (0.0, steps * DT), x, t_eval=np.arange(steps) * DT, **options)
-        if not sol.success:
-            raise RuntimeError(f"seed {t['seed']}: {sol.message}")
-        states = sol.y.T
+        states = lsoda(line_rhs, x, np.arange(steps) * DT, line.args(), t["seed"], atol=1e-10)
     else:
         # a PI speed loop on the first body's measured speed (bandwidth 5 Hz on the line's
         # inertia reflected to it), its reference a PRBS of ±2 rad/s about the set point's speed
@@ -278,6 +302,7 @@ def simulate_states(t, rng):
         states = np.zeros((steps, x.size))
         integral = 0.0
         line.u = u
+        args = line.args()  # holds u itself: each sample's torques are written into it
         for k in range(steps):
             states[k] = x
             error = reference[k] - (x[line.n] + noise[k])
@@ -285,10 +310,7 @@ def simulate_states(t, rng):
             u[k, 0] = np.clip(sp + kp * error + ki * integral, sp - 3 * a, sp + 3 * a)
             if load is not None:
                 u[k, 1] = load[k]
-            sol = solve_ivp(line.rhs, (k * DT, (k + 1) * DT), x, **options)
-            if not sol.success:
-                raise RuntimeError(f"seed {t['seed']}: {sol.message}")
-            x = sol.y[:, -1]
+            x = lsoda(line_rhs, x, np.array([k * DT, (k + 1) * DT]), args, t["seed"], atol=1e-10)[-1]
     n = line.n
     outputs = []
     for quantity, at in t["outputs"]:
