@@ -151,9 +151,7 @@ def rig_rhs(time, x, p, u):
         shaft = cs * (s + b) + ds * sd
     else:
         shaft = 0.0  # inside the play: no spring, no damper
-    # the drive torque commanded a dead time ago, held over its sample
-    i = int(np.floor((time - delay) / DT + 1e-9))
-    held = u[min(max(i, 0), u.size - 1)]
+    held = u[held_sample(time, delay, DT, u.size)]
     drive = z if lag > 0 else held
     dz = (held - z) / lag if lag > 0 else 0.0
     a2 = (shaft - load_drag * w2 - stribeck(fric_m2, w2)) / j_m2
@@ -166,6 +164,15 @@ def rig_rhs(time, x, p, u):
         ac = (-2 * shaft + drive) / j_cage
         am = 0.0
     return np.array([w2, wc, w3, wm, a2, ac, a3, am, dz])
+
+
+@njit(cache=True)
+def held_sample(time, delay, dt, samples):
+    """The sample (of `samples`, `dt` apart) of a held input that acts at `time`: the one
+    commanded `delay` before, held over its sample (the first before the record, the last after
+    it)."""
+    i = int(np.floor((time - delay) / dt + 1e-9))
+    return min(max(i, 0), samples - 1)
 
 
 @njit(cache=True)

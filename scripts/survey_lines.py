@@ -25,7 +25,8 @@ import os
 import numpy as np
 from numba import njit
 
-from survey import arguments, bundles_of, diagnose_all, lsoda, measured, parse_seeds, table, write_summary
+from survey import (arguments, bundles_of, diagnose_all, held_sample, lsoda, measured, parse_seeds, stribeck, table,
+                    write_summary)
 
 DT = 1e-3
 DURATION_S = 10.0
@@ -249,16 +250,16 @@ def line_rhs(time, x, e, half, stiffness, damping, drag, inertia, friction, inpu
     torques (samples x inputs), each input's held over its sample and read a dead time late."""
     n = inertia.size
     q, w, z = x[:n], x[n:2 * n], x[2 * n:]
-    # Stribeck: 1.3 T_c near rest falling to T_c above 0.05 rad/s, the sign smoothed over 5 mrad/s
-    force = -drag * w - np.tanh(w / 0.005) * friction * (1.0 + 0.3 * np.exp(-(w / 0.05) ** 2))
+    force = np.empty(n)
+    for j in range(n):
+        force[j] = -drag[j] * w[j] - stribeck(friction[j], w[j])
     torque = coupling_torques(e, half, stiffness, damping, q, w)
     for j in range(n):
         for c in range(n - 1):
             force[j] -= e[c, j] * torque[c]
     dz = np.zeros(z.size)
     for k in range(inputs.size):
-        i = int(np.floor((time - delay[k]) / DT + 1e-9))
-        held = u[min(max(i, 0), u.shape[0] - 1), k]
+        held = u[held_sample(time, delay[k], DT, u.shape[0]), k]
         if lag[k] > 0:
             dz[k] = (held - z[k]) / lag[k]
             force[inputs[k]] += z[k]
