@@ -389,26 +389,9 @@ impl Problem<'_> {
     /// Effect `e` of size scale·exp(`log_size`) in model `m` (its friction's smoothing from the
     /// body's inertia there); `None` beyond the size the effect allows.
     fn sized(&self, e: Effect, log_size: f64, m: &DriveModel) -> Option<Effect> {
-        let search = e.search();
-        let i = e.at().index();
-        let dt = self.rec.dt_s;
-        let record_s = dt * self.rec.inputs[0].len() as f64;
-        let scale = match search.scale {
-            Scale::BodyForce => self.body_force[i],
-            Scale::CouplingTwist => self.twist_rms[i],
-            Scale::BodyStiffness => self.rec.model.line.diagonal(i).0,
-            Scale::SampleTime => dt,
-        };
+        let scale = self.scale(e);
         let size = scale * log_size.exp();
-        if size < search.floor * scale {
-            return None;
-        }
-        let beyond = match search.limit {
-            Limit::Unbounded => false,
-            Limit::TimesScale(k) => size > k * scale,
-            Limit::RecordShare(share) => size > share * record_s,
-        };
-        if beyond {
+        if size < e.search().floor * scale || self.largest_size(e).is_some_and(|limit| size > limit) {
             return None;
         }
         let body = match e.at() {
@@ -421,6 +404,69 @@ impl Problem<'_> {
             fastest_rate: self.rate,
         };
         Some(e.of_size(size, &context))
+    }
+
+    /// What effect `e`'s size is searched as a multiple of in this record ([`Scale`]).
+    fn scale(&self, e: Effect) -> f64 {
+        let i = e.at().index();
+        match e.search().scale {
+            Scale::BodyForce => self.body_force[i],
+            Scale::CouplingTwist => self.twist_rms[i],
+            Scale::BodyStiffness => self.rec.model.line.diagonal(i).0,
+            Scale::SampleTime => self.rec.dt_s,
+        }
+    }
+
+    /// The largest size of effect `e` that is still an answer in this record ([`Limit`];
+    /// `None`: unbounded).
+    fn largest_size(&self, e: Effect) -> Option<f64> {
+        match e.search().limit {
+            Limit::Unbounded => None,
+            Limit::TimesScale(k) => Some(k * self.scale(e)),
+            Limit::RecordShare(share) => Some(share * self.rec.dt_s * self.rec.inputs[0].len() as f64),
+        }
+    }
+
+    /// Why the sizes of candidate `c`'s effects, fitted as `x` at `cost`, are no finding: the
+    /// record does not bound one from above. With that size moved to the largest its effect
+    /// allows ([`Problem::largest_size`]) and everything else held, the answer scores within
+    /// `min_evidence` of the information criterion (`n_eff` effective residual values) of
+    /// itself — a play whose coupling never closes in the fitted model fits alike at any wider
+    /// play, and the record then shows only that it is wider than the twists the coupling
+    /// makes. The key of each such size, and why (none: the record bounds them all).
+    fn unbounded_above(
+        &self,
+        c: Candidate,
+        x: &[f64],
+        cost: f64,
+        n_eff: f64,
+        min_evidence: f64,
+    ) -> Vec<(String, String)> {
+        let nbase = self.nbase();
+        let mut out = Vec::new();
+        for (k, e) in c.effects().into_iter().enumerate() {
+            let Some(limit) = self.largest_size(e) else { continue };
+            let Some(&log_size) = x.get(nbase + k) else { continue };
+            let mut at_limit = x.to_vec();
+            // just inside the limit (`sized` refuses beyond it)
+            at_limit[nbase + k] = (limit / self.scale(e)).ln() - 1e-9;
+            let cost_at_limit = self.cost(c, &at_limit);
+            let evidence = n_eff * (cost_at_limit / cost).ln();
+            if evidence.is_nan() || evidence < min_evidence {
+                let m = &self.rec.model;
+                let key = e.parameters(m).first().map_or_else(String::new, |p| p.0.clone());
+                let why = format!(
+                    "the record does not bound {key} = {:.4e} of the {} {} from above: at {limit:.4e}, the largest the effect allows, the answer errs {:.4} against {:.4} (information criterion {evidence:.1} apart, less than the {min_evidence} that names a finding), so the record shows only a lower bound: no finding",
+                    self.scale(e) * log_size.exp(),
+                    e.name(),
+                    e.at().phrase(m),
+                    cost_at_limit.sqrt(),
+                    cost.sqrt(),
+                );
+                out.push((key, why));
+            }
+        }
+        out
     }
 
     /// The screen of candidate `c`'s last effect's size with the parameters before it `held`:
@@ -1387,6 +1433,11 @@ fn diagnose_scored(
         before,
         after,
     };
+    // a size the record bounds only from below (a play wider than every twist it meets) is
+    // no finding either
+    let chosen_cost = chosen.error_after.powi(2);
+    let min_evidence = PlaceSettings::default().min_evidence;
+    let open_above = problem.unbounded_above(chosen_candidate, &chosen_x, chosen_cost, n_eff, min_evidence);
     // each effect found, with what it explains: the error without it (the other of a pair
     // alone, as the first step fitted it; the re-fitted declared model for a single effect)
     let own = chosen_candidate.effects();
@@ -1399,7 +1450,19 @@ fn diagnose_scored(
             let intervals = parameters.keys().filter_map(|k| intervals.get(k).map(|v| (k.clone(), *v))).collect();
             let other = own.iter().find(|o| *o != placed).copied();
             let error_without = other.and_then(error_alone).unwrap_or(scored[none].0.error_after);
-            FoundEffect::new(sized.name().into(), Some(sized.element(&model)), parameters, intervals, error_without)
+            let mut found = FoundEffect::new(
+                sized.name().into(),
+                Some(sized.element(&model)),
+                parameters,
+                intervals,
+                error_without,
+            );
+            for (key, _) in open_above.iter().filter(|(k, _)| found.parameters.contains_key(k)) {
+                if !found.not_determined.contains(key) {
+                    found.not_determined.push(key.clone());
+                }
+            }
+            found
         })
         .collect();
     let mut candidates: Vec<CandidateScore> = scored.into_iter().map(|s| s.0).collect();
@@ -1407,8 +1470,18 @@ fn diagnose_scored(
     let undetermined = super::verdict::undetermined(&chosen, &candidates, &PlaceSettings::default());
     // an effect whose size the record does not determine is no finding; every such value is said
     let held_out_settings = super::HeldOutSettings::default();
-    let unsupported = check.unsupported.or_else(|| super::sizes_not_determined(&effects, &held_out_settings));
-    let not_determined = super::not_determined(&chosen.parameters, &intervals, &held_out_settings);
+    let unsupported = check
+        .unsupported
+        .or_else(|| {
+            (!open_above.is_empty()).then(|| open_above.iter().map(|o| o.1.as_str()).collect::<Vec<_>>().join("; "))
+        })
+        .or_else(|| super::sizes_not_determined(&effects, &held_out_settings));
+    let mut not_determined = super::not_determined(&chosen.parameters, &intervals, &held_out_settings);
+    for (key, _) in open_above {
+        if !not_determined.contains(&key) {
+            not_determined.push(key);
+        }
+    }
     let mut d = DriveDiagnosis {
         effect: chosen_candidate.name().to_string(),
         at: effects.first().and_then(|e| e.at.clone()),

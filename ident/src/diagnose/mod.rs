@@ -505,8 +505,10 @@ pub(crate) fn sizes_not_determined(effects: &[torsional::FoundEffect], s: &HeldO
         .flat_map(|e| {
             e.not_determined.iter().map(move |k| {
                 let at = e.at.as_ref().map(|a| format!(" at {a}")).unwrap_or_default();
-                let [lo, hi] = e.intervals[k];
-                format!("{k} = {:.3e} of {}{at} (95 %: {lo:.3e} … {hi:.3e})", e.parameters[k], e.effect)
+                let interval =
+                    e.intervals.get(k).map_or_else(String::new, |[lo, hi]| format!(" (95 %: {lo:.3e} … {hi:.3e})"));
+                let value = e.parameters.get(k).copied().unwrap_or(f64::NAN);
+                format!("{k} = {value:.3e} of {}{at}{interval}", e.effect)
             })
         })
         .collect();
