@@ -500,9 +500,14 @@ pub fn human(r: &DiagnosisReport) -> String {
             s += &format!("  {why}\n");
         }
         if r.effect != "none" {
+            let all: Vec<String> = if r.effects.len() > 1 {
+                r.effects.iter().map(|e| named(&e.effect, e.at.as_ref())).collect()
+            } else {
+                vec![named(&r.effect, r.at.as_ref())]
+            };
             s += &format!(
                 "  the best candidate, {}, is therefore no finding (its error is among the candidates below)\n",
-                named(&r.effect, r.at.as_ref())
+                all.join(" and ")
             );
         }
         s

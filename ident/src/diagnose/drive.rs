@@ -469,6 +469,49 @@ impl Problem<'_> {
         out
     }
 
+    /// Why the frictions of candidate `c` in its fitted model `m` are no finding: one at a body
+    /// an input drives, which turns one way throughout the record — as measured where the record
+    /// measures its speed, else in `m`'s simulation. There the friction is a constant force
+    /// against the motion, exactly as an offset of that input's measured force is, and the
+    /// record cannot tell the two apart (a motor held at a speed by a closed loop). The key of
+    /// each such friction, and why (none: every friction of the answer meets a reversal, or acts
+    /// where no input does).
+    fn one_way_frictions(&self, c: Candidate, m: &DriveModel) -> Vec<(String, String)> {
+        let own = c.effects().len();
+        let mut out = Vec::new();
+        for e in &m.effects[m.effects.len() - own..] {
+            let Effect::CoulombFriction(f) = e else { continue };
+            let Some(input) = m.inputs.iter().position(|&b| b == f.body) else { continue };
+            let measured = self
+                .rec
+                .outputs
+                .iter()
+                .zip(self.rec.measured)
+                .find(|((q, b), _)| *q == Quantity::Speed && *b == f.body)
+                .map(|(_, y)| (y.clone(), "as measured"));
+            let speed = measured.or_else(|| {
+                let simulated =
+                    m.simulate(self.rec.inputs, self.rec.dt_s, self.initial_speed, &[(Quantity::Speed, f.body)]);
+                simulated.ok().map(|mut s| (s.swap_remove(0), "in the answer's simulation"))
+            });
+            let Some((speed, source)) = speed else { continue };
+            let (lo, hi) = speed.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &v| (lo.min(v), hi.max(v)));
+            if lo > 0.0 || hi < 0.0 {
+                let key = e.parameters(m).first().map_or_else(String::new, |p| p.0.clone());
+                let unit = if m.line.domain == Domain::Rotational { "rad/s" } else { "m/s" };
+                let why = format!(
+                    "{key} = {:.4e} of the {} {} is a constant force there: its body turns one way throughout the record ({lo:.4e} to {hi:.4e} {unit}, {source}), and an input acts on it (input {}), whose offset the record cannot tell from such a friction: no finding",
+                    f.friction,
+                    e.name(),
+                    e.at().phrase(m),
+                    input + 1,
+                );
+                out.push((key, why));
+            }
+        }
+        out
+    }
+
     /// The screen of candidate `c`'s last effect's size with the parameters before it `held`:
     /// the best of its grid ([`Problem::starts`]), refined where the effect's profile is rough
     /// (a play's: each impact shifts with it), then [`SCREEN_ITERATIONS`] of LM. The whole
@@ -1433,11 +1476,13 @@ fn diagnose_scored(
         before,
         after,
     };
-    // a size the record bounds only from below (a play wider than every twist it meets) is
-    // no finding either
+    // a size the record bounds only from below (a play wider than every twist it meets), or a
+    // friction it cannot tell from an input's offset, is no finding either
     let chosen_cost = chosen.error_after.powi(2);
     let min_evidence = PlaceSettings::default().min_evidence;
-    let open_above = problem.unbounded_above(chosen_candidate, &chosen_x, chosen_cost, n_eff, min_evidence);
+    let mut no_finding = problem.unbounded_above(chosen_candidate, &chosen_x, chosen_cost, n_eff, min_evidence);
+    // a friction that is a constant force where an input acts is no finding either
+    no_finding.extend(problem.one_way_frictions(chosen_candidate, &model));
     // each effect found, with what it explains: the error without it (the other of a pair
     // alone, as the first step fitted it; the re-fitted declared model for a single effect)
     let own = chosen_candidate.effects();
@@ -1457,7 +1502,7 @@ fn diagnose_scored(
                 intervals,
                 error_without,
             );
-            for (key, _) in open_above.iter().filter(|(k, _)| found.parameters.contains_key(k)) {
+            for (key, _) in no_finding.iter().filter(|(k, _)| found.parameters.contains_key(k)) {
                 if !found.not_determined.contains(key) {
                     found.not_determined.push(key.clone());
                 }
@@ -1473,11 +1518,11 @@ fn diagnose_scored(
     let unsupported = check
         .unsupported
         .or_else(|| {
-            (!open_above.is_empty()).then(|| open_above.iter().map(|o| o.1.as_str()).collect::<Vec<_>>().join("; "))
+            (!no_finding.is_empty()).then(|| no_finding.iter().map(|o| o.1.as_str()).collect::<Vec<_>>().join("; "))
         })
         .or_else(|| super::sizes_not_determined(&effects, &held_out_settings));
     let mut not_determined = super::not_determined(&chosen.parameters, &intervals, &held_out_settings);
-    for (key, _) in open_above {
+    for (key, _) in no_finding {
         if !not_determined.contains(&key) {
             not_determined.push(key);
         }
