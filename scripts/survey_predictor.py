@@ -98,6 +98,11 @@ def error_of(args):
         return np.array([w[at] if quantity == "speed" else torques[at] for quantity, at in t["outputs"]])
 
     x = line.start(line.u[0])
+    args = line.args()  # once: the line and its recorded inputs stay as they are while it runs
+
+    def rhs(tt, x):
+        return S.line_rhs(tt, x, *args)
+
     predicted = np.zeros_like(y)
     h = dt / SUBSTEPS
     for k in range(steps):
@@ -109,10 +114,10 @@ def error_of(args):
             x[n:2 * n] += dz[n - 1:]
         for j in range(SUBSTEPS):
             tt = k * dt + j * h
-            k1 = line.rhs(tt, x)
-            k2 = line.rhs(tt + h / 2, x + h / 2 * k1)
-            k3 = line.rhs(tt + h / 2, x + h / 2 * k2)
-            k4 = line.rhs(tt + h, x + h * k3)
+            k1 = rhs(tt, x)
+            k2 = rhs(tt + h / 2, x + h / 2 * k1)
+            k3 = rhs(tt + h / 2, x + h / 2 * k2)
+            k4 = rhs(tt + h, x + h * k3)
             x = x + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
         if not np.all(np.isfinite(x)):
             return seed, factor, mechanics, gain_scale, float("nan")

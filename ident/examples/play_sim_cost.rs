@@ -52,23 +52,11 @@ fn main() {
     }
 }
 
-/// `../shared/data/bench_gear`'s input and declared line.
+/// `../shared/data/bench_gear`'s input and declared line, read as `rigtwin diagnose` reads them.
 fn bench_gear() -> (Vec<f64>, f64, plant::DriveModel) {
-    use plant::{Coupling, Domain, DriveModel, Line, LineBody};
+    let bundle = std::path::Path::new("../shared/data/bench_gear.toml");
+    let m = modelfile::drive::load_drive_model(bundle).unwrap_or_else(|e| panic!("{e}"));
     let text = std::fs::read_to_string("../shared/data/bench_gear.csv").expect("../shared/data/bench_gear.csv");
     let u = text.lines().skip(1).map(|l| l.split(',').nth(1).unwrap().parse().unwrap()).collect();
-    let m = DriveModel {
-        line: Line {
-            domain: Domain::Rotational,
-            bodies: vec![
-                LineBody { name: "motor".into(), inertia: 0.002, drag: 0.0001 },
-                LineBody { name: "hub".into(), inertia: 0.0004, drag: 0.0 },
-                LineBody { name: "load".into(), inertia: 0.05, drag: 0.004 },
-            ],
-            couplings: vec![Coupling::new(800.0, 0.02, 1.0), Coupling::new(20000.0, 0.5, 4.0)],
-        },
-        inputs: vec![0],
-        effects: vec![],
-    };
     (u, 1e-3, m)
 }
