@@ -732,5 +732,17 @@ mod tests {
             sizes_not_determined(&[effect("backlash", "two_either_way"), effect("coulomb_friction", "a_friction")], &s);
         assert!(why.as_ref().is_some_and(|w| w.contains("a_friction") && !w.contains("two_either_way")), "{why:?}");
         assert_eq!(sizes_not_determined(&[effect("backlash", "two_either_way")], &s), None);
+        // a size judged not determined without an interval (a play the record bounds only from
+        // below, which no fold moved): named, without an interval, and no panic
+        let mut open = torsional::FoundEffect::new(
+            "backlash".into(),
+            Some("coupling 1".into()),
+            BTreeMap::from([("no_interval".to_string(), parameters["no_interval"])]),
+            BTreeMap::new(),
+            0.1,
+        );
+        open.not_determined.push("no_interval".into());
+        let why = sizes_not_determined(&[open], &s);
+        assert!(why.as_ref().is_some_and(|w| w.contains("no_interval = 5.000e0") && !w.contains("95 %")), "{why:?}");
     }
 }
