@@ -490,6 +490,12 @@ pub fn human(r: &DiagnosisReport) -> String {
         Some(a) => format!("{} at {a}", effect_name(effect)),
         None => effect_name(effect).to_string(),
     };
+    // the answer's effects, each where it acts ("a dead time at input 1 and Coulomb friction at
+    // body b1")
+    let answer_named = || match r.effects.len() {
+        0 | 1 => named(&r.effect, r.at.as_ref()),
+        _ => r.effects.iter().map(|e| named(&e.effect, e.at.as_ref())).collect::<Vec<_>>().join(" and "),
+    };
     let kind = r.kind.replace('_', " ");
     let explained = r.verdict != ident::diagnose::verdict::Verdict::NotExplained;
     let mut s = if !explained {
@@ -500,24 +506,16 @@ pub fn human(r: &DiagnosisReport) -> String {
             s += &format!("  {why}\n");
         }
         if r.effect != "none" {
-            let all: Vec<String> = if r.effects.len() > 1 {
-                r.effects.iter().map(|e| named(&e.effect, e.at.as_ref())).collect()
-            } else {
-                vec![named(&r.effect, r.at.as_ref())]
-            };
             s += &format!(
                 "  the best candidate, {}, is therefore no finding (its error is among the candidates below)\n",
-                all.join(" and ")
+                answer_named()
             );
         }
         s
     } else if r.effect == "none" {
         format!("{kind}: the declared model fits (no effect improves it clearly)\n")
-    } else if r.effects.len() > 1 {
-        let all: Vec<String> = r.effects.iter().map(|e| named(&e.effect, e.at.as_ref())).collect();
-        format!("{kind}: the declared model lacks {}\n", all.join(" and "))
     } else {
-        format!("{kind}: the declared model lacks {}\n", named(&r.effect, r.at.as_ref()))
+        format!("{kind}: the declared model lacks {}\n", answer_named())
     };
     let one = |k: &String, v: f64, interval: Option<&[f64; 2]>, loose: &[String]| {
         if loose.contains(k) {

@@ -482,20 +482,28 @@ impl Problem<'_> {
         for e in &m.effects[m.effects.len() - own..] {
             let Effect::CoulombFriction(f) = e else { continue };
             let Some(input) = m.inputs.iter().position(|&b| b == f.body) else { continue };
+            // the speed's least and largest value; NaN where one is not finite, which tells
+            // nothing of its sign
+            let range = |y: &[f64]| {
+                if y.iter().all(|v| v.is_finite()) {
+                    y.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &v| (lo.min(v), hi.max(v)))
+                } else {
+                    (f64::NAN, f64::NAN)
+                }
+            };
             let measured = self
                 .rec
                 .outputs
                 .iter()
                 .zip(self.rec.measured)
                 .find(|((q, b), _)| *q == Quantity::Speed && *b == f.body)
-                .map(|(_, y)| (y.clone(), "as measured"));
-            let speed = measured.or_else(|| {
+                .map(|(_, y)| (range(y), "as measured"));
+            let speeds = measured.or_else(|| {
                 let simulated =
                     m.simulate(self.rec.inputs, self.rec.dt_s, self.initial_speed, &[(Quantity::Speed, f.body)]);
-                simulated.ok().map(|mut s| (s.swap_remove(0), "in the answer's simulation"))
+                simulated.ok().map(|s| (range(&s[0]), "in the answer's simulation"))
             });
-            let Some((speed, source)) = speed else { continue };
-            let (lo, hi) = speed.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &v| (lo.min(v), hi.max(v)));
+            let Some(((lo, hi), source)) = speeds else { continue };
             if lo > 0.0 || hi < 0.0 {
                 let key = e.parameters(m).first().map_or_else(String::new, |p| p.0.clone());
                 let unit = if m.line.domain == Domain::Rotational { "rad/s" } else { "m/s" };
@@ -1481,7 +1489,6 @@ fn diagnose_scored(
     let chosen_cost = chosen.error_after.powi(2);
     let min_evidence = PlaceSettings::default().min_evidence;
     let mut no_finding = problem.unbounded_above(chosen_candidate, &chosen_x, chosen_cost, n_eff, min_evidence);
-    // a friction that is a constant force where an input acts is no finding either
     no_finding.extend(problem.one_way_frictions(chosen_candidate, &model));
     // each effect found, with what it explains: the error without it (the other of a pair
     // alone, as the first step fitted it; the re-fitted declared model for a single effect)
