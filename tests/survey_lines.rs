@@ -94,3 +94,17 @@ fn a_friction_that_never_meets_a_reversal_at_an_input_is_no_finding() {
     assert_eq!(v["records"], 1, "{v}");
     assert_eq!(v["wrong"], 0, "a friction the record cannot tell from an input's offset is a finding again: {v}");
 }
+
+/// Seeds 3087 (8 bodies and two gear stages, steps) and 3136 (7 bodies and two gear stages,
+/// steps): no effect, the declared inertias and stiffnesses a few per cent off. The declared
+/// model's re-fit within its tolerance started from its free re-fit, which had moved quantities
+/// the record hardly determines far off, and stopped at the tolerance's edge: *not explained*
+/// ("the declared model fits only with its mechanics at the edge"). Restarted from the declared
+/// values, or held there where it ends at the edge again, it fits as well as the free re-fit, and
+/// the declared model fits (docs/validation.md, step 24; both records were held out until then).
+#[test]
+fn a_declared_quantity_the_record_does_not_determine_is_held_at_its_declared_value() {
+    let v = common::survey_script("survey_lines.py", "3087,3136", "--summary");
+    assert_eq!(v["records"], 2, "{v}");
+    assert_eq!(v["right"], 2, "a re-fit stopped at the tolerance's edge makes the declared model distorted again: {v}");
+}

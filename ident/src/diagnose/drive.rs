@@ -671,19 +671,32 @@ impl Problem<'_> {
         }
     }
 
+    /// The report's key of declared quantity `i` of a fit's parameters (the inertias, then the
+    /// stiffnesses).
+    fn base_key(&self, i: usize) -> String {
+        let line = &self.rec.model.line;
+        let rotational = line.domain == Domain::Rotational;
+        match line.bodies.get(i) {
+            Some(body) => {
+                let inertia = if rotational { "inertia" } else { "mass" };
+                format!("{inertia}_{}_{}", body.name.replace(' ', "_"), Dimension::Inertia.key_unit(rotational))
+            }
+            None => {
+                let coupling = i - line.bodies.len() + 1;
+                format!("stiffness_coupling{coupling}_{}", Dimension::Stiffness.key_unit(rotational))
+            }
+        }
+    }
+
     /// The candidate's parameters as reported: the re-fitted inertias and stiffnesses, then
     /// its own.
     fn report(&self, c: Candidate, m: &DriveModel) -> BTreeMap<String, f64> {
         let rotational = m.line.domain == Domain::Rotational;
-        let inertia = if rotational { "inertia" } else { "mass" };
-        let [j_unit, k_unit, d_unit] =
-            [Dimension::Inertia, Dimension::Stiffness, Dimension::Damping].map(|d| d.key_unit(rotational));
+        let d_unit = Dimension::Damping.key_unit(rotational);
         let mut b = BTreeMap::new();
-        for body in &m.line.bodies {
-            b.insert(format!("{inertia}_{}_{j_unit}", body.name.replace(' ', "_")), body.inertia);
-        }
-        for (i, c) in m.line.couplings.iter().enumerate() {
-            b.insert(format!("stiffness_coupling{}_{k_unit}", i + 1), c.stiffness);
+        let quantities = m.line.bodies.iter().map(|b| b.inertia).chain(m.line.couplings.iter().map(|c| c.stiffness));
+        for (i, value) in quantities.enumerate() {
+            b.insert(self.base_key(i), value);
         }
         if matches!(c, Candidate::Damping) {
             for body in &m.line.bodies {
@@ -738,6 +751,63 @@ fn judge_declared(
         .chain(stiffnesses.iter().map(|(name, ratio)| Refitted::Stiffness { name, ratio: *ratio, series_ratio: None }))
         .collect();
     rule(&refitted, &DeclaredSettings::default())
+}
+
+/// The declared model's re-fit within the tolerance (`fit`, in the box `bounds`) where it ended
+/// at the box's edge: that re-fit started from the free one, which moves along what the record
+/// does not determine, and the box stops such a quantity at its edge — an edge the record need
+/// not ask for. The quantities at the edge are set back to their declared values and the fit
+/// restarted from there, in the box; where it ends at the edge again, they are held at their
+/// declared values and the rest re-fitted — and so on while a re-fit ends at the edge somewhere.
+/// A re-fit replaces `fit` only where the record does not prefer the free re-fit (`free_score`)
+/// strongly over it ([`super::verdict::moved_by_the_record`], the rule that judges the box
+/// itself); else the record demands the edge, and the declared mechanics are distorted.
+/// Returns the keys of the quantities held (none where the restart left the edge). `score`
+/// scores a re-fit (its parameters and sum of squares); a held quantity is counted as fitted,
+/// which asks a held re-fit for a little more.
+fn hold_edges_at_declared(
+    problem: &Problem,
+    bounds: &[f64],
+    fit: &mut Scored,
+    free_score: f64,
+    score: &dyn Fn(Vec<f64>, f64) -> Option<Scored>,
+) -> Vec<String> {
+    let within = |x: &[f64]| problem.residual(Candidate::None, x);
+    let accepted = |h: &Scored| !super::verdict::moved_by_the_record(free_score, h.0.score, &DeclaredSettings::default());
+    let at_edge = |x: &[f64], b: &[f64]| -> Vec<usize> {
+        (0..b.len()).filter(|&i| b[i] > 0.0 && x[i].abs() >= b[i] * (1.0 - 1e-6)).collect()
+    };
+    let refit = |start: &[f64], b: &[f64]| {
+        let (x, cost) = lm::minimise(&within, start, lm::Fit::new(20, LM_REL_TOL).within(TRUST_RADIUS).boxed(b));
+        score(x, cost)
+    };
+    let mut held_box = bounds.to_vec();
+    let mut held = Vec::new();
+    loop {
+        let edge = at_edge(&fit.4, &held_box);
+        if edge.is_empty() {
+            break;
+        }
+        let mut start = fit.4.clone();
+        for &i in &edge {
+            start[i] = 0.0;
+        }
+        if let Some(restarted) = refit(&start, &held_box).filter(|r| accepted(r) && at_edge(&r.4, &held_box).is_empty()) {
+            *fit = restarted;
+            break;
+        }
+        for &i in &edge {
+            held_box[i] = 0.0;
+        }
+        match refit(&start, &held_box).filter(accepted) {
+            Some(h) => {
+                *fit = h;
+                held.extend(edge);
+            }
+            None => break,
+        }
+    }
+    held.iter().map(|&i| problem.base_key(i)).collect()
 }
 
 /// The box an effect's re-fit keeps the declared inertias and stiffnesses in (the first `nbase`
@@ -1401,6 +1471,7 @@ fn diagnose_scored(
     // the declared model within its tolerance is the answer — where nothing ends at the
     // tolerance's edge (else it is distorted).
     let free_moved = moved_declared(m0, &scored[none].1);
+    let mut held_at_declared: Vec<String> = Vec::new();
     if best == none && !free_moved.is_empty() {
         // from the free re-fit, which the fit moves into the box
         let bounds = tolerance_box(nbase, nbase);
@@ -1418,7 +1489,17 @@ fn diagnose_scored(
                     scored[none].0.error_after,
                     s.min_evidence
                 ));
+                let free_score = scored[none].0.score;
                 scored[none] = boxed;
+                held_at_declared = hold_edges_at_declared(&problem, &bounds, &mut scored[none], free_score, &|x, cost| {
+                    score_fit(Candidate::None, x, cost, true)
+                });
+                if !held_at_declared.is_empty() {
+                    search_notes.push(format!(
+                        "held at their declared values, re-fitted without them: {} (the re-fit within the factor ended at its edge for them, and held at the declared values the declared model fits as well as its free re-fit: the record does not determine them)",
+                        held_at_declared.join(", ")
+                    ));
+                }
             }
         }
     }
@@ -1460,7 +1541,9 @@ fn diagnose_scored(
                 .map_or_else(BTreeMap::new, |m| problem.report(chosen_candidate, &m))
         })
         .collect();
-    let intervals = super::fold_intervals(&chosen.parameters, &fold_parameters);
+    let mut intervals = super::fold_intervals(&chosen.parameters, &fold_parameters);
+    // a quantity held at its declared value was not fitted: its folds' spread is no interval
+    intervals.retain(|k, _| !held_at_declared.contains(k));
 
     // the declared model as the answer: its mechanics neither beyond the factor nor at its
     // edge (re-fitted within it, where the record did not demand more: a quantity at the edge
@@ -1529,7 +1612,7 @@ fn diagnose_scored(
         })
         .or_else(|| super::sizes_not_determined(&effects, &held_out_settings));
     let mut not_determined = super::not_determined(&chosen.parameters, &intervals, &held_out_settings);
-    for (key, _) in no_finding {
+    for key in held_at_declared.into_iter().chain(no_finding.into_iter().map(|(key, _)| key)) {
         if !not_determined.contains(&key) {
             not_determined.push(key);
         }

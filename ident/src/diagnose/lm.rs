@@ -106,9 +106,10 @@ pub fn minimise(f: &(dyn Fn(&[f64]) -> Option<Vec<f64>> + Sync), x0: &[f64], fit
         if jtj.iter().chain(g.iter()).any(|v: &f64| !v.is_finite()) {
             break;
         }
-        // a parameter on its bound that the descent direction −g pushes outward is held
+        // a parameter on its bound that the descent direction −g pushes outward is held, and
+        // one whose box is empty (|x_i| ≤ 0: held at the origin) throughout
         for (i, m) in max_abs.iter().enumerate() {
-            if x[i].abs() >= *m && x[i] * -g[i] > 0.0 {
+            if x[i].abs() >= *m && (*m == 0.0 || x[i] * -g[i] > 0.0) {
                 jtj.row_mut(i).fill(0.0);
                 jtj.column_mut(i).fill(0.0);
                 jtj[(i, i)] = 1.0;
@@ -375,6 +376,18 @@ mod tests {
         let (x, cost) = minimise(&f, &[-1.2, 1.0], Fit::new(60, 1e-12).smooth(true).central().within(1.0));
         assert!(cost < 1e-12, "cost {cost} at {x:?}");
         assert!((x[0] - 1.0).abs() < 1e-6 && (x[1] - 1.0).abs() < 1e-6, "{x:?}");
+    }
+
+    /// A parameter whose box is empty stays at the origin, and the others reach the minimum
+    /// with it held there: for f = (x0 − 1, x1 − 2 + x0), x0 held at 0, the least squares
+    /// minimum is x1 = 2 (analytic).
+    #[test]
+    fn a_parameter_with_an_empty_box_is_held_at_the_origin() {
+        let f = |x: &[f64]| Some(vec![x[0] - 1.0, x[1] - 2.0 + x[0]]);
+        let (x, cost) = minimise(&f, &[0.5, 0.0], Fit::new(40, 1e-14).boxed(&[0.0, f64::INFINITY]));
+        assert_eq!(x[0], 0.0, "{x:?}");
+        assert!((x[1] - 2.0).abs() < 1e-6, "{x:?}");
+        assert!((cost - 1.0).abs() < 1e-9, "cost {cost}");
     }
 
     #[test]
