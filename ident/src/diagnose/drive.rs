@@ -469,19 +469,23 @@ impl Problem<'_> {
         out
     }
 
-    /// Why the frictions of candidate `c` in its fitted model `m` are no finding: one at a body
-    /// an input drives, which turns one way throughout the record — as measured where the record
-    /// measures its speed, else in `m`'s simulation. There the friction is a constant force
-    /// against the motion, exactly as an offset of that input's measured force is, and the
-    /// record cannot tell the two apart (a motor held at a speed by a closed loop). The key of
-    /// each such friction, and why (none: every friction of the answer meets a reversal, or acts
+    /// Why effects of candidate `c` in its fitted model `m` are no finding as an input's offset
+    /// ([`plant::drive::Search::offset_where_one_way`], a friction): one at a body an input
+    /// drives, which turns one way throughout the record — as measured where the record
+    /// measures its speed, else in `m`'s simulation. There it is a constant force against the
+    /// motion, exactly as an offset of that input's measured force is, and the record cannot
+    /// tell the two apart (a motor held at a speed by a closed loop). The key of each such
+    /// effect's size, and why (none: every such effect of the answer meets a reversal, or acts
     /// where no input does).
-    fn one_way_frictions(&self, c: Candidate, m: &DriveModel) -> Vec<(String, String)> {
+    fn one_way_offsets(&self, c: Candidate, m: &DriveModel) -> Vec<(String, String)> {
         let own = c.effects().len();
         let mut out = Vec::new();
         for e in &m.effects[m.effects.len() - own..] {
-            let Effect::CoulombFriction(f) = e else { continue };
-            let Some(input) = m.inputs.iter().position(|&b| b == f.body) else { continue };
+            let Element::Body(body) = e.at() else { continue };
+            if !e.search().offset_where_one_way {
+                continue;
+            }
+            let Some(input) = m.inputs.iter().position(|&b| b == body) else { continue };
             // the speed's least and largest value; NaN where one is not finite, which tells
             // nothing of its sign
             let range = |y: &[f64]| {
@@ -496,20 +500,19 @@ impl Problem<'_> {
                 .outputs
                 .iter()
                 .zip(self.rec.measured)
-                .find(|((q, b), _)| *q == Quantity::Speed && *b == f.body)
+                .find(|((q, b), _)| *q == Quantity::Speed && *b == body)
                 .map(|(_, y)| (range(y), "as measured"));
             let speeds = measured.or_else(|| {
                 let simulated =
-                    m.simulate(self.rec.inputs, self.rec.dt_s, self.initial_speed, &[(Quantity::Speed, f.body)]);
+                    m.simulate(self.rec.inputs, self.rec.dt_s, self.initial_speed, &[(Quantity::Speed, body)]);
                 simulated.ok().map(|s| (range(&s[0]), "in the answer's simulation"))
             });
             let Some(((lo, hi), source)) = speeds else { continue };
             if lo > 0.0 || hi < 0.0 {
-                let key = e.parameters(m).first().map_or_else(String::new, |p| p.0.clone());
+                let Some((key, size)) = e.parameters(m).into_iter().next() else { continue };
                 let unit = if m.line.domain == Domain::Rotational { "rad/s" } else { "m/s" };
                 let why = format!(
-                    "{key} = {:.4e} of the {} {} is a constant force there: its body turns one way throughout the record ({lo:.4e} to {hi:.4e} {unit}, {source}), and an input acts on it (input {}), whose offset the record cannot tell from such a friction: no finding",
-                    f.friction,
+                    "{key} = {size:.4e} of the {} {} is a constant force there: its body turns one way throughout the record ({lo:.4e} to {hi:.4e} {unit}, {source}), and an input acts on it (input {}), whose offset the record cannot tell from such a force: no finding",
                     e.name(),
                     e.at().phrase(m),
                     input + 1,
@@ -773,7 +776,8 @@ fn hold_edges_at_declared(
     score: &dyn Fn(Vec<f64>, f64) -> Option<Scored>,
 ) -> Vec<String> {
     let within = |x: &[f64]| problem.residual(Candidate::None, x);
-    let accepted = |h: &Scored| !super::verdict::moved_by_the_record(free_score, h.0.score, &DeclaredSettings::default());
+    let accepted =
+        |h: &Scored| !super::verdict::moved_by_the_record(free_score, h.0.score, &DeclaredSettings::default());
     let at_edge = |x: &[f64], b: &[f64]| -> Vec<usize> {
         (0..b.len()).filter(|&i| b[i] > 0.0 && x[i].abs() >= b[i] * (1.0 - 1e-6)).collect()
     };
@@ -792,7 +796,8 @@ fn hold_edges_at_declared(
         for &i in &edge {
             start[i] = 0.0;
         }
-        if let Some(restarted) = refit(&start, &held_box).filter(|r| accepted(r) && at_edge(&r.4, &held_box).is_empty()) {
+        if let Some(restarted) = refit(&start, &held_box).filter(|r| accepted(r) && at_edge(&r.4, &held_box).is_empty())
+        {
             *fit = restarted;
             break;
         }
@@ -1491,9 +1496,10 @@ fn diagnose_scored(
                 ));
                 let free_score = scored[none].0.score;
                 scored[none] = boxed;
-                held_at_declared = hold_edges_at_declared(&problem, &bounds, &mut scored[none], free_score, &|x, cost| {
-                    score_fit(Candidate::None, x, cost, true)
-                });
+                held_at_declared =
+                    hold_edges_at_declared(&problem, &bounds, &mut scored[none], free_score, &|x, cost| {
+                        score_fit(Candidate::None, x, cost, true)
+                    });
                 if !held_at_declared.is_empty() {
                     search_notes.push(format!(
                         "held at their declared values, re-fitted without them: {} (the re-fit within the factor ended at its edge for them, and held at the declared values the declared model fits as well as its free re-fit: the record does not determine them)",
@@ -1572,7 +1578,7 @@ fn diagnose_scored(
     let chosen_cost = chosen.error_after.powi(2);
     let min_evidence = PlaceSettings::default().min_evidence;
     let mut no_finding = problem.unbounded_above(chosen_candidate, &chosen_x, chosen_cost, n_eff, min_evidence);
-    no_finding.extend(problem.one_way_frictions(chosen_candidate, &model));
+    no_finding.extend(problem.one_way_offsets(chosen_candidate, &model));
     // each effect found, with what it explains: the error without it (the other of a pair
     // alone, as the first step fitted it; the re-fitted declared model for a single effect)
     let own = chosen_candidate.effects();

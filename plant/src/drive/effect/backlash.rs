@@ -36,6 +36,7 @@ impl EffectModel for Backlash {
         rough: true,
         limit: Limit::TimesScale(3000.0),
         floor: 0.0,
+        offset_where_one_way: false,
     };
 
     fn element(&self) -> Element {

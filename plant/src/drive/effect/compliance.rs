@@ -70,6 +70,7 @@ impl EffectModel for Compliance {
         rough: false,
         limit: Limit::TimesScale(100.0),
         floor: 0.0,
+        offset_where_one_way: false,
     };
 
     fn element(&self) -> Element {

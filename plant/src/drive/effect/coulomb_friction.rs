@@ -40,6 +40,7 @@ impl EffectModel for CoulombFriction {
         rough: false,
         limit: Limit::Unbounded,
         floor: 0.0,
+        offset_where_one_way: true,
     };
 
     fn element(&self) -> Element {

@@ -140,6 +140,11 @@ pub struct Search {
     /// The smallest size the record can show, a multiple of the scale (0: none): a fit does
     /// not go below it.
     pub floor: f64,
+    /// Where its body turns one way throughout the record it is a constant force against the
+    /// motion; at a body an input drives that is exactly an offset of the input's measured
+    /// force, which the record cannot tell from it, so there it is no finding (a friction
+    /// under a motor held at speed).
+    pub offset_where_one_way: bool,
 }
 
 /// Where a record can show an effect, judged on the declared model's own motion under the
@@ -190,6 +195,7 @@ pub const INPUT_TIME_SEARCH: Search = Search {
     rough: false,
     limit: Limit::RecordShare(0.1),
     floor: INPUT_TIME_FLOOR_SAMPLES,
+    offset_where_one_way: false,
 };
 
 /// The shortest dead time or lag a sampled record can show, in samples: an input is known only
