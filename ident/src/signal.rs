@@ -48,30 +48,6 @@ pub fn correlation_lag(x: &[f64], max_lag: usize) -> usize {
     (0..=max_lag).find(|&m| (1..=k_n).all(|k| rho.get(m + k).is_none_or(|r| r.abs() < band))).unwrap_or(max_lag)
 }
 
-/// The frequency below which `share` of the power of `x` (its mean removed) lies, Hz: the top of
-/// the band a record's excitation covers (a 1–30 Hz sweep: about 30 Hz), 0 for a constant.
-pub fn excited_band_hz(x: &[f64], dt_s: f64, share: f64) -> f64 {
-    let n = x.len();
-    if n < 2 {
-        return 0.0;
-    }
-    let mean = x.iter().sum::<f64>() / n as f64;
-    let centred: Vec<f64> = x.iter().map(|v| v - mean).collect();
-    let power: Vec<f64> = rfft(&centred).iter().map(|c| c.norm_sqr()).collect();
-    let total: f64 = power.iter().skip(1).sum();
-    if !(total > 0.0 && total.is_finite()) {
-        return 0.0;
-    }
-    let mut sum = 0.0;
-    for (k, p) in power.iter().enumerate().skip(1) {
-        sum += p;
-        if sum >= share * total {
-            return k as f64 / (n as f64 * dt_s);
-        }
-    }
-    (power.len() - 1) as f64 / (n as f64 * dt_s)
-}
-
 /// Cross-correlation c[lag] = Σᵢ u[i]·r[i + lag] for |lag| ≤ `max_lag` (clamped to the data's
 /// length), by FFT: O(n log n) whatever the lag range. Returns (lag, c) pairs, lag ascending.
 pub fn cross_correlation(u: &[f64], r: &[f64], max_lag: usize) -> Vec<(isize, f64)> {
@@ -533,25 +509,6 @@ mod tests {
         let rho = autocorrelation(&ar, 10);
         assert!((rho[1] - 0.99).abs() < 0.01, "{}", rho[1]);
         assert_eq!(autocorrelation(&[1.0; 10], 3), vec![0.0; 4]);
-    }
-
-    #[test]
-    fn the_excited_band_ends_where_the_excitation_does() {
-        let dt = 1e-3;
-        // a 10 Hz sine on an offset: all its power at 10 Hz
-        let sine: Vec<f64> = (0..10_000).map(|k| 5.0 + (2.0 * PI * 10.0 * k as f64 * dt).sin()).collect();
-        assert!((excited_band_hz(&sine, dt, 0.99) - 10.0).abs() <= 0.1, "{}", excited_band_hz(&sine, dt, 0.99));
-        // a linear sweep 1 -> 30 Hz over 20 s spreads its power evenly: 99 % lies below
-        // 1 + 0.99 x 29 = 29.7 Hz (within the sweep's spectral leakage, a few tenths of a hertz)
-        let sweep: Vec<f64> = (0..20_000)
-            .map(|k| {
-                let t = k as f64 * dt;
-                (2.0 * PI * (t + 0.5 * 29.0 / 20.0 * t * t)).sin()
-            })
-            .collect();
-        let top = excited_band_hz(&sweep, dt, 0.99);
-        assert!((top - 29.7).abs() < 0.5, "{top}");
-        assert_eq!(excited_band_hz(&[1.0; 100], dt, 0.99), 0.0);
     }
 
     #[test]

@@ -54,11 +54,6 @@ pub struct BoundSettings {
     /// A dead time or time constant is at most this fraction of the record (default 0.1: a
     /// longer one leaves too little of the record to show it).
     pub time_per_record: f64,
-    /// A mode an effect adds (a compliance's) lies below the frequency under which this share
-    /// of the input's power lies (default 0.99: a 1–30 Hz sweep excites up to 30 Hz; a mode
-    /// above every frequency the record excites shows only as a softer spring, and its
-    /// frequency and inertia share are then not determined).
-    pub excited_power_share: f64,
 }
 
 impl Default for BoundSettings {
@@ -67,7 +62,6 @@ impl Default for BoundSettings {
             friction_per_force: 1.0,
             smoothing_per_speed: 0.25,
             time_per_record: 0.1,
-            excited_power_share: 0.99,
         }
     }
 }
