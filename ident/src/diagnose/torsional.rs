@@ -270,7 +270,9 @@ impl Problem<'_> {
         {
             return None;
         }
-        if e.compliance_stiffness_nm_per_rad > 0.0 && highest_mode_hz(&m) > COMPLIANCE_TOP_PER_SAMPLE_RATE / self.sweep.dt_s {
+        if e.compliance_stiffness_nm_per_rad > 0.0
+            && highest_mode_hz(&m) > COMPLIANCE_TOP_PER_SAMPLE_RATE / self.sweep.dt_s
+        {
             return None;
         }
         let speeds = [(Quantity::Speed, 0), (Quantity::Speed, 2)];
@@ -1127,10 +1129,16 @@ pub fn diagnose(
             cost: f64::INFINITY,
             score: f64::INFINITY,
         });
-        if !best.cost.is_finite() || problem.plausible(&best) {
+        // a compliance trades its spring against the shafts it is in series with (the pair is
+        // what the declared c_short measured): its fit with them free may end in a valley of
+        // its own beside the one at the declared mechanics, so both are fitted and the lower
+        // kept
+        let trades = effects.iter().any(|c| c.moves() == Moves::SeriesSpring);
+        if !best.cost.is_finite() || (problem.plausible(&best) && !trades) {
             return best;
         }
-        // The fit bent j_drive or c_short beyond the plausible factor: the candidate is fitted
+        // The fit bent j_drive or c_short beyond the plausible factor (or may have, for a
+        // compliance): the candidate is fitted
         // again with them held at their declared values, from the best grid point beside them.
         // Two effects that share a mode (damping and a compliance) can often explain a record
         // either way; the declared mechanics are kept unless bending them is clearly better.
@@ -1146,6 +1154,15 @@ pub fn diagnose(
         let (y, cost) = lm::minimise(&held, &start, lm::Fit::new(LM_ITERATIONS, LM_REL_TOL));
         let pinned =
             Fit { effects: effects.clone(), x: [vec![0.0, 0.0], y].concat(), cost, score: score(cost, start.len()) };
+        if problem.plausible(&best) {
+            // the compliance's other valley: from its fit at the declared mechanics, with them
+            // free again; the lowest plausible of the three
+            let released = fit_with(effects.clone(), pinned.x.clone(), LM_ITERATIONS);
+            return [pinned, released]
+                .into_iter()
+                .filter(|f| f.cost.is_finite() && problem.plausible(f))
+                .fold(best, |a, b| if b.cost < a.cost { b } else { a });
+        }
         if pinned.cost.is_finite() && !best.beats(&pinned) {
             pinned
         } else {

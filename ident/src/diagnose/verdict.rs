@@ -58,11 +58,7 @@ pub struct BoundSettings {
 
 impl Default for BoundSettings {
     fn default() -> Self {
-        BoundSettings {
-            friction_per_force: 1.0,
-            smoothing_per_speed: 0.25,
-            time_per_record: 0.1,
-        }
+        BoundSettings { friction_per_force: 1.0, smoothing_per_speed: 0.25, time_per_record: 0.1 }
     }
 }
 
