@@ -384,7 +384,9 @@ impl Problem<'_> {
             ));
         };
         let evidence = self.n_eff * (cost / f.cost).ln();
-        (upper.is_nan() || !(evidence >= min_evidence)).then(|| {
+        // NaN evidence (a cost that is not finite) shows nothing either
+        let shown = evidence >= min_evidence;
+        (upper.is_nan() || !shown).then(|| {
             format!(
                 "the record does not show the compliance's mode at {upper:.1} Hz: with it at {moved_hz:.1} Hz (the spring stiffer, the shafts softer so that the pair's stiffness stays) the fit errs {:.4} against {:.4} (information criterion {evidence:.1} apart, less than the {min_evidence} that names a finding)",
                 cost.sqrt(),
