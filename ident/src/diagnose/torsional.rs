@@ -1139,9 +1139,9 @@ pub fn diagnose(
         if !best.cost.is_finite() || (problem.plausible(&best) && !trades) {
             return best;
         }
-        // The fit bent j_drive or c_short beyond the plausible factor (or may have, for a
-        // compliance): the candidate is fitted
-        // again with them held at their declared values, from the best grid point beside them.
+        // The fit bent j_drive or c_short beyond the plausible factor (or, for a compliance,
+        // may have found the valley of its own): the candidate is fitted again with them held
+        // at their declared values, from the best grid point beside them.
         // Two effects that share a mode (damping and a compliance) can often explain a record
         // either way; the declared mechanics are kept unless bending them is clearly better.
         let Some(start) = grid
