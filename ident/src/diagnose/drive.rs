@@ -478,6 +478,15 @@ impl Problem<'_> {
     /// effect's size, and why (none: every such effect of the answer meets a reversal, or acts
     /// where no input does).
     fn one_way_offsets(&self, c: Candidate, m: &DriveModel) -> Vec<(String, String)> {
+        // a speed's least and largest value; NaN where one is not finite, which tells nothing
+        // of its sign
+        let range = |y: &[f64]| {
+            if y.iter().all(|v| v.is_finite()) {
+                y.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &v| (lo.min(v), hi.max(v)))
+            } else {
+                (f64::NAN, f64::NAN)
+            }
+        };
         let own = c.effects().len();
         let mut out = Vec::new();
         for e in &m.effects[m.effects.len() - own..] {
@@ -486,15 +495,6 @@ impl Problem<'_> {
                 continue;
             }
             let Some(input) = m.inputs.iter().position(|&b| b == body) else { continue };
-            // the speed's least and largest value; NaN where one is not finite, which tells
-            // nothing of its sign
-            let range = |y: &[f64]| {
-                if y.iter().all(|v| v.is_finite()) {
-                    y.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &v| (lo.min(v), hi.max(v)))
-                } else {
-                    (f64::NAN, f64::NAN)
-                }
-            };
             let measured = self
                 .rec
                 .outputs

@@ -1136,7 +1136,12 @@ pub fn diagnose(
         // its own beside the one at the declared mechanics, so both are fitted and the lower
         // kept
         let trades = effects.iter().any(|c| c.moves() == Moves::SeriesSpring);
-        if !best.cost.is_finite() || (problem.plausible(&best) && !trades) {
+        if !best.cost.is_finite() {
+            return best;
+        }
+        // judged once: for a compliance, plausibility simulates its mode moved
+        let best_plausible = problem.plausible(&best);
+        if best_plausible && !trades {
             return best;
         }
         // The fit bent j_drive or c_short beyond the plausible factor (or, for a compliance,
@@ -1156,7 +1161,7 @@ pub fn diagnose(
         let (y, cost) = lm::minimise(&held, &start, lm::Fit::new(LM_ITERATIONS, LM_REL_TOL));
         let pinned =
             Fit { effects: effects.clone(), x: [vec![0.0, 0.0], y].concat(), cost, score: score(cost, start.len()) };
-        if problem.plausible(&best) {
+        if best_plausible {
             // the compliance's other valley: from its fit at the declared mechanics, with them
             // free again; the lowest plausible of the three
             let released = fit_with(effects.clone(), pinned.x.clone(), LM_ITERATIONS);
