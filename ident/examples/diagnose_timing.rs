@@ -1,6 +1,6 @@
 //! One-shot timing of the torsional diagnosis on 60 s, 1 kHz records (the criterion bench
 //! `cargo bench -p ident --bench diagnose` repeats them): `cargo run --release -p ident
-//! --example diagnose_timing`.
+//! --example diagnose_timing [-- NAME]` (only the cases whose name contains NAME).
 
 #[path = "common/sweep.rs"]
 mod common;
@@ -25,8 +25,19 @@ fn main() {
             5.0,
             DriveEffects { time_delay_s: 0.005, backlash_rad: 0.003, ..Default::default() },
         ),
+        (
+            "0 Nm, drive compliance + friction at M2 and M3",
+            0.0,
+            DriveEffects {
+                compliance_stiffness_nm_per_rad: 1500.0,
+                coulomb_friction_nm: [1.0, 0.0, 1.0],
+                ..Default::default()
+            },
+        ),
     ];
-    for (name, set_point, effects) in cases {
+    // an argument picks the cases whose name contains it (`-- compliance`)
+    let pick = std::env::args().nth(1).unwrap_or_default();
+    for (name, set_point, effects) in cases.into_iter().filter(|c| c.0.contains(&pick)) {
         let s = sweep(set_point, effects);
         let t0 = Instant::now();
         let d = diagnose(&s, &rig, Variant::V1, &|_| {}).unwrap();

@@ -779,7 +779,7 @@ fn hold_edges_at_declared(
     let accepted =
         |h: &Scored| !super::verdict::moved_by_the_record(free_score, h.0.score, &DeclaredSettings::default());
     let at_edge = |x: &[f64], b: &[f64]| -> Vec<usize> {
-        (0..b.len()).filter(|&i| b[i] > 0.0 && x[i].abs() >= b[i] * (1.0 - 1e-6)).collect()
+        (0..b.len()).filter(|&i| b[i] > 0.0 && super::verdict::at_edge(x[i].abs(), b[i])).collect()
     };
     let refit = |start: &[f64], b: &[f64]| {
         let (x, cost) = lm::minimise(&within, start, lm::Fit::new(20, LM_REL_TOL).within(TRUST_RADIUS).boxed(b));
