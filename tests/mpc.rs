@@ -135,7 +135,8 @@ impl Plant for FmuPlant {
 #[test]
 fn closed_loop_with_the_fmu_matches_the_plant() {
     let params = rigtwin_fmu::RigPlant::default();
-    let ss = mpc::prediction::prediction(&params.powertrain, params.variant, &params.effects, 1e-3).unwrap().model;
+    let design = mpc::Design::Rig { rig: &params.powertrain, variant: params.variant, effects: &params.effects };
+    let ss = design.prediction(1e-3).unwrap().model;
     let sig = RigSignals::of(&ss).unwrap();
     let mut settings = MpcSettings::powertrain(50);
     settings.solver.time_limit_s = 1.0; // identical solves in both runs, whatever the clock
@@ -201,7 +202,8 @@ fn controller_fmu_closes_the_loop_in_fmpy() {
     // from the next point on (a Jacobi master's sample of computational delay)
     let params = rigtwin::fmu_package::params_of_file(&rig).unwrap();
     let params = params.plant.rig().expect("a rig file");
-    let p = mpc::prediction::prediction(&params.powertrain, params.variant, &params.effects, 1e-3).unwrap();
+    let design = mpc::Design::Rig { rig: &params.powertrain, variant: params.variant, effects: &params.effects };
+    let p = design.prediction(1e-3).unwrap();
     let mut settings = MpcSettings::powertrain(50);
     settings.solver.time_limit_s = 1.0;
     let speed = 10.0;

@@ -159,7 +159,8 @@ fn c_program_commands_what_the_rust_loop_commands() {
 
     // the Rust closed loop, assembled as `rigtwin mpc` assembles it
     let modelfile::Model::Rig(params) = modelfile::read(&rig).unwrap().model else { panic!("a rig file") };
-    let p = mpc::prediction::prediction(&params.model, params.variant, &params.effects, 1e-3).unwrap();
+    let design = mpc::Design::Rig { rig: &params.model, variant: params.variant, effects: &params.effects };
+    let p = design.prediction(1e-3).unwrap();
     let mut settings = MpcSettings::powertrain(50);
     settings.solver.time_limit_s = 1.0;
     let mut c = Controller::with_input_delays(&p.model, &p.input_delays_s, &settings).unwrap();

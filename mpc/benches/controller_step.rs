@@ -27,8 +27,9 @@ impl Loop {
     fn new(horizon: usize, effects: bool) -> Self {
         let (ss, delays) = if effects {
             let e = plant::rig::DriveEffects { time_delay_s: 0.0043, actuator_lag_s: 0.005, ..Default::default() };
+            let rig = plant::paper::damped_params();
             let p =
-                mpc::prediction::prediction(&plant::paper::damped_params(), plant::rig::Variant::V1, &e, 1e-3).unwrap();
+                mpc::Design::Rig { rig: &rig, variant: plant::rig::Variant::V1, effects: &e }.prediction(1e-3).unwrap();
             (p.model, p.input_delays_s)
         } else {
             (rig_plant(&plant::paper::damped_params(), plant::rig::Variant::V1).unwrap(), Vec::new())

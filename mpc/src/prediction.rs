@@ -12,7 +12,8 @@ use crate::{MpcSection, MpcSettings};
 
 /// What the controller predicts with: the model's linearisation
 /// (`plant::DriveModel::control_state_space`, the rig's with its own names:
-/// [`rig_control_state_space`]) and the inputs' dead times. Backlash and friction
+/// [`rig_control_state_space`]) and the inputs' dead times, the same for the paper rig and any
+/// drive model ([`Design::prediction`]). Backlash and friction
 /// are left out of the prediction (linear in contact, without friction): [`Prediction::notes`]
 /// says so.
 #[derive(Debug, Clone)]
@@ -26,8 +27,9 @@ pub struct Prediction {
     /// What the prediction includes and leaves out, in words.
     pub notes: Vec<String>,
     /// Free motion at unit speed — every body turning together as its gears allow, the first
-    /// body at 1 (rad/s or m/s) — or `None` where the model cannot move freely (a spring to
-    /// ground holds it, or it falls apart into separate lines).
+    /// body at 1 (rad/s or m/s; where several motions twist nothing, as an open differential's,
+    /// the one nearest to every body at one speed) — or `None` where the model
+    /// cannot move freely (a spring to ground holds it).
     pub motion: Option<Motion>,
 }
 
@@ -51,33 +53,6 @@ impl Motion {
         };
         Motion { state: block(n), rate: block(0) }
     }
-}
-
-/// The prediction model of the rig `rig` in `variant` with `effects`, for a controller sampling
-/// every `dt_s`. Refused when the rig's modes lie beyond that loop's Nyquist frequency (an
-/// inertia or stiffness far off): it could not be controlled, and its Riccati equations would
-/// fail with a message about residuals instead of the parameters.
-pub fn prediction(rig: &RigParams, variant: Variant, effects: &DriveEffects, dt_s: f64) -> Result<Prediction> {
-    let modes = rig.open_differential(variant)?.modes()?;
-    let top = modes.frequencies_hz.iter().copied().fold(0.0, f64::max);
-    let nyquist = 0.5 / dt_s;
-    if top.is_nan() || top >= nyquist {
-        return Err(MpcError::Numerical(format!(
-            "the rig's fastest mode is at {top:.4e} Hz, beyond the {nyquist} Hz a controller sampling every \
-             {dt_s} s can see: check [model] (j_m2 = {}, j_drive = {}, j_m3 = {} kg m^2, c_short = {}, c_long = {} Nm/rad)",
-            rig.j_m2,
-            rig.j_drive,
-            rig.j_m3,
-            rig.c_short,
-            rig.c_long()
-        )));
-    }
-    let model = DriveModel::paper_rig(rig, variant, effects)?;
-    let notes = effect_notes(&model);
-    let ss = rig_control_state_space(&model)?;
-    // the rig has no gear stage: every body at 1
-    let motion = Motion::physical(&vec![1.0; model.line.bodies.len()], ss.nstates());
-    Ok(Prediction { model: ss, input_delays_s: model.input_delays_s(), notes, motion: Some(motion) })
 }
 
 /// The paper rig's drive model `m` (`plant::DriveModel::paper_rig`) as its controller sees it:
@@ -135,7 +110,7 @@ fn effect_notes(model: &DriveModel) -> Vec<String> {
     model.effects.iter().map(|e| format!("{} is {}", e.summary(model), e.prediction())).collect()
 }
 
-/// [`drive_prediction`] from the model's control state space `ss`.
+/// [`drive_prediction`] from the model's control state space `ss` (the rig's: its own names).
 fn prediction_of(model: &DriveModel, ss: StateSpace, dt_s: f64) -> Result<Prediction> {
     let mut notes = effect_notes(model);
     let nyquist_hz = 0.5 / dt_s;
@@ -169,20 +144,12 @@ fn without_modes_beyond(
     let hz = |w2: f64| w2.max(0.0).sqrt() / (2.0 * std::f64::consts::PI);
     let slow: Vec<usize> = (0..n).filter(|&i| eig.eigenvalues[i] < omega_max * omega_max).collect();
     let mut dropped: Vec<f64> = (0..n).filter(|i| !slow.contains(i)).map(|i| hz(eig.eigenvalues[i])).collect();
-    // free motion: the one rigid-body mode (K φ = 0), the first body at 1, as speeds
     let top = eig.eigenvalues.iter().copied().fold(0.0_f64, f64::max);
     let rigid: Vec<usize> = (0..n).filter(|&i| eig.eigenvalues[i] <= 1e-10 * top).collect();
     let ns = ss.a.nrows();
-    let motion = match rigid[..] {
-        [i] => {
-            let shape: Vec<f64> = (0..n).map(|j| root[j] * eig.eigenvectors[(j, i)]).collect();
-            let largest = shape.iter().copied().fold(0.0, |a: f64, v| if v.abs() > a.abs() { v } else { a });
-            let first = if shape[0].abs() > 1e-9 * largest.abs() { shape[0] } else { largest };
-            let shape: Vec<f64> = shape.iter().map(|v| v / first).collect();
-            Some(Motion::physical(&shape, ns))
-        }
-        _ => None,
-    };
+    let modes: Vec<Vec<f64>> =
+        rigid.iter().map(|&i| (0..n).map(|j| root[j] * eig.eigenvectors[(j, i)]).collect()).collect();
+    let motion = free_motion(&modes, &mech.inertia, &k).map(|shape| Motion::physical(&shape, ns));
     if dropped.is_empty() {
         return Ok((ss, dropped, motion));
     }
@@ -218,6 +185,45 @@ fn without_modes_beyond(
     Ok((reduced, dropped, motion.map(|m| Motion { state: &w * m.state, rate: &w * m.rate })))
 }
 
+/// The free motion "every body turning together as its gears allow", the first body at 1, from
+/// the rigid-body modes `modes` (K φ = 0, J-orthonormal) of a line of inertia `j` and stiffness
+/// `k`. One mode: that mode (normalised by its largest entry where the first body does not move
+/// in it). Several — an open differential, whose outputs may also turn against each other at no
+/// twist (eq. (A1): the stiffness is rank one on s = 2φ_drive − φ_m2 − φ_m3) — the one nearest,
+/// in kinetic energy, to every body at the same speed: the J-orthogonal projection of the
+/// vector of ones onto them, which is that vector itself where it twists nothing (the paper
+/// rig, as its controller has always started). `None`: no mode (a spring to ground holds the
+/// line), or no free motion carries the bodies together.
+fn free_motion(modes: &[Vec<f64>], j: &nalgebra::DMatrix<f64>, k: &nalgebra::DMatrix<f64>) -> Option<Vec<f64>> {
+    let n = j.nrows();
+    let normalised = |shape: Vec<f64>| -> Option<Vec<f64>> {
+        let largest = shape.iter().copied().fold(0.0, |a: f64, v| if v.abs() > a.abs() { v } else { a });
+        let first = if shape[0].abs() > 1e-9 * largest.abs() { shape[0] } else { largest };
+        (first != 0.0 && first.is_finite()).then(|| shape.iter().map(|v| v / first).collect())
+    };
+    match modes {
+        [] => None,
+        [one] => normalised(one.clone()),
+        several => {
+            let ones = nalgebra::DVector::from_element(n, 1.0);
+            let scale = k.abs().max();
+            if (k * &ones).abs().max() <= 1e-12 * scale {
+                return Some(vec![1.0; n]);
+            }
+            // Σ φ (φᵀ J 1): the modes are J-orthonormal
+            let mut shape = vec![0.0; n];
+            for phi in several {
+                let weight: f64 = (0..n).map(|i| phi[i] * j[(i, i)]).sum();
+                for (s, p) in shape.iter_mut().zip(phi) {
+                    *s += weight * p;
+                }
+            }
+            let size = shape.iter().map(|v| v.abs()).fold(0.0, f64::max);
+            (size > 1e-9).then_some(shape).and_then(normalised)
+        }
+    }
+}
+
 /// The model a controller is designed on: the paper rig (its signals fixed) or a drive model.
 #[derive(Debug, Clone, Copy)]
 pub enum Design<'a> {
@@ -235,11 +241,15 @@ pub enum Design<'a> {
 }
 
 impl Design<'_> {
-    /// The prediction model sampled every `dt_s`: the rig's ([`prediction`]) or a drive
-    /// model's ([`drive_prediction`]).
+    /// The prediction model sampled every `dt_s`, by one rule for the rig and any drive model
+    /// ([`drive_prediction`]: its modes beyond the loop's Nyquist frequency left out, its free
+    /// motion); the rig's with its own signal names ([`rig_control_state_space`]).
     pub fn prediction(&self, dt_s: f64) -> Result<Prediction> {
         match *self {
-            Design::Rig { rig, variant, effects } => prediction(rig, variant, effects, dt_s),
+            Design::Rig { rig, variant, effects } => {
+                let model = DriveModel::paper_rig(rig, variant, effects)?;
+                prediction_of(&model, rig_control_state_space(&model)?, dt_s)
+            }
             Design::Drive(model) => drive_prediction(model, dt_s),
         }
     }
@@ -249,9 +259,9 @@ impl Design<'_> {
     /// ([`MpcSection::drive_settings`] on its prediction's signals).
     pub fn controller(&self, section: &MpcSection, horizon: usize) -> Result<(Prediction, MpcSettings)> {
         match *self {
-            Design::Rig { rig, variant, effects } => {
+            Design::Rig { .. } => {
                 let settings = section.rig_settings(horizon)?;
-                Ok((prediction(rig, variant, effects, settings.dt_s)?, settings))
+                Ok((self.prediction(settings.dt_s)?, settings))
             }
             Design::Drive(model) => {
                 let full = model.control_state_space()?;
@@ -279,7 +289,7 @@ mod tests {
             coulomb_friction_nm: [0.8, 0.0, 0.0],
             ..DriveEffects::default()
         };
-        let pred = prediction(&rig, Variant::V1, &effects, 1e-3).unwrap();
+        let pred = Design::Rig { rig: &rig, variant: Variant::V1, effects: &effects }.prediction(1e-3).unwrap();
         let held = |what: &str| {
             let note =
                 pred.notes.iter().find(|n| n.starts_with(what)).unwrap_or_else(|| panic!("{what}: {:?}", pred.notes));
@@ -290,6 +300,76 @@ mod tests {
         // the compliance is in it: the motor's speed is a state of the prediction
         assert!(pred.model.state_names.iter().any(|n| n == "w_motor"), "{:?}", pred.model.state_names);
         assert_eq!(pred.notes.len(), 2, "{:?}", pred.notes);
+    }
+
+    /// The open differential behind a gear stage: motor (0.1 kg m²) → gear 2 → cage (0.5) → two
+    /// side shafts on s = 2φ_cage − φ_l − φ_r to outputs of `j_out`.
+    fn geared_differential(j_out: [f64; 2]) -> DriveModel {
+        use plant::line::{Coupling, Domain, Line, LineBody};
+        let body = |name: &str, inertia: f64| LineBody { name: name.into(), inertia, drag: 0.01 };
+        let shaft = |name: &str, c: f64| Coupling {
+            name: Some(name.into()),
+            elongation: Some(vec![0.0, 1.0, -0.5, -0.5]),
+            ..Coupling::new(c, 0.5, 1.0)
+        };
+        DriveModel {
+            line: Line {
+                domain: Domain::Rotational,
+                bodies: vec![body("motor", 0.1), body("cage", 0.5), body("out_l", j_out[0]), body("out_r", j_out[1])],
+                couplings: vec![Coupling::new(5000.0, 1.0, 2.0), shaft("left", 1500.0), shaft("right", 1100.0)],
+            },
+            inputs: vec![0],
+            effects: Vec::new(),
+        }
+    }
+
+    /// A line whose stiffness leaves several free motions (an open differential's outputs may
+    /// also turn against each other at no twist) still moves together: the motor at 1, the cage
+    /// and both outputs at 1/2 through the gear (the analytic free motion: no coupling twists),
+    /// so the controller can start at speed. Before, such a model had no free motion and a reset
+    /// at speed was refused as if a spring to ground held it.
+    #[test]
+    fn an_open_differential_behind_a_gear_moves_together() {
+        let model = geared_differential([1.0, 1.0]);
+        let pred = Design::Drive(&model).prediction(1e-3).unwrap();
+        let motion = pred.motion.expect("a free motion");
+        let n = 4;
+        let expected = [1.0, 0.5, 0.5, 0.5];
+        for (i, e) in expected.iter().enumerate() {
+            assert!((motion.state[n + i] - e).abs() < 1e-9, "{:?}", motion.state);
+            assert!((motion.rate[i] - e).abs() < 1e-9, "{:?}", motion.rate);
+        }
+        // it twists nothing: every coupling force of the motion is zero
+        let forces = model.coupling_forces(pred.model.nstates()) * &motion.rate;
+        assert!(forces.abs().max() < 1e-9, "{forces}");
+        // and the controller starts at speed
+        let section = crate::MpcSection { input_max: Some(vec![50.0]), ..Default::default() };
+        let (pred, settings) = Design::Drive(&model).controller(&section, 20).unwrap();
+        let mut rt = crate::RealTime::new(&pred, &settings).unwrap();
+        rt.reset(10.0).unwrap();
+    }
+
+    /// The paper rig's prediction is its drive model's, by the one rule: the same matrices and
+    /// free motion (every body at 1: the vector of ones twists nothing on the differential,
+    /// eq. (A1)) as the preset's model predicted as any drive model, only the names its own.
+    #[test]
+    fn the_rig_is_predicted_as_any_drive_model() {
+        let rig = plant::paper::damped_params();
+        let effects =
+            DriveEffects { compliance_stiffness_nm_per_rad: 2000.0, time_delay_s: 0.003, ..Default::default() };
+        let as_rig = Design::Rig { rig: &rig, variant: Variant::V3, effects: &effects }.prediction(1e-3).unwrap();
+        let model = DriveModel::paper_rig(&rig, Variant::V3, &effects).unwrap();
+        let as_drive = Design::Drive(&model).prediction(1e-3).unwrap();
+        assert_eq!(as_rig.model.a, as_drive.model.a);
+        assert_eq!(as_rig.model.b, as_drive.model.b);
+        assert_eq!(as_rig.input_delays_s, as_drive.input_delays_s);
+        for (row, name) in as_rig.model.output_names.iter().enumerate() {
+            let k = as_drive.model.output_names.iter().position(|n| n == name).unwrap();
+            assert_eq!(as_rig.model.c.row(row), as_drive.model.c.row(k), "{name}");
+        }
+        let ones = Motion::physical(&[1.0; 4], as_rig.model.nstates());
+        assert_eq!(as_rig.motion, Some(ones.clone()));
+        assert_eq!(as_drive.motion, Some(ones));
     }
 
     /// What the MPC predicts the rig with is the open differential assembled by
