@@ -188,7 +188,13 @@ pub fn modal_of_line(name: &str, m: &plant::DriveModel) -> anyhow::Result<LineMo
     Ok(LineModalReport {
         model: name.to_string(),
         domain: m.line.domain,
-        mode_kinds: modes.frequencies_hz.iter().zip(&modes.shapes).map(|(&f, s)| mode_in_words(f, s, &names)).collect(),
+        mode_kinds: modes
+            .frequencies_hz
+            .iter()
+            .zip(&modes.shapes)
+            .enumerate()
+            .map(|(k, (&f, s))| mode_in_words(f, k > 0 && modes.frequencies_hz[k - 1] == 0.0, s, &names))
+            .collect(),
         dof_names: names,
         frequencies_hz: modes.frequencies_hz,
         modes: modes.shapes.iter().map(|s| s.iter().copied().collect()).collect(),
@@ -197,19 +203,27 @@ pub fn modal_of_line(name: &str, m: &plant::DriveModel) -> anyhow::Result<LineMo
     })
 }
 
-/// A mode in words: `rigid body` at 0 Hz, else the bodies that swing with the largest component
-/// against those that swing against it (components beyond a third of the largest count).
-fn mode_in_words(f_hz: f64, shape: &nalgebra::DVector<f64>, names: &[String]) -> String {
-    if f_hz == 0.0 {
+/// A mode in words: `rigid body` at 0 Hz (the first: `plant::modal::modes` puts the motion of
+/// every body together first), else the bodies that swing with the largest component against
+/// those that swing against it (components beyond a third of the largest count) — at 0 Hz after
+/// another (`after_free`), a free motion that twists nothing, as an open differential's outputs
+/// turning against each other (the rig's "outputs in antiphase").
+fn mode_in_words(f_hz: f64, after_free: bool, shape: &nalgebra::DVector<f64>, names: &[String]) -> String {
+    if f_hz == 0.0 && !after_free {
         return "rigid body".into();
     }
     let with: Vec<&str> = shape.iter().zip(names).filter(|(v, _)| **v >= 1.0 / 3.0).map(|(_, n)| n.as_str()).collect();
     let against: Vec<&str> =
         shape.iter().zip(names).filter(|(v, _)| **v <= -1.0 / 3.0).map(|(_, n)| n.as_str()).collect();
-    if against.is_empty() {
+    let swing = if against.is_empty() {
         format!("{} against the rest", with.join(", "))
     } else {
         format!("{} against {}", with.join(", "), against.join(", "))
+    };
+    if f_hz == 0.0 {
+        format!("free: {swing}, no twist")
+    } else {
+        swing
     }
 }
 
@@ -464,5 +478,29 @@ pub fn words<T: serde::Serialize>(value: &T) -> String {
         Ok(serde_json::Value::String(s)) => s.replace('_', " "),
         Ok(other) => other.to_string(),
         Err(_) => String::new(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The paper rig written as any drive model (its preset, V3: the outputs' inertias differ)
+    /// names its modes as the rig's own modal analysis classifies them: the motion of every body
+    /// together, then the outputs turning against each other at no twist (the rig's "outputs in
+    /// antiphase", `plant::ModeKind`), then the drive swinging against the outputs.
+    #[test]
+    fn the_rig_as_a_drive_model_names_its_free_motions_as_the_rig_does() {
+        let rig = plant::paper::damped_params();
+        let m = plant::DriveModel::paper_rig(&rig, Variant::V3, &plant::rig::DriveEffects::default()).unwrap();
+        let line = modal_of_line("rig", &m).unwrap();
+        let own = rig.open_differential(Variant::V3).unwrap();
+        let layout = own.layout.expect("the differential's layout");
+        let kinds = own.modes().unwrap().kinds(&layout);
+        assert_eq!(kinds[..2], [ModeKind::RigidBody, ModeKind::OutputsAntiphase]);
+        assert_eq!(line.mode_kinds[0], "rigid body");
+        assert_eq!(line.mode_kinds[1], "free: m2 against m3, no twist");
+        assert_eq!(line.mode_kinds[2], "drive against the rest");
+        assert_eq!(kinds[2], ModeKind::Shuffle);
     }
 }
