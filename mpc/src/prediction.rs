@@ -224,6 +224,29 @@ fn free_motion(modes: &[Vec<f64>], j: &nalgebra::DMatrix<f64>, k: &nalgebra::DMa
     }
 }
 
+/// Refuses the rig `rig` in `variant` when its modes lie beyond the Nyquist frequency of a
+/// controller sampling every `dt_s`: the rig's three masses put none there unless an inertia or
+/// stiffness is far off, and such a rig could not be controlled — left out of the prediction as
+/// a drive model's gear meshes are, it would fail later in its estimator, with a message about
+/// disturbances instead of the parameters. The message names them.
+fn rig_within_nyquist(rig: &RigParams, variant: Variant, dt_s: f64) -> Result<()> {
+    let modes = rig.open_differential(variant)?.modes()?;
+    let top = modes.frequencies_hz.iter().copied().fold(0.0, f64::max);
+    let nyquist = 0.5 / dt_s;
+    if top.is_nan() || top >= nyquist {
+        return Err(MpcError::Numerical(format!(
+            "the rig's fastest mode is at {top:.4e} Hz, beyond the {nyquist} Hz a controller sampling every \
+             {dt_s} s can see: check [model] (j_m2 = {}, j_drive = {}, j_m3 = {} kg m^2, c_short = {}, c_long = {} Nm/rad)",
+            rig.j_m2,
+            rig.j_drive,
+            rig.j_m3,
+            rig.c_short,
+            rig.c_long()
+        )));
+    }
+    Ok(())
+}
+
 /// The model a controller is designed on: the paper rig (its signals fixed) or a drive model.
 #[derive(Debug, Clone, Copy)]
 pub enum Design<'a> {
@@ -247,6 +270,7 @@ impl Design<'_> {
     pub fn prediction(&self, dt_s: f64) -> Result<Prediction> {
         match *self {
             Design::Rig { rig, variant, effects } => {
+                rig_within_nyquist(rig, variant, dt_s)?;
                 let model = DriveModel::paper_rig(rig, variant, effects)?;
                 prediction_of(&model, rig_control_state_space(&model)?, dt_s)
             }
