@@ -373,9 +373,13 @@ mod tests {
         rt.reset(10.0).unwrap();
     }
 
-    /// The paper rig's prediction is its drive model's, by the one rule: the same matrices and
-    /// free motion (every body at 1: the vector of ones twists nothing on the differential,
-    /// eq. (A1)) as the preset's model predicted as any drive model, only the names its own.
+    /// The paper rig's prediction is its drive model's, by the one rule: the same matrices as
+    /// the preset's model predicted as any drive model, only the names its own (a guard that the
+    /// rig keeps no path of its own; the matrices themselves are checked against the rig's open
+    /// differential by `the_rig_control_state_space_is_the_open_differential_with_its_names`),
+    /// and the free motion every body at 1 exactly — analytic: the side shafts' elongation
+    /// [−1, 2, −1]·share and the compliance's φ_motor − φ_drive each sum to zero, so no coupling
+    /// force arises from it.
     #[test]
     fn the_rig_is_predicted_as_any_drive_model() {
         let rig = plant::paper::damped_params();
@@ -393,7 +397,9 @@ mod tests {
         }
         let ones = Motion::physical(&[1.0; 4], as_rig.model.nstates());
         assert_eq!(as_rig.motion, Some(ones.clone()));
-        assert_eq!(as_drive.motion, Some(ones));
+        assert_eq!(as_drive.motion, Some(ones.clone()));
+        let forces = model.coupling_forces(as_drive.model.nstates()) * &ones.rate;
+        assert!(forces.abs().max() < 1e-9, "{forces}");
     }
 
     /// What the MPC predicts the rig with is the open differential assembled by
