@@ -1014,9 +1014,39 @@ pub fn diagnose(
         let k = x.len();
         Fit { effects, x, cost, score: score(cost, k) }
     };
+    // Where `base` is an implausible single effect (it bent j_drive or c_short to imitate what
+    // it lacks), that effect re-seated with the declared j_drive and c_short: its value was
+    // fitted without the candidate that explains the rest. It is re-seated at the basins of its
+    // own grid there ([`Candidate::basins`] of its starts alone, one per motor share for a
+    // compliance): a candidate beside it changes how deep its valleys are, not where the record
+    // puts them, and crossing every start with every start of the candidate's grid (a play's
+    // profile beside a compliance's 36 starts) is most of a pair's run time. Empty otherwise.
+    let reseated_at = |base: &Fit| -> Vec<Vec<f64>> {
+        let [own] = base.effects[..] else { return Vec::new() };
+        if problem.plausible(base) {
+            return Vec::new();
+        }
+        let points: Vec<Vec<f64>> = own
+            .starts(&problem, shuffle_hz)
+            .into_iter()
+            .map(|s| {
+                let mut x = base.x.clone();
+                x[..2].fill(0.0);
+                x[2..2 + s.len()].copy_from_slice(&s);
+                x
+            })
+            .collect();
+        let costs = super::on_two_workers(points.len(), &|i| {
+            problem
+                .residual(&problem.build(&[own], &points[i]))
+                .map_or(f64::INFINITY, |r| r.iter().map(|v| v * v).sum())
+        });
+        own.basins(&costs).into_iter().filter(|&i| costs[i].is_finite()).map(|i| points[i].clone()).collect()
+    };
     // `base` plus candidate `c`: its starts on a grid (the others at base's values), the best
-    // (for the play: the best of distinct basins of its profile) refined by a fit of all.
-    let extend = |base: &Fit, c: Candidate| -> Fit {
+    // (for the play: the best of distinct basins of its profile) refined by a fit of all;
+    // `reseated` the re-seatings of base's effect ([`reseated_at`]).
+    let extend = |base: &Fit, c: Candidate, reseated: &[Vec<f64>]| -> Fit {
         let mut effects = base.effects.clone();
         effects.push(c);
         let f = |x: &[f64]| problem.residual(&problem.build(&effects, x));
@@ -1035,23 +1065,8 @@ pub fn diagnose(
         if !base.effects.is_empty() {
             bases.push(base.x.clone());
         }
-        // beside an implausible single effect (it bent j_drive or c_short to imitate what it
-        // lacks), that effect re-seated from its own starts too, with the declared j_drive and
-        // c_short: its value was fitted without the candidate that explains the rest. Only the
-        // best of each of its basins on its grid ([`Candidate::basins`]) goes on to a fit.
-        let reseated_from = bases.len();
-        let mut reseated: Option<Candidate> = None;
-        if let [own] = base.effects[..] {
-            if !problem.plausible(base) {
-                reseated = Some(own);
-                for s in own.starts(&problem, shuffle_hz) {
-                    let mut x = base.x.clone();
-                    x[..2].fill(0.0);
-                    x[2..2 + s.len()].copy_from_slice(&s);
-                    bases.push(x);
-                }
-            }
-        }
+        // beside base's effect re-seated at its basins ([`reseated_at`])
+        bases.extend_from_slice(reseated);
         let starts = c.starts(&problem, shuffle_hz);
         let points: Vec<Vec<f64>> =
             bases.iter().flat_map(|b| starts.iter().map(move |s| [b.as_slice(), s].concat())).collect();
@@ -1077,20 +1092,14 @@ pub fn diagnose(
             minima.truncate(BACKLASH_REFINED);
             minima
         } else {
-            // the best start beside each base; of the re-seated effect's starts, those of its
-            // basins
-            let best_beside = |b: usize| {
-                (b * starts.len()..(b + 1) * starts.len())
-                    .filter(|&i| grid[i].1.is_finite())
-                    .min_by(|&a, &b| grid[a].1.total_cmp(&grid[b].1))
-            };
-            let mut best: Vec<usize> = (0..reseated_from).filter_map(best_beside).collect();
-            if let Some(own) = reseated {
-                let beside: Vec<Option<usize>> = (reseated_from..bases.len()).map(best_beside).collect();
-                let costs: Vec<f64> = beside.iter().map(|i| i.map_or(f64::INFINITY, |i| grid[i].1)).collect();
-                best.extend(own.basins(&costs).into_iter().filter_map(|k| beside[k]));
-            }
-            best
+            // the best start beside each base (the re-seatings are its effect's basins already)
+            (0..bases.len())
+                .filter_map(|b| {
+                    (b * starts.len()..(b + 1) * starts.len())
+                        .filter(|&i| grid[i].1.is_finite())
+                        .min_by(|&a, &b| grid[a].1.total_cmp(&grid[b].1))
+                })
+                .collect()
         };
         best.dedup();
         let mut chosen: Vec<Vec<f64>> = best.iter().map(|&i| grid[i].0.clone()).collect();
@@ -1225,8 +1234,9 @@ pub fn diagnose(
             Candidate::CoulombFriction(_) => 1,
             _ => 2,
         });
+        let reseated = reseated_at(base);
         let fits = super::on_two_workers(todo.len(), &|k| {
-            let fit = extend(base, todo[order[k]]);
+            let fit = extend(base, todo[order[k]], &reseated);
             if base.effects.is_empty() {
                 progress(todo[order[k]].name());
             }
@@ -1360,7 +1370,8 @@ pub fn diagnose(
             }
         };
         let swap = |fit: &Fit, i: usize, a: Candidate| -> Fit {
-            let f = extend(&fit.without(i), a);
+            let base = fit.without(i);
+            let f = extend(&base, a, &reseated_at(&base));
             // polished only where it is a near-tie of the model it would replace (within the 10 %
             // that "beats" asks of the error), as the selection polishes only its winner
             if f.cost.is_finite() && 0.9 * f.error() <= fit.error() {
