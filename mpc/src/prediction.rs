@@ -205,9 +205,7 @@ fn free_motion(modes: &[Vec<f64>], j: &nalgebra::DMatrix<f64>, k: &nalgebra::DMa
         [] => None,
         [one] => normalised(one.clone()),
         several => {
-            let ones = nalgebra::DVector::from_element(n, 1.0);
-            let scale = k.abs().max();
-            if (k * &ones).abs().max() <= 1e-12 * scale {
+            if plant::modal::turns_freely_as_one(k) {
                 return Some(vec![1.0; n]);
             }
             // Σ φ (φᵀ J 1): the modes are J-orthonormal

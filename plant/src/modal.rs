@@ -68,8 +68,7 @@ pub fn modes(inertia: &DMatrix<f64>, stiffness: &DMatrix<f64>) -> Result<Modes> 
 fn rigid_body_first(psi: &mut DMatrix<f64>, zeros: usize, l: &DMatrix<f64>, stiffness: &DMatrix<f64>) {
     let n = psi.nrows();
     let ones = DVector::from_element(n, 1.0);
-    let free = (stiffness * &ones).norm() <= 1e-9 * stiffness.norm() * (n as f64).sqrt();
-    if zeros == 0 || !free {
+    if zeros == 0 || !turns_freely_as_one(stiffness) {
         return;
     }
     let mut basis = DMatrix::zeros(n, zeros + 1);
@@ -77,6 +76,15 @@ fn rigid_body_first(psi: &mut DMatrix<f64>, zeros: usize, l: &DMatrix<f64>, stif
     basis.view_mut((0, 1), (n, zeros)).copy_from(&psi.columns(0, zeros));
     let q = basis.qr().q();
     psi.view_mut((0, 0), (n, zeros)).copy_from(&q.columns(0, zeros));
+}
+
+/// Whether every body turning by the same angle twists nothing (K·1 = 0 to round-off of K's
+/// size): a free line without gears, as the paper rig is. A gear stage makes the free motion
+/// turn its bodies at the ratio instead, and a spring to ground allows none.
+pub fn turns_freely_as_one(stiffness: &DMatrix<f64>) -> bool {
+    let n = stiffness.nrows();
+    let ones = DVector::from_element(n, 1.0);
+    (stiffness * &ones).norm() <= 1e-9 * stiffness.norm() * (n as f64).sqrt()
 }
 
 /// Scales a shape so its largest-magnitude component is +1.
@@ -139,6 +147,23 @@ pub fn damp(a: &DMatrix<f64>) -> Result<Vec<Pole>> {
 mod tests {
     use super::*;
     use approx::assert_relative_eq;
+
+    #[test]
+    fn only_a_line_without_gears_or_ground_turns_freely_as_one() {
+        // two shafts of 1e4 and 3e4 N·m/rad in a chain: K·1 = 0 exactly
+        let (a, b) = (1e4, 3e4);
+        let chain = DMatrix::from_row_slice(3, 3, &[a, -a, 0.0, -a, a + b, -b, 0.0, -b, b]);
+        assert!(turns_freely_as_one(&chain));
+        // the same shaft behind a 1:2 gear (φ₂ = 2φ₁ twists nothing): the stiffness on
+        // (φ₁, φ₂) of the twist 2φ₁ − φ₂ is a·[4, −2; −2, 1], and 1 twists it
+        let geared = DMatrix::from_row_slice(2, 2, &[4.0 * a, -2.0 * a, -2.0 * a, a]);
+        assert!(!turns_freely_as_one(&geared));
+        assert!(geared * DVector::from_row_slice(&[1.0, 2.0]) == DVector::zeros(2));
+        // a spring to ground of a ten-thousandth of the shaft's: no free motion at all
+        let mut grounded = chain.clone();
+        grounded[(0, 0)] += 1e-4 * a;
+        assert!(!turns_freely_as_one(&grounded));
+    }
 
     #[test]
     fn single_oscillator_pole_is_analytic() {
