@@ -187,7 +187,8 @@ enum Command {
         #[arg(long, value_enum, default_value_t = ScenarioArg::Step)]
         scenario: ScenarioArg,
         /// Length of the timed run, s, at most 120 (default: 1 s step, 3.5 s sweep; the sweep's
-        /// chirp spans the whole run). The shuffle figures always come from the 1 s step.
+        /// chirp spans the whole run; a drive model's reference step, 1 s). The rig's shuffle
+        /// figures always come from its 1 s step.
         #[arg(long, value_name = "S", allow_negative_numbers = true, value_parser = positive)]
         duration: Option<f64>,
         /// Number of move blocks (1, 2, 4, … steps, the last taking the rest); 0: every step free.
@@ -588,15 +589,19 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                         "--export-qp: the QP export compares the paper rig's QPs with OSQP and DAQP; {model_name} is a drive model"
                     );
                 }
-                if duration.is_some() || matches!(scenario, ScenarioArg::Sweep) {
+                if matches!(scenario, ScenarioArg::Sweep) {
                     anyhow::bail!(
-                        "--scenario sweep and --duration are the paper rig's runs; {model_name} is a drive model, whose run is a step of its tracked speeds' references ({} rad/s or {} m/s at {} s, {} s long)",
+                        "--scenario sweep is the paper rig's run; {model_name} is a drive model, whose run is a step of its tracked speeds' references ({} rad/s or {} m/s at {} s, {} s long unless --duration says)",
                         harness.reference_step_radps,
                         harness.reference_step_mps,
                         harness.reference_step_at_s,
                         harness.drive_run_s
                     );
                 }
+                let harness = match duration {
+                    Some(d) => harness.with_drive_run(d).map_err(|e| anyhow::anyhow!("--duration {d} s: {e}"))?,
+                    None => harness,
+                };
                 let (report, run) =
                     mpc::evaluation::drive(model, &prediction, &truth, &settings, &harness, allocations)
                         .map_err(|e| anyhow::anyhow!("{model_name}: {e:#}"))?;

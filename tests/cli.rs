@@ -571,19 +571,37 @@ fn a_controller_fmu_that_cannot_be_made_is_refused_by_name() {
     assert_eq!(std::fs::read_dir(&out_dir).unwrap().count(), 0, "nothing written");
 }
 
-/// The paper rig's runs (`--scenario sweep`, `--duration`) asked of a drive model are refused
-/// by name, not silently replaced by the drive model's reference step; nothing is written.
+/// The paper rig's sweep asked of a drive model is refused by name, not silently replaced by
+/// the drive model's reference step; `--duration` sets that step's run: 2 s at the loop's 1 ms
+/// are 2000 steps, and a run that ends before its step (0.05 s) or beyond the 120 s every run
+/// is bounded by is refused. Nothing is written by a refused run.
 #[test]
-fn a_rig_run_asked_of_a_drive_model_is_refused() {
+fn a_drive_models_run_takes_a_duration_and_refuses_the_rigs_sweep() {
     let d = common::scratch("cli", "drive_run");
     let json = d.join("mpc.json");
-    for extra in [&["--duration", "2"][..], &["--scenario", "sweep"]] {
-        let mut args = vec!["mpc", "--params", "examples/gear_bench/bench.toml", "--json", json.to_str().unwrap()];
-        args.extend_from_slice(extra);
-        let out = rigtwin(&args);
+    let args = |extra: &[&'static str]| -> Vec<String> {
+        let mut a: Vec<String> =
+            ["mpc", "--params", "examples/gear_bench/bench.toml", "--json"].map(String::from).into();
+        a.push(json.to_str().unwrap().into());
+        a.extend(extra.iter().map(|s| s.to_string()));
+        a
+    };
+    for (extra, says) in [
+        (&["--scenario", "sweep"][..], "--scenario sweep is the paper rig's run"),
+        (&["--duration", "0.01"], "--duration 0.01 s"),
+        (&["--duration", "200"], "--duration 200 s"),
+    ] {
+        let a = args(extra);
+        let out = rigtwin(&a.iter().map(String::as_str).collect::<Vec<_>>());
         let err = String::from_utf8_lossy(&out.stderr);
         assert_eq!(out.status.code(), Some(1), "{extra:?}: {err}");
-        assert!(err.contains("--scenario sweep and --duration") && err.contains("drive model"), "{extra:?}: {err}");
+        assert!(err.contains(says), "{extra:?}: {err}");
         assert!(!json.exists(), "{extra:?}: nothing written");
     }
+    let a = args(&["--duration", "2"]);
+    let out = rigtwin(&a.iter().map(String::as_str).collect::<Vec<_>>());
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let report: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    assert_eq!(report["steps"], 2000, "2 s of 1 ms steps");
+    assert_eq!(report["step_response"]["at_s"], 0.05);
 }

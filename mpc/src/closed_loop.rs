@@ -52,6 +52,16 @@ impl HarnessSettings {
         drive_run_s: 1.0,
     };
 
+    /// These settings with a drive model's run `duration_s` long: after its reference step and
+    /// at most [`HarnessSettings::max_duration_s`], as the paper rig's scenarios.
+    pub fn with_drive_run(self, duration_s: f64) -> std::result::Result<Self, String> {
+        let (start, longest) = (self.reference_step_at_s, self.max_duration_s);
+        if !(duration_s.is_finite() && duration_s > start && duration_s <= longest) {
+            return Err(format!("expected more than the reference step's time {start} s and at most {longest} s"));
+        }
+        Ok(HarnessSettings { drive_run_s: duration_s, ..self })
+    }
+
     /// The reference step of a drive model's run in `domain` (rad/s or m/s).
     pub fn reference_step(&self, domain: plant::Domain) -> f64 {
         match domain {
