@@ -52,14 +52,22 @@ impl HarnessSettings {
         drive_run_s: 1.0,
     };
 
-    /// These settings with a drive model's run `duration_s` long: after its reference step and
-    /// at most [`HarnessSettings::max_duration_s`], as the paper rig's scenarios.
-    pub fn with_drive_run(self, duration_s: f64) -> std::result::Result<Self, String> {
-        let (start, longest) = (self.reference_step_at_s, self.max_duration_s);
-        if !(duration_s.is_finite() && duration_s > start && duration_s <= longest) {
-            return Err(format!("expected more than the reference step's time {start} s and at most {longest} s"));
+    /// `duration_s` as the length of a run whose `start` (its name and time, s) it must pass:
+    /// finite, longer than that and at most [`HarnessSettings::max_duration_s`] — the one rule
+    /// of the paper rig's scenarios and a drive model's run.
+    pub fn run_length(&self, duration_s: f64, start: (&str, f64)) -> std::result::Result<f64, String> {
+        let ((what, start_s), longest) = (start, self.max_duration_s);
+        if !(duration_s.is_finite() && duration_s > start_s && duration_s <= longest) {
+            return Err(format!("expected more than {what} {start_s} s and at most {longest} s"));
         }
-        Ok(HarnessSettings { drive_run_s: duration_s, ..self })
+        Ok(duration_s)
+    }
+
+    /// These settings with a drive model's run `duration_s` long: after its reference step
+    /// ([`HarnessSettings::run_length`]).
+    pub fn with_drive_run(self, duration_s: f64) -> std::result::Result<Self, String> {
+        let drive_run_s = self.run_length(duration_s, ("the reference step's time", self.reference_step_at_s))?;
+        Ok(HarnessSettings { drive_run_s, ..self })
     }
 
     /// The reference step of a drive model's run in `domain` (rad/s or m/s).

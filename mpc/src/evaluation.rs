@@ -332,13 +332,9 @@ fn positions(names: &[String], all: &[String]) -> Vec<usize> {
 
 impl Scenario {
     /// This scenario run for `duration_s` instead of its own length: longer than its start and
-    /// at most `harness.max_duration_s`.
+    /// at most `harness.max_duration_s` ([`HarnessSettings::run_length`]).
     pub fn with_duration(mut self, duration_s: f64, harness: &HarnessSettings) -> std::result::Result<Self, String> {
-        let longest = harness.max_duration_s;
-        if !(duration_s.is_finite() && duration_s > self.start_s && duration_s <= longest) {
-            return Err(format!("expected more than the scenario's start {} s and at most {longest} s", self.start_s));
-        }
-        self.duration_s = duration_s;
+        self.duration_s = harness.run_length(duration_s, ("the scenario's start", self.start_s))?;
         Ok(self)
     }
 }

@@ -1369,9 +1369,10 @@ pub fn diagnose(
                 _ => true,
             }
         };
-        let swap = |fit: &Fit, i: usize, a: Candidate| -> Fit {
-            let base = fit.without(i);
-            let f = extend(&base, a, &reseated_at(&base));
+        // `fit` with its `i`-th effect replaced by `a`, beside the others' re-seatings
+        // (`reseated`: [`reseated_at`] of `fit` without it, shared by its alternatives)
+        let swap = |fit: &Fit, i: usize, a: Candidate, reseated: &[Vec<f64>]| -> Fit {
+            let f = extend(&fit.without(i), a, reseated);
             // polished only where it is a near-tie of the model it would replace (within the 10 %
             // that "beats" asks of the error), as the selection polishes only its winner
             if f.cost.is_finite() && 0.9 * f.error() <= fit.error() {
@@ -1392,7 +1393,13 @@ pub fn diagnose(
                         && near_tie(&current, i, a)
                 })
                 .collect();
-            let swapped: Vec<Fit> = super::on_two_workers(trials.len(), &|t| swap(&current, trials[t].0, trials[t].1));
+            let reseatings: Vec<Vec<Vec<f64>>> = (0..current.effects.len())
+                .map(|i| if trials.iter().any(|t| t.0 == i) { reseated_at(&current.without(i)) } else { Vec::new() })
+                .collect();
+            let swapped: Vec<Fit> = super::on_two_workers(trials.len(), &|t| {
+                let (i, a) = trials[t];
+                swap(&current, i, a, &reseatings[i])
+            });
             let best = swapped
                 .into_iter()
                 .filter(|f| f.cost.is_finite() && problem.plausible(f) && f.score < current.score)
