@@ -19,6 +19,7 @@ Three numbers per record:
     python scripts/refit_check.py --rigtwin target/release/rigtwin --seeds 17,31,38 --out /tmp/refit
 """
 
+import reproducible  # noqa: F401  (first: the records alike on every machine)
 import argparse
 import json
 import os

@@ -21,6 +21,7 @@ Three numbers per record:
     python scripts/refit_check_lines.py --rigtwin target/release/rigtwin --seeds 0,7,14 --out /tmp/refit_lines
 """
 
+import reproducible  # noqa: F401  (first: the records alike on every machine)
 import os
 import sys
 import tomllib

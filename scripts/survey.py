@@ -14,6 +14,7 @@ parameter errors and run times as the markdown of docs/validation.md. Seeds 0-99
 survey's tuning part; seeds from 1000 on are held out (run once after a change, never tuned on).
 """
 
+import reproducible  # noqa: F401  (first: the records alike on every machine)
 import argparse
 import json
 import os

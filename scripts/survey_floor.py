@@ -11,6 +11,7 @@ the error of a simulation over the whole record (a play that rattles: docs/valid
 `--records` holds the bundles `survey_lines.py` wrote for these seeds.
 """
 
+import reproducible  # noqa: F401  (first: the records alike on every machine)
 import argparse
 import os
 import sys

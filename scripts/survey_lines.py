@@ -19,6 +19,7 @@ bundle as `.truth.json`) is scored as absent and marked "(cannot act)" in the lo
 survey's tuning part; seeds from 1000 on are held out (run once after a change, never tuned on).
 """
 
+import reproducible  # noqa: F401  (first: the records alike on every machine)
 import json
 import os
 

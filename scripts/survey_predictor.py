@@ -20,6 +20,7 @@ norm) on the predicted outputs. The states are stepped by RK4 at an eighth of th
 `--records` holds the bundles `survey_lines.py` wrote for these seeds.
 """
 
+import reproducible  # noqa: F401  (first: the records alike on every machine)
 import argparse
 import os
 import sys
