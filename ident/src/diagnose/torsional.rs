@@ -1506,6 +1506,66 @@ pub fn diagnose(
         }
     }
 
+    // An answer of several effects is chosen on the data its fits did not see as well (as the
+    // `drive_test` engine's pairs; issue 32, item 3): where the answer without one of its
+    // effects (the leave-out check's re-fit) errs no more on the held-out folds than the answer,
+    // that effect's gain on the fitted data is the fit's own freedom, not the record's, and the
+    // answer goes without it. The check of the answer kept gives its intervals (below).
+    let declared = |x: &[f64]| problem.residual(&problem.build(&[], x));
+    let check_of = |fit: &Fit, rivals: &[Fit]| -> super::HeldOutCheck {
+        let p = &problem;
+        let of = |effects: &[Candidate]| {
+            let effects = effects.to_vec();
+            move |x: &[f64]| p.residual(&p.build(&effects, x))
+        };
+        let answer = of(&fit.effects);
+        let rival_fns: Vec<_> = rivals.iter().map(|r| of(&r.effects)).collect();
+        let jobs: Vec<(super::ResidualFn, &[f64])> =
+            rival_fns.iter().zip(rivals).map(|(f, r)| (f as super::ResidualFn, r.x.as_slice())).collect();
+        let has_effects = !fit.effects.is_empty();
+        super::check_held_out(
+            n,
+            dt,
+            answer(&fit.x).as_deref(),
+            (&answer, &fit.x),
+            (has_effects && problem.plausible(&none)).then_some((&declared as super::ResidualFn, none.x.as_slice())),
+            &jobs,
+            has_effects,
+            error_before,
+        )
+    };
+    let (mut search, mut leaving_out) = (search, leaving_out);
+    let mut held_out_notes: Vec<String> = Vec::new();
+    let check = loop {
+        let rivals: Vec<Fit> = leaving_out
+            .iter()
+            .filter(|f| f.effects.len() + 1 == current.effects.len() && f.cost.is_finite() && problem.plausible(f))
+            .cloned()
+            .collect();
+        let check = check_of(&current, &rivals);
+        let answer_held_out = check.held_out.error_held_out;
+        let Some((k, &alone)) = check
+            .rivals_held_out
+            .iter()
+            .enumerate()
+            .filter(|(_, &e)| e <= answer_held_out)
+            .min_by(|a, b| a.1.total_cmp(b.1))
+        else {
+            break check;
+        };
+        let name = |f: &Fit| f.effects.iter().map(|c| label(*c)).collect::<Vec<_>>().join(" + ");
+        held_out_notes.push(format!(
+            "{} rather than {}: on the folds its fit did not see, it errs {alone:.4} against {answer_held_out:.4}",
+            name(&rivals[k]),
+            name(&current)
+        ));
+        current = rivals[k].clone();
+        search.push(current.step());
+        leaving_out = if current.effects.len() >= 2 { each_left_out(&current) } else { Vec::new() };
+    };
+    // the effects in the order the check fitted them (the path below may reorder the answer's)
+    let checked_effects = current.effects.clone();
+
     // The answer's own path, declared → +A → +A+B: where the search reached the answer only
     // by additions, its steps; otherwise (an effect left out or swapped) the nested models
     // re-fitted, each adding the kept effect that lowers the error most, and the answer's
@@ -1619,25 +1679,12 @@ pub fn diagnose(
     let undetermined = verdict::undetermined(&entry(&current), &candidates, &verdict::PlaceSettings::default());
 
     let model = problem.build(&current.effects, &current.x);
-    // The answer on data its fit did not see ([`super::check_held_out`]): it and the re-fitted
-    // declared model (where its re-fit is plausible) fitted again without each fold, each
-    // scored on the fold it did not see; the answer's fold fits give its parameters' intervals.
+    // The answer on data its fit did not see (`check`, above): the answer's fold fits give its
+    // parameters' intervals.
     let after = problem.simulate(&model);
     let answer_residual = after.as_ref().map(|a| problem.residual_of(a));
-    let answer = |x: &[f64]| problem.residual(&problem.build(&current.effects, x));
-    let declared = |x: &[f64]| problem.residual(&problem.build(&[], x));
-    let has_effects = !current.effects.is_empty();
-    let check = super::check_held_out(
-        n,
-        dt,
-        answer_residual.as_deref(),
-        (&answer, &current.x),
-        (has_effects && problem.plausible(&none)).then_some((&declared as super::ResidualFn, none.x.as_slice())),
-        has_effects,
-        error_before,
-    );
     let fold_models: Vec<TorsionalModel> =
-        check.answer_folds.iter().map(|f| problem.build(&current.effects, &f.x)).collect();
+        check.answer_folds.iter().map(|f| problem.build(&checked_effects, &f.x)).collect();
     let intervals_of = |of: &dyn Fn(&TorsionalModel) -> BTreeMap<String, f64>| {
         super::fold_intervals(&of(&model), &fold_models.iter().map(of).collect::<Vec<_>>())
     };
@@ -1719,6 +1766,7 @@ pub fn diagnose(
         traces,
     };
     d.notes = d.notes_in_words();
+    d.notes.extend(held_out_notes);
     (d.verdict, d.verdict_reasons) = d.judged(sweep);
     Ok(d)
 }
