@@ -19,7 +19,8 @@ for key, value in {
     "NPY_DISABLE_CPU_FEATURES": "X86_V4 AVX512_ICL AVX512_SPR",
     # OpenBLAS (numpy's and scipy's copies): the Haswell kernels
     "OPENBLAS_CORETYPE": "Haswell",
-    # numba: code for a Haswell CPU
+    # numba: code for a Haswell CPU with that CPU's own features (empty: none added from the
+    # host's, which would bring AVX-512 back)
     "NUMBA_CPU_NAME": "haswell",
     "NUMBA_CPU_FEATURES": "",
 }.items():

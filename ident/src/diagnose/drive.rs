@@ -1561,9 +1561,7 @@ fn diagnose_scored(
     };
     let mut check = check_of(best, &rivals);
     let pair_held_out = check.held_out.error_held_out;
-    if let Some((k, &alone)) =
-        check.rivals_held_out.iter().enumerate().filter(|(_, &e)| e <= pair_held_out).min_by(|a, b| a.1.total_cmp(b.1))
-    {
+    if let Some((k, alone)) = check.rival_as_good() {
         search_notes.push(format!(
             "{} rather than {}: on the folds its fit did not see, it alone errs {alone:.4} against the pair's {pair_held_out:.4}",
             label(scored[rivals[k]].3),

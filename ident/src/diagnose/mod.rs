@@ -416,6 +416,22 @@ pub(crate) struct HeldOutCheck {
     pub(crate) rivals_held_out: Vec<f64>,
 }
 
+impl HeldOutCheck {
+    /// The rival (its index in the rivals checked) that errs no more on the folds than the
+    /// answer, the least such, with its held-out error: the effect it lacks gained only on the
+    /// fitted data, by the fit's own freedom, and the answer goes without it — the one rule of
+    /// both engines for an answer of several effects (issue 32, item 3).
+    pub(crate) fn rival_as_good(&self) -> Option<(usize, f64)> {
+        let answer = self.held_out.error_held_out;
+        self.rivals_held_out
+            .iter()
+            .copied()
+            .enumerate()
+            .filter(|&(_, e)| e <= answer)
+            .min_by(|a, b| a.1.total_cmp(&b.1))
+    }
+}
+
 /// The answer on data its fit did not see, as both engines check it ([`HeldOutSettings`]): the
 /// record of `n` samples per channel (sample time `dt_s`) cut into folds by the correlation of
 /// the answer's residual `answer_residual` (all channels; `None` where the answer cannot be

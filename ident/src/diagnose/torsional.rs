@@ -1544,13 +1544,7 @@ pub fn diagnose(
             .collect();
         let check = check_of(&current, &rivals);
         let answer_held_out = check.held_out.error_held_out;
-        let Some((k, &alone)) = check
-            .rivals_held_out
-            .iter()
-            .enumerate()
-            .filter(|(_, &e)| e <= answer_held_out)
-            .min_by(|a, b| a.1.total_cmp(b.1))
-        else {
+        let Some((k, alone)) = check.rival_as_good() else {
             break check;
         };
         let name = |f: &Fit| f.effects.iter().map(|c| label(*c)).collect::<Vec<_>>().join(" + ");
