@@ -567,6 +567,14 @@ pub fn human(r: &DiagnosisReport) -> String {
             h.folds,
             crate::units::quantity(h.block_s, "s")
         );
+        if h.unmoved_folds == h.folds {
+            s += "  held out: no fit without a fold moved from the fit to the whole record (which saw every fold): the answer is not checked on data its fit did not see\n";
+        } else if h.unmoved_folds > 0 {
+            s += &format!(
+                "  on {} of the {} folds no fit without the fold moved from the fit to the whole record: those folds are predicted by a fit that saw them\n",
+                h.unmoved_folds, h.folds
+            );
+        }
         if h.damped_folds > 0 {
             s += &format!(
                 "  {} of the {} fits without a fold needed a damped step (an interval of a parameter the record hardly determines is then too narrow)\n",

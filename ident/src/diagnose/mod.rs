@@ -246,6 +246,11 @@ pub struct HeldOut {
     /// Folds whose fit without them needed a damped step ([`FOLD_DAMPINGS`]): where there are
     /// any, the intervals of parameters the record hardly determines are too narrow.
     pub damped_folds: usize,
+    /// Folds where no step of the fit without them lowered the error outside them (a play's
+    /// notched cost, a fit at a minimum of every fold): each is predicted by the fit to all of
+    /// the record, which saw it, so on these folds `error_held_out` is the fitted error, not a
+    /// check on unseen data; where it is every fold, the answer was not checked at all.
+    pub unmoved_folds: usize,
 }
 
 /// The blocks of a record of `n` samples per channel, in folds ([`HeldOutSettings`]).
@@ -295,6 +300,9 @@ pub(crate) struct FoldFit {
     pub(crate) held_ssr: f64,
     /// Its step was damped ([`refit_without_folds`]).
     pub(crate) damped: bool,
+    /// It took a step: false where no step lowered the error outside the fold, and the fit to
+    /// all of the record, which saw the fold, predicts it.
+    pub(crate) moved: bool,
 }
 
 /// A residual over parameters (`None` where the model cannot be simulated).
@@ -344,17 +352,19 @@ fn refit_without_folds(folds: &Folds, fits: &[(ResidualFn, &[f64])]) -> Vec<Vec<
             let step = if damped { damped_step(a, b, t) } else { undamped.iter().map(|d| t * d).collect() };
             let x: Vec<f64> = x0.iter().zip(&step).map(|(a, d)| a + d).collect();
             if let Some(r) = residual(&x).filter(|r| ssr(r, false) <= outside0) {
-                return FoldFit { held_ssr: ssr(&r, true), x, damped };
+                return FoldFit { held_ssr: ssr(&r, true), x, damped, moved: true };
             }
         }
-        FoldFit { x: x0.to_vec(), held_ssr: ssr(r0, true), damped: false }
+        FoldFit { x: x0.to_vec(), held_ssr: ssr(r0, true), damped: false, moved: false }
     });
     let mut fold_fits = fold_fits.into_iter();
     fits.iter()
         .zip(&prepared)
         .map(|(&(_, x0), p)| match p {
             Some(_) => fold_fits.by_ref().take(k).collect(),
-            None => (0..k).map(|_| FoldFit { x: x0.to_vec(), held_ssr: f64::INFINITY, damped: false }).collect(),
+            None => (0..k)
+                .map(|_| FoldFit { x: x0.to_vec(), held_ssr: f64::INFINITY, damped: false, moved: false })
+                .collect(),
         })
         .collect()
 }
@@ -476,6 +486,7 @@ pub(crate) fn check_held_out(
         error_held_out,
         declared_error_held_out,
         damped_folds: answer_folds.iter().filter(|f| f.damped).count(),
+        unmoved_folds: answer_folds.iter().filter(|f| !f.moved).count(),
     };
     let unsupported = if has_effects { unsupported(&held_out) } else { None };
     HeldOutCheck { held_out, answer_folds, unsupported, rivals_held_out }
@@ -699,6 +710,26 @@ mod tests {
             assert!(f.damped, "fold {j}");
             assert!(outside(&rosenbrock(&f.x).unwrap()) < 0.5 * outside(&r0), "fold {j}: {:?}", f.x);
         }
+    }
+
+    /// Where the cost has a notch at the fit in every fold — r_k(x) = c_k + |x|, c_k > 0, whose
+    /// sum of squares over any rows is least at x = 0 — no step without a fold lowers the error
+    /// outside it: every fold is unmoved, predicted by the fit that saw it, and the held-out
+    /// error is then exactly the fitted error √(Σ c_k²) (by hand), which the check reports as
+    /// no check at all (`HeldOut::unmoved_folds`). A quadratic cost's folds all move.
+    #[test]
+    fn a_fold_no_step_can_leave_is_counted_as_unmoved() {
+        let n = 200;
+        let c: Vec<f64> = (0..n).map(|k| 0.5 + ((k * 13) % 7) as f64 / 7.0).collect();
+        let notched = |x: &[f64]| Some(c.iter().map(|c| c + x[0].abs()).collect::<Vec<f64>>());
+        let fitted = c.iter().map(|v| v * v).sum::<f64>().sqrt();
+        let check = check_held_out(n, 1e-3, notched(&[0.0]).as_deref(), (&notched, &[0.0]), None, &[], true, 1.0);
+        assert_eq!(check.held_out.unmoved_folds, check.held_out.folds);
+        approx::assert_relative_eq!(check.held_out.error_held_out, fitted, max_relative = 1e-12);
+        let quadratic = |x: &[f64]| Some(c.iter().map(|c| c - x[0]).collect::<Vec<f64>>());
+        let mean = c.iter().sum::<f64>() / n as f64;
+        let check = check_held_out(n, 1e-3, quadratic(&[mean]).as_deref(), (&quadratic, &[mean]), None, &[], true, 1.0);
+        assert_eq!(check.held_out.unmoved_folds, 0);
     }
 
     /// A pair's rivals are fitted without the answer's own folds, so their held-out errors
