@@ -560,16 +560,20 @@ pub fn human(r: &DiagnosisReport) -> String {
     }
     s += &format!("  error {:.4} → {:.4}  ({})\n", r.error_before, r.error_after, r.error_definition);
     if let Some(h) = &r.held_out {
-        s += &format!(
-            "  held out: error {:.4} on the folds its fit did not see (the declared model: {:.4}; {} folds of {} blocks)\n",
-            h.error_held_out,
-            h.declared_error_held_out,
-            h.folds,
-            crate::units::quantity(h.block_s, "s")
-        );
+        let blocks = format!("{} folds of {} blocks", h.folds, crate::units::quantity(h.block_s, "s"));
         if h.unmoved_folds == h.folds {
-            s += "  held out: no fit without a fold moved from the fit to the whole record (which saw every fold): the answer is not checked on data its fit did not see\n";
-        } else if h.unmoved_folds > 0 {
+            // its "held-out" error is then the fitted error: no number is shown as a check
+            s += &format!(
+                "  held out: not checked on data its fit did not see — no fit without a fold moved from the fit to the whole record, which saw every fold (the declared model: {:.4}; {blocks})\n",
+                h.declared_error_held_out
+            );
+        } else {
+            s += &format!(
+                "  held out: error {:.4} on the folds its fit did not see (the declared model: {:.4}; {blocks})\n",
+                h.error_held_out, h.declared_error_held_out
+            );
+        }
+        if h.unmoved_folds > 0 && h.unmoved_folds < h.folds {
             s += &format!(
                 "  on {} of the {} folds no fit without the fold moved from the fit to the whole record: those folds are predicted by a fit that saw them\n",
                 h.unmoved_folds, h.folds
