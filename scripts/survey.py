@@ -261,16 +261,17 @@ def diagnose(rigtwin, bundle, out):
 def diagnose_all(rigtwin, seeds, truths, bundles, score, describe):
     """Diagnoses each bundle (its JSON beside it), scores the report against its truth with
     `score`, and tells each on standard error (`describe(truth, report)`: what it held and what
-    rigtwin said). The rows (truth, outcome, parameter error, seconds, interval holds)."""
+    rigtwin said). The rows (truth, outcome, parameter error, seconds, interval holds, whether the
+    report gives an interval beside folds whose fit did not move — which it must not)."""
     rows = []
     for seed, t, bundle in zip(seeds, truths, bundles):
         report, elapsed, failure = diagnose(rigtwin, bundle, os.path.splitext(bundle)[0] + ".json")
         if report is None:
-            rows.append((t, "error", None, elapsed, None))
+            rows.append((t, "error", None, elapsed, None, False))
             print(f"seed {seed}: {failure}", file=sys.stderr)
             continue
         outcome, err, covered = score(t, report)
-        rows.append((t, outcome, err, elapsed, covered))
+        rows.append((t, outcome, err, elapsed, covered, unmeasured_intervals(report)))
         print(f"seed {seed:4d} {describe(t, report)} {outcome}"
               + (f" ({100 * err:.0f} %{', interval misses' if covered is False else ''})" if err is not None else "")
               + f" {elapsed:.1f} s", file=sys.stderr)
@@ -314,8 +315,16 @@ def bundles_of(args, truths, write_bundle, name):
         return list(pool.map(write_bundle, [args.out] * len(truths), truths))
 
 
+def unmeasured_intervals(report):
+    """Whether `report` gives an interval although a fold's fit did not move
+    (`held_out.unmoved_folds`): such folds add no spread, so rigtwin gives none."""
+    if not (report.get("held_out") or {}).get("unmoved_folds"):
+        return False
+    return bool(report.get("intervals")) or any(e.get("intervals") for e in report.get("effects", []))
+
+
 def write_summary(path, rows):
-    """The counts of `rows` (truth, outcome, parameter error, seconds, interval holds) as JSON."""
+    """The counts of `rows` (see `diagnose_all`) as JSON."""
     with open(path, "w") as f:
         json.dump({"records": len(rows),
                    "right": sum(1 for r in rows if r[1] == "right"),
@@ -323,7 +332,8 @@ def write_summary(path, rows):
                    "wrong": sum(1 for r in rows if r[1] in ("wrong", "error")),
                    "right_beyond_20_percent": sum(1 for r in rows if r[2] is not None and r[2] > 0.2),
                    "intervals": sum(1 for r in rows if r[4] is not None),
-                   "intervals_covering": sum(1 for r in rows if r[4])}, f)
+                   "intervals_covering": sum(1 for r in rows if r[4]),
+                   "intervals_beside_unmoved_folds": sum(1 for r in rows if r[5])}, f)
 
 
 def main():

@@ -564,7 +564,7 @@ pub fn human(r: &DiagnosisReport) -> String {
         if h.unmoved_folds == h.folds {
             // its "held-out" error is then the fitted error: no number is shown as a check
             s += &format!(
-                "  held out: not checked on data its fit did not see — no fit without a fold moved from the fit to the whole record, which saw every fold (the declared model: {:.4}; {blocks})\n",
+                "  held out: not checked on data its fit did not see — no fit without a fold moved from the fit to the whole record, which saw every fold, so no intervals are given (the declared model: {:.4}; {blocks})\n",
                 h.declared_error_held_out
             );
         } else {
@@ -575,7 +575,7 @@ pub fn human(r: &DiagnosisReport) -> String {
         }
         if h.unmoved_folds > 0 && h.unmoved_folds < h.folds {
             s += &format!(
-                "  on {} of the {} folds no fit without the fold moved from the fit to the whole record: those folds are predicted by a fit that saw them\n",
+                "  on {} of the {} folds no fit without the fold moved from the fit to the whole record: those folds are predicted by a fit that saw them, and the folds' spread is no interval (none given)\n",
                 h.unmoved_folds, h.folds
             );
         }

@@ -1661,6 +1661,11 @@ fn diagnose_scored(
             not_determined.push(key);
         }
     }
+    // the intervals judged above; reported only where every fold's fit moved
+    let reported = |i: BTreeMap<String, [f64; 2]>| super::reported_intervals(&check.held_out, i);
+    let effects: Vec<FoundEffect> =
+        effects.into_iter().map(|e| FoundEffect { intervals: reported(e.intervals), ..e }).collect();
+    let intervals = reported(intervals);
     let mut d = DriveDiagnosis {
         effect: chosen_candidate.name().to_string(),
         at: effects.first().and_then(|e| e.at.clone()),
