@@ -580,8 +580,14 @@ pub fn human(r: &DiagnosisReport) -> String {
             );
         }
         if h.damped_folds > 0 {
+            // where intervals are given at all (no unmoved fold), what the damping does to them
+            let intervals = if h.unmoved_folds == 0 {
+                " (an interval of a parameter the record hardly determines is then too narrow)"
+            } else {
+                ""
+            };
             s += &format!(
-                "  {} of the {} fits without a fold needed a damped step (an interval of a parameter the record hardly determines is then too narrow)\n",
+                "  {} of the {} fits without a fold needed a damped step{intervals}\n",
                 h.damped_folds, h.folds
             );
         }
