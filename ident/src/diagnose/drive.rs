@@ -1649,23 +1649,20 @@ fn diagnose_scored(
     let undetermined = super::verdict::undetermined(&chosen, &candidates, &PlaceSettings::default());
     // an effect whose size the record does not determine is no finding; every such value is said
     let held_out_settings = super::HeldOutSettings::default();
+    let mut not_determined = super::not_determined(&chosen.parameters, &intervals, &held_out_settings);
+    let (mut effects, mut intervals) = (effects, intervals);
+    super::drop_unmeasured_intervals(&check.held_out, &mut effects, &mut intervals);
     let unsupported = check
         .unsupported
         .or_else(|| {
             (!no_finding.is_empty()).then(|| no_finding.iter().map(|o| o.1.as_str()).collect::<Vec<_>>().join("; "))
         })
         .or_else(|| super::sizes_not_determined(&effects, &held_out_settings));
-    let mut not_determined = super::not_determined(&chosen.parameters, &intervals, &held_out_settings);
     for key in held_at_declared.into_iter().chain(no_finding.into_iter().map(|(key, _)| key)) {
         if !not_determined.contains(&key) {
             not_determined.push(key);
         }
     }
-    // the intervals judged above; reported only where every fold's fit moved
-    let reported = |i: BTreeMap<String, [f64; 2]>| super::reported_intervals(&check.held_out, i);
-    let effects: Vec<FoundEffect> =
-        effects.into_iter().map(|e| FoundEffect { intervals: reported(e.intervals), ..e }).collect();
-    let intervals = reported(intervals);
     let mut d = DriveDiagnosis {
         effect: chosen_candidate.name().to_string(),
         at: effects.first().and_then(|e| e.at.clone()),

@@ -250,7 +250,7 @@ pub struct HeldOut {
     /// notched cost, a fit at a minimum of every fold): each is predicted by the fit to all of
     /// the record, which saw it, so on these folds `error_held_out` is the fitted error, not a
     /// check on unseen data; where it is every fold, the answer was not checked at all. Where
-    /// there is any, the answer reports no intervals ([`reported_intervals`]).
+    /// there is any, the answer reports no intervals ([`drop_unmeasured_intervals`]).
     pub unmoved_folds: usize,
 }
 
@@ -516,19 +516,24 @@ pub(crate) fn fold_intervals(
 /// Relative width below which an interval is rounding, not a spread ([`fold_intervals`]).
 const ROUNDING: f64 = 1e-9;
 
-/// The intervals an answer reports, given its check on the folds `h`: none where a fold's fit
-/// could not leave the fit to the whole record ([`HeldOut::unmoved_folds`]). Such a fold adds
-/// no spread, so the folds' spread is narrower than the record's and is no 95 % interval: a
-/// rattling play's cost is rough below the scale of any step a fold's fit can take (on a
-/// survey record every change of 3e-5 to 3e-3 of any parameter raised the error outside every
-/// fold, by up to 12 times: validation.md step 29), and its intervals from the folds that did move held
-/// the truth in 3 of 6. What the spread judged before stands: a parameter whose folds spread
-/// beyond [`HeldOutSettings::determined_within`] even so is not determined ([`not_determined`]).
-pub(crate) fn reported_intervals(h: &HeldOut, intervals: BTreeMap<String, [f64; 2]>) -> BTreeMap<String, [f64; 2]> {
+/// Drops an answer's `intervals` and its `effects`' intervals where a fold's fit could not
+/// leave the fit to the whole record ([`HeldOut::unmoved_folds`], in its check on the folds
+/// `h`). Such a fold adds no spread, so the folds' spread is narrower than the record's and is
+/// no 95 % interval: a rattling play's cost is rough below the scale of any step a fold's fit
+/// can take (on a survey record every change of 3e-5 to 3e-3 of any parameter raised the error
+/// outside every fold, by up to 12 times: validation.md step 29), and its intervals from the
+/// folds that did move held the truth in 3 of 6. Called after the spread has judged what the
+/// record does not determine ([`not_determined`]: a spread beyond
+/// [`HeldOutSettings::determined_within`] even so), which stands; a reason that names such a
+/// value ([`sizes_not_determined`]) then gives no interval beside it.
+pub(crate) fn drop_unmeasured_intervals(
+    h: &HeldOut,
+    effects: &mut [torsional::FoundEffect],
+    intervals: &mut BTreeMap<String, [f64; 2]>,
+) {
     if h.unmoved_folds > 0 {
-        BTreeMap::new()
-    } else {
-        intervals
+        intervals.clear();
+        effects.iter_mut().for_each(|e| e.intervals.clear());
     }
 }
 

@@ -1731,13 +1731,10 @@ pub fn diagnose(
         .collect();
     // an effect whose size the record does not determine is no finding; every such value is said
     let held_out_settings = super::HeldOutSettings::default();
-    let unsupported = check.unsupported.or_else(|| super::sizes_not_determined(&effects, &held_out_settings));
     let not_determined = super::not_determined(&parameters, &intervals, &held_out_settings);
-    // the intervals judged above; reported only where every fold's fit moved
-    let reported = |i: BTreeMap<String, [f64; 2]>| super::reported_intervals(&check.held_out, i);
-    let effects: Vec<FoundEffect> =
-        effects.into_iter().map(|e| FoundEffect { intervals: reported(e.intervals), ..e }).collect();
-    let intervals = reported(intervals);
+    let (mut effects, mut intervals) = (effects, intervals);
+    super::drop_unmeasured_intervals(&check.held_out, &mut effects, &mut intervals);
+    let unsupported = check.unsupported.or_else(|| super::sizes_not_determined(&effects, &held_out_settings));
     let mut d = TorsionalDiagnosis {
         distorted,
         equivalents,
