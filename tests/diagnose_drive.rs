@@ -288,8 +288,36 @@ fn the_example_drive_bundles() {
         assert!(signals.lines().next().unwrap().contains("__residual_extended"));
         if bundle == "bench_gear.toml" {
             fmu_replays_the_diagnosis(&dir, &v);
+            the_written_model_runs_in_the_controller(&dir, &model);
         }
     }
+}
+
+/// The diagnosed drive model is usable as written (the model file of the diagnosis above:
+/// one diagnosis of the example serves both checks): `rigtwin mpc --params` runs it, its input
+/// bounds the record's peak inputs — said in the file, read here from the CSV by this test —
+/// and `--plot` draws the run.
+fn the_written_model_runs_in_the_controller(dir: &std::path::Path, model: &str) {
+    assert!(model.contains("peak |input|"), "the file says where its bounds come from:\n{model}");
+    let csv = std::fs::read_to_string(common::shared("bench_gear.csv")).unwrap();
+    let peak =
+        csv.lines().skip(1).map(|l| l.split(',').nth(1).unwrap().parse::<f64>().unwrap().abs()).fold(0.0, f64::max);
+    let v: serde_json::Value = serde_json::to_value(toml::from_str::<toml::Value>(model).unwrap()).unwrap();
+    let written = v["mpc"]["input_max"][0].as_f64().unwrap();
+    assert!((written / peak - 1.0).abs() < 1e-9, "{written} vs {peak}");
+    let out = Command::new(env!("CARGO_BIN_EXE_rigtwin"))
+        .args(["mpc", "--params", "m.toml", "--plot", "run.svg", "--json"])
+        .current_dir(dir)
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(v["schema_version"], 1);
+    // the keys every mpc document carries, whatever the model
+    assert_eq!((v["verdict"].as_str(), v["model_kind"].as_str()), (Some("valid"), Some("drive_model")), "{v}");
+    assert_eq!(v["steps"], 1000, "1 s at 1 ms");
+    let svg = std::fs::read_to_string(dir.join("run.svg")).unwrap();
+    assert!(svg.contains("<svg") && svg.contains("reference"), "the plot was drawn");
 }
 
 /// The FMU of bench_gear's extended model (`rigtwin fmu --params m.toml`), validated by fmpy and
