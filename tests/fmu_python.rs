@@ -71,25 +71,38 @@ fn powertrain() -> plant::StateSpace {
         .unwrap()
 }
 
-/// Frequency of the largest peak of |FFT(x − mean)| in [lo, hi] Hz, zero-padded 64×, refined by
-/// a parabola through the three largest bins.
-fn fft_peak_hz(x: &[f64], dt: f64, lo: f64, hi: f64) -> f64 {
-    use rustfft::{num_complex::Complex64, FftPlanner};
-    let n = (x.len() * 64).next_power_of_two();
+/// Frequency of the largest peak of the discrete-time Fourier transform |X(f)| of x − mean in
+/// [lo, hi] Hz: the largest value on a grid of 1/(8T) Hz (T the record's length; the main lobe
+/// is 2/T wide, so the grid cannot step over the peak), then a golden-section search within one
+/// grid step either side. X(f) = Σ x_k e^{−i2πf k dt} is summed with the phase advanced by one
+/// complex product per sample.
+fn spectral_peak_hz(x: &[f64], dt: f64, lo: f64, hi: f64) -> f64 {
     let mean = x.iter().sum::<f64>() / x.len() as f64;
-    let mut buf: Vec<Complex64> = x
-        .iter()
-        .map(|v| Complex64::new(v - mean, 0.0))
-        .chain(std::iter::repeat(Complex64::new(0.0, 0.0)))
-        .take(n)
-        .collect();
-    FftPlanner::new().plan_fft_forward(n).process(&mut buf);
-    let mag: Vec<f64> = buf[..n / 2].iter().map(|c| c.norm()).collect();
-    let bin = |f: f64| ((f * n as f64 * dt) as usize).clamp(1, mag.len() - 2);
-    let k = (bin(lo)..=bin(hi)).max_by(|&a, &b| mag[a].total_cmp(&mag[b])).unwrap();
-    let (a, b, c) = (mag[k - 1].ln(), mag[k].ln(), mag[k + 1].ln());
-    let shift = 0.5 * (a - c) / (a - 2.0 * b + c);
-    (k as f64 + shift) / (n as f64 * dt)
+    let magnitude = |f: f64| {
+        let (c, s) = ((2.0 * std::f64::consts::PI * f * dt).cos(), -(2.0 * std::f64::consts::PI * f * dt).sin());
+        let (mut pr, mut pi, mut re, mut im) = (1.0, 0.0, 0.0, 0.0);
+        for v in x {
+            re += (v - mean) * pr;
+            im += (v - mean) * pi;
+            (pr, pi) = (pr * c - pi * s, pr * s + pi * c);
+        }
+        re.hypot(im)
+    };
+    let step = 1.0 / (8.0 * x.len() as f64 * dt);
+    let points = ((hi - lo) / step).ceil() as usize;
+    let grid: Vec<(f64, f64)> = (0..=points).map(|k| lo + k as f64 * step).map(|f| (f, magnitude(f))).collect();
+    let best = grid.iter().max_by(|a, b| a.1.total_cmp(&b.1)).unwrap().0;
+    let (mut a, mut b) = ((best - step).max(lo), (best + step).min(hi));
+    let g = 0.5 * (5f64.sqrt() - 1.0);
+    while b - a > 1e-9 * b.abs().max(1.0) {
+        let (c, d) = (b - g * (b - a), a + g * (b - a));
+        if magnitude(c) > magnitude(d) {
+            b = d;
+        } else {
+            a = c;
+        }
+    }
+    0.5 * (a + b)
 }
 
 #[test]
@@ -107,10 +120,10 @@ fn fmus_pass_validation_simulate_like_the_plant_and_run_in_libcosim() {
     let shuffle = ss.damp().unwrap().into_iter().max_by(|a, b| a.natural_hz.total_cmp(&b.natural_hz)).unwrap();
     for key in ["fmi3_cs", "fmi3_me", "fmi2_cs", "fmi2_me"] {
         let w = floats(&r["free"][key]["w_drive"]);
-        let f = fft_peak_hz(&w, 1e-3, 0.0, 500.0);
+        let f = spectral_peak_hz(&w, 1e-3, 0.0, 500.0);
         assert!(
             (f / shuffle.damped_hz - 1.0).abs() < 0.005,
-            "{key}: FFT peak {f} Hz vs shuffle {} Hz",
+            "{key}: spectral peak {f} Hz vs shuffle {} Hz",
             shuffle.damped_hz
         );
     }
@@ -128,7 +141,7 @@ fn fmus_pass_validation_simulate_like_the_plant_and_run_in_libcosim() {
                 let after: Vec<f64> =
                     t.iter().zip(&w).filter(|(t, _)| **t > 0.1 && **t <= 2.1).map(|(_, w)| *w).collect();
                 let diff: Vec<f64> = after.windows(2).map(|p| p[1] - p[0]).collect();
-                fft_peak_hz(&diff, 1e-3, 8.0, 20.0)
+                spectral_peak_hz(&diff, 1e-3, 8.0, 20.0)
             };
             let (cs, me) = (ring("cs"), ring("me"));
             eprintln!("{set} {v}: ring at fmpy's ME defaults {me:.4} Hz, CS {cs:.4} Hz");

@@ -1,5 +1,5 @@
 //! One-shot timing of the torsional diagnosis on 60 s, 1 kHz records (the criterion bench
-//! `cargo bench -p ident --bench diagnose` repeats them): `cargo run --release -p ident
+//! `cargo bench -p ident --features bench --bench diagnose` repeats them): `cargo run --release -p ident
 //! --example diagnose_timing [-- NAME]` (only the cases whose name contains NAME).
 
 #[path = "common/sweep.rs"]

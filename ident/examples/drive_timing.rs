@@ -1,5 +1,5 @@
 //! One-shot timing of the `drive_test` diagnosis on a 60 s, 1 kHz record of a three-body line
-//! with three outputs and the whole vocabulary (the criterion bench `cargo bench -p ident
+//! with three outputs and the whole vocabulary (the criterion bench `cargo bench -p ident --features bench
 //! --bench diagnose_drive` repeats it): `cargo run --release -p ident --example drive_timing`.
 
 #[path = "common/drive_record.rs"]
