@@ -1020,7 +1020,11 @@ pub fn diagnose(
     // own grid there ([`Candidate::basins`] of its starts alone, one per motor share for a
     // compliance): a candidate beside it changes how deep its valleys are, not where the record
     // puts them, and crossing every start with every start of the candidate's grid (a play's
-    // profile beside a compliance's 36 starts) is most of a pair's run time. Empty otherwise.
+    // profile beside a compliance's 36 starts) is most of a pair's run time. A basin where the
+    // effect alone errs no less than the declared model as declared is no seat of it: there it
+    // explains nothing of the record, and the fits beside it ended where they would have started
+    // from the declared model. Empty otherwise.
+    let declared_cost = error_before * error_before;
     let reseated_at = |base: &Fit| -> Vec<Vec<f64>> {
         let [own] = base.effects[..] else { return Vec::new() };
         if problem.plausible(base) {
@@ -1041,7 +1045,7 @@ pub fn diagnose(
                 .residual(&problem.build(&[own], &points[i]))
                 .map_or(f64::INFINITY, |r| r.iter().map(|v| v * v).sum())
         });
-        own.basins(&costs).into_iter().filter(|&i| costs[i].is_finite()).map(|i| points[i].clone()).collect()
+        own.basins(&costs).into_iter().filter(|&i| costs[i] < declared_cost).map(|i| points[i].clone()).collect()
     };
     // `base` plus candidate `c`: its starts on a grid (the others at base's values), the best
     // (for the play: the best of distinct basins of its profile) refined by a fit of all;
@@ -1054,10 +1058,13 @@ pub fn diagnose(
         // declared j_drive and c_short (the re-fitted `none` may have bent them to imitate the
         // very effect); the play's profile beside an effect also from the declared j_drive and
         // c_short (the effects found may have bent them to imitate the play), and beside an
-        // implausible model (one followed a round ahead) also from the declared ones
+        // implausible model (one followed a round ahead) also from the declared ones — unless
+        // its effect is re-seated there (`reseated`: the same base at the declared mechanics,
+        // its effect at the basins of its own grid rather than where the bent fit left it)
         let mut bases: Vec<Vec<f64>> = Vec::new();
         let bent = base.x[..2].iter().any(|v| v.abs() > PROFILE_BENT_LN);
-        if base.effects.is_empty() || (c == Candidate::Backlash && bent) || !problem.plausible(base) {
+        let implausible_alone = !problem.plausible(base) && reseated.is_empty();
+        if base.effects.is_empty() || (c == Candidate::Backlash && bent) || implausible_alone {
             let mut x = base.x.clone();
             x[..2].fill(0.0);
             bases.push(x);
