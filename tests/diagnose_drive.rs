@@ -287,9 +287,23 @@ fn the_example_drive_bundles() {
         let signals = std::fs::read_to_string(dir.join("s.csv")).unwrap();
         assert!(signals.lines().next().unwrap().contains("__residual_extended"));
         if bundle == "bench_gear.toml" {
-            fmu_replays_the_diagnosis(&dir, &v);
-            the_written_model_runs_in_the_controller(&dir, &model);
+            let column = bench_gear_columns();
+            fmu_replays_the_diagnosis(&dir, &v, &column);
+            the_written_model_runs_in_the_controller(&dir, &model, &column);
         }
+    }
+}
+
+/// The columns of `bench_gear.csv`, read here by the test (not by rigtwin's readers): each
+/// column by its header's name.
+fn bench_gear_columns() -> impl Fn(&str) -> Vec<f64> {
+    let text = std::fs::read_to_string(common::shared("bench_gear.csv")).unwrap();
+    let mut lines = text.lines();
+    let header: Vec<String> = lines.next().unwrap().split(',').map(String::from).collect();
+    let rows: Vec<Vec<f64>> = lines.map(|l| l.split(',').map(|x| x.trim().parse().unwrap()).collect()).collect();
+    move |name: &str| {
+        let i = header.iter().position(|h| h == name).unwrap();
+        rows.iter().map(|r| r[i]).collect()
     }
 }
 
@@ -297,11 +311,9 @@ fn the_example_drive_bundles() {
 /// one diagnosis of the example serves both checks): `rigtwin mpc --params` runs it, its input
 /// bounds the record's peak inputs — said in the file, read here from the CSV by this test —
 /// and `--plot` draws the run.
-fn the_written_model_runs_in_the_controller(dir: &std::path::Path, model: &str) {
+fn the_written_model_runs_in_the_controller(dir: &std::path::Path, model: &str, column: &dyn Fn(&str) -> Vec<f64>) {
     assert!(model.contains("peak |input|"), "the file says where its bounds come from:\n{model}");
-    let csv = std::fs::read_to_string(common::shared("bench_gear.csv")).unwrap();
-    let peak =
-        csv.lines().skip(1).map(|l| l.split(',').nth(1).unwrap().parse::<f64>().unwrap().abs()).fold(0.0, f64::max);
+    let peak = column("torque_motor_Nm").iter().fold(0.0, |m: f64, u| m.max(u.abs()));
     let v: serde_json::Value = serde_json::to_value(toml::from_str::<toml::Value>(model).unwrap()).unwrap();
     let written = v["mpc"]["input_max"][0].as_f64().unwrap();
     assert!((written / peak - 1.0).abs() < 1e-9, "{written} vs {peak}");
@@ -324,7 +336,7 @@ fn the_written_model_runs_in_the_controller(dir: &std::path::Path, model: &str) 
 /// fmutool and replayed in fmpy on the measured motor torque, has the diagnosis's error against
 /// the measured outputs, computed here as the report defines it (each output high-passed at
 /// the report's frequency on both sides, ‖measured − model‖/‖measured‖, RMS over the outputs).
-fn fmu_replays_the_diagnosis(dir: &std::path::Path, v: &serde_json::Value) {
+fn fmu_replays_the_diagnosis(dir: &std::path::Path, v: &serde_json::Value, column: &dyn Fn(&str) -> Vec<f64>) {
     let out = Command::new(env!("CARGO_BIN_EXE_rigtwin"))
         .args(["fmu", "--params", "m.toml", "--out", "fmus"])
         .current_dir(dir)
@@ -332,15 +344,8 @@ fn fmu_replays_the_diagnosis(dir: &std::path::Path, v: &serde_json::Value) {
         .unwrap();
     assert!(out.status.success(), "rigtwin fmu: {}", String::from_utf8_lossy(&out.stderr));
     let csv_path = common::shared("bench_gear.csv");
-    let text = std::fs::read_to_string(&csv_path).unwrap();
-    let mut lines = text.lines();
-    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
-    let rows: Vec<Vec<f64>> = lines.map(|l| l.split(',').map(|x| x.trim().parse().unwrap()).collect()).collect();
-    let column = |name: &str| -> Vec<f64> {
-        let i = header.iter().position(|h| *h == name).unwrap();
-        rows.iter().map(|r| r[i]).collect()
-    };
-    let dt = rows[1][0] - rows[0][0];
+    let time = column("time_s");
+    let dt = time[1] - time[0];
     // the diagnosis starts the model in rigid motion at the first 10 samples' mean motor speed
     let w0 = column("speed_motor_radps")[..10].iter().sum::<f64>() / 10.0;
     let start = serde_json::json!({ "w_motor": w0, "w_hub": w0, "w_load": w0 / 4.0 });

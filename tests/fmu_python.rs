@@ -92,14 +92,20 @@ fn spectral_peak_hz(x: &[f64], dt: f64, lo: f64, hi: f64) -> f64 {
     let points = ((hi - lo) / step).ceil() as usize;
     let grid: Vec<(f64, f64)> = (0..=points).map(|k| lo + k as f64 * step).map(|f| (f, magnitude(f))).collect();
     let best = grid.iter().max_by(|a, b| a.1.total_cmp(&b.1)).unwrap().0;
+    // golden section: each step keeps one inner point and its value, and evaluates one new one
     let (mut a, mut b) = ((best - step).max(lo), (best + step).min(hi));
     let g = 0.5 * (5f64.sqrt() - 1.0);
+    let (mut c, mut d) = (b - g * (b - a), a + g * (b - a));
+    let (mut mc, mut md) = (magnitude(c), magnitude(d));
     while b - a > 1e-9 * b.abs().max(1.0) {
-        let (c, d) = (b - g * (b - a), a + g * (b - a));
-        if magnitude(c) > magnitude(d) {
-            b = d;
+        if mc > md {
+            (b, d, md) = (d, c, mc);
+            c = b - g * (b - a);
+            mc = magnitude(c);
         } else {
-            a = c;
+            (a, c, mc) = (c, d, md);
+            d = a + g * (b - a);
+            md = magnitude(d);
         }
     }
     0.5 * (a + b)
