@@ -1063,8 +1063,8 @@ pub fn diagnose(
         // its effect at the basins of its own grid rather than where the bent fit left it)
         let mut bases: Vec<Vec<f64>> = Vec::new();
         let bent = base.x[..2].iter().any(|v| v.abs() > PROFILE_BENT_LN);
-        let implausible_alone = !problem.plausible(base) && reseated.is_empty();
-        if base.effects.is_empty() || (c == Candidate::Backlash && bent) || implausible_alone {
+        let implausible_unseated = !problem.plausible(base) && reseated.is_empty();
+        if base.effects.is_empty() || (c == Candidate::Backlash && bent) || implausible_unseated {
             let mut x = base.x.clone();
             x[..2].fill(0.0);
             bases.push(x);
