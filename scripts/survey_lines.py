@@ -3,7 +3,9 @@ simulator that shares no code with rigtwin: lines of 2-8 bodies with 0-2 gear st
 by spring-dampers, driven by one or two torques, integrated by scipy's adaptive LSODA; the
 effects modelled their own way (play as a dead zone whose damper acts only in contact, Coulomb
 friction with a Stribeck rise to a static friction 1.3 times the sliding one, a dead time read
-off the held torque, a first-order lag), single and in pairs, at random places; the measurement
+off the held torque, a first-order lag; with `--only compliance`, a compliance inside a body: the
+body split into two inertias joined by a spring-damper of its own, damped at 1-5 % of that
+mode's critical damping), single and in pairs, at random places; the measurement
 as a rig's (survey.py's encoder noise, drift and quantisation; noise on torques); the declared
 model a few per cent off the truth, as a drawing's values are. Excitations: a sweep, a
 multisine, steps, a PRBS and a closed loop (a PI speed controller on the first body's measured
@@ -12,11 +14,14 @@ speed), about a set point near or far from zero.
     python scripts/survey_lines.py --rigtwin target/release/rigtwin --seeds 0-34 --out /tmp/lines
 
 writes one `drive_test` bundle per seed, diagnoses it, and prints the verdict matrix, the
-parameter errors and run times as the markdown of docs/validation.md. An effect of the truth
+parameter errors and run times as the markdown of docs/validation.md. `--only KIND` gives every
+record one effect of that kind (`compliance` is drawn only so: the plan of the other records
+stays as it was). An effect of the truth
 that cannot act on its record (a friction whose body never turns slower than 0.25 rad/s, a play
 whose coupling never leaves contact: `not_acting`, judged on the true states and kept beside the
 bundle as `.truth.json`) is scored as absent and marked "(cannot act)" in the log. Seeds 0-999 are the
-survey's tuning part; seeds from 1000 on are held out (run once after a change, never tuned on).
+survey's tuning part; seeds from 1000 on are held out (run once after a change, never tuned on),
+for each `--only` kind on its own.
 """
 
 import reproducible  # noqa: F401  (first: the records alike on every machine)
@@ -36,7 +41,7 @@ PLAN = ["none", "time_delay", "actuator_lag", "backlash", "coulomb_friction", "p
 KINDS = ["time_delay", "actuator_lag", "backlash", "coulomb_friction"]
 # the parameter each effect is scored on (rigtwin's report key)
 SCORED = {"time_delay": "delay_s", "actuator_lag": "time_constant_s", "backlash": "backlash_rad",
-          "coulomb_friction": "friction_Nm"}
+          "coulomb_friction": "friction_Nm", "compliance": "compliance_stiffness_Nm_per_rad"}
 EXCITATIONS = ["sweep", "multisine", "steps", "prbs", "closed_loop"]
 # the lowest and highest natural frequency a line may have, Hz: within what a 1 kHz record with
 # a 1-30 Hz excitation band shows
@@ -96,9 +101,9 @@ def torque_scale(line, j):
     return float(np.prod(line["ratio"][:j]))
 
 
-def truth_of(seed):
+def truth_of(seed, only=None):
     """The record's truth: the line, the effects (kind, place, size), the declared model, the
-    excitation and set point (all from the seed)."""
+    excitation and set point (all from the seed); `only`: one effect of that kind."""
     rng = np.random.default_rng(seed)
     line = line_of(rng)
     n = len(line["inertia"])
@@ -107,7 +112,7 @@ def truth_of(seed):
     # to it)
     j_total = sum(line["inertia"][j] / torque_scale(line, j) ** 2 for j in range(n))
     amplitude = float(5.0 * 2 * np.pi * j_total)
-    plan = PLAN[seed % len(PLAN)]
+    plan = only or PLAN[seed % len(PLAN)]
     kinds = [plan] if plan != "pair" else list(rng.choice(KINDS, 2, replace=False))
     effects = []
     for kind in ([] if plan == "none" else kinds):
@@ -131,6 +136,17 @@ def truth_of(seed):
             e["body"] = j
             # 2-30 % of the excitation's torque as it reaches the body
             e["size"] = float(amplitude * torque_scale(line, j) * np.exp(rng.uniform(np.log(0.02), np.log(0.3))))
+        elif kind == "compliance":
+            j = int(rng.integers(n))
+            e["body"] = j
+            # the body split: a share 0.3-0.7 of its inertia on the driven side, the two parts'
+            # own mode 8-60 Hz, damped at 1-5 % of its critical damping
+            share = float(rng.uniform(0.3, 0.7))
+            j_red = share * (1 - share) * line["inertia"][j]
+            f = np.exp(rng.uniform(np.log(8.0), np.log(60.0)))
+            e["share"] = share
+            e["size"] = float((2 * np.pi * f) ** 2 * j_red)
+            e["damping"] = float(2 * rng.uniform(0.01, 0.05) * np.sqrt(e["size"] * j_red))
         effects.append(e)
     near_zero = any(e["effect"] in ("backlash", "coulomb_friction") for e in effects)
     set_point = float(rng.choice([0.0, 0.0, 0.1]) if near_zero else rng.choice([0.0, 0.5, 2.0])) * amplitude
@@ -178,8 +194,17 @@ class Line:
         ln = t["line"]
         self.n = len(ln["inertia"])
         self.e = elongations(ln)
+        self.inertia = np.asarray(ln["inertia"], dtype=float).copy()
+        self.stiffness = np.asarray(ln["stiffness"], dtype=float).copy()
+        self.damping = np.asarray(ln["damping"], dtype=float).copy()
+        self.drag = np.asarray(ln["drag"], dtype=float).copy()
+        self.inputs = np.asarray(t["inputs"], dtype=np.int64).copy()
         self.half = np.zeros(self.n - 1)
         self.friction = np.zeros(self.n)
+        self.split = None  # a compliance: (body, spring stiffness)
+        for e in t["effects"]:
+            if e["effect"] == "compliance":
+                self.split_body(e)
         self.delay = np.zeros(len(t["inputs"]))
         self.lag = np.zeros(len(t["inputs"]))
         for e in t["effects"]:
@@ -189,29 +214,47 @@ class Line:
                 self.friction[e["body"]] = e["size"]
             elif e["effect"] == "time_delay":
                 self.delay[e["input"]] = e["size"]
-            else:
+            elif e["effect"] == "actuator_lag":
                 self.lag[e["input"]] = e["size"]
         self.u = None  # commanded torques, samples x inputs, filled as the record runs
 
+    def split_body(self, e):
+        """Body e["body"] split by a compliance: the share e["share"] of its inertia becomes a new
+        last body, which the body's inputs drive, joined to the rest (which keeps the couplings
+        and the drag) by a spring e["size"] with damper e["damping"] on its twist q_new - q_body."""
+        b, n = e["body"], self.n
+        j = self.inertia[b]
+        self.inertia[b] = (1 - e["share"]) * j
+        self.inertia = np.append(self.inertia, e["share"] * j)
+        self.drag = np.append(self.drag, 0.0)
+        self.friction = np.append(self.friction, 0.0)
+        row = np.zeros(n + 1)
+        row[b], row[n] = -1.0, 1.0
+        self.e = np.vstack([np.hstack([self.e, np.zeros((self.e.shape[0], 1))]), row])
+        self.stiffness = np.append(self.stiffness, e["size"])
+        self.damping = np.append(self.damping, e["damping"])
+        self.half = np.append(self.half, 0.0)
+        self.inputs[self.inputs == b] = n
+        self.split = (b, e["size"])
+        self.n = n + 1
+
     def args(self):
         """`line_rhs`'s arguments after the time and the state."""
-        ln = self.t["line"]
-        return (self.e, self.half, *(np.asarray(ln[k], dtype=float) for k in ("stiffness", "damping", "drag", "inertia")),
-                self.friction, np.asarray(self.t["inputs"], dtype=np.int64), self.delay, self.lag,
-                np.ascontiguousarray(self.u, dtype=float))
+        return (self.e, self.half, self.stiffness, self.damping, self.drag, self.inertia, self.friction, self.inputs,
+                self.delay, self.lag, np.ascontiguousarray(self.u, dtype=float))
 
     def coupling_torques(self, q, w):
-        ln = self.t["line"]
-        return coupling_torques(self.e, self.half, np.asarray(ln["stiffness"], dtype=float),
-                                np.asarray(ln["damping"], dtype=float), np.asarray(q, dtype=float),
+        return coupling_torques(self.e, self.half, self.stiffness, self.damping, np.asarray(q, dtype=float),
                                 np.asarray(w, dtype=float))
 
     def rhs(self, time, x):
         return line_rhs(time, np.asarray(x, dtype=float), *self.args())
 
     def start(self, torques):
-        """Rest or steady rotation under constant `torques` (one per input), friction aside."""
-        n, ln = self.n, self.t["line"]
+        """Rest or steady rotation under constant `torques` (one per input), friction aside; a
+        split body's driven part turning with the rest, its spring carrying the body's inputs."""
+        ln = self.t["line"]
+        n = len(ln["inertia"])
         scale = np.array([1.0 / torque_scale(ln, j) for j in range(n)])  # speed of j per speed of 0
         t_in = np.zeros(n)
         for k, body in enumerate(self.t["inputs"]):
@@ -225,6 +268,10 @@ class Line:
             carried = ln["ratio"][j] * (carried + t_in[j] - ln["drag"][j] * w[j])
             s = carried / ln["stiffness"][j] + np.sign(carried) * self.half[j]
             q[j + 1] = q[j] / ln["ratio"][j] - s
+        if self.split is not None:
+            b, k = self.split
+            q = np.append(q, q[b] + t_in[b] / k)
+            w = np.append(w, w[b])
         return np.concatenate([q, w, torques])
 
 
@@ -256,7 +303,7 @@ def line_rhs(time, x, e, half, stiffness, damping, drag, inertia, friction, inpu
         force[j] = -drag[j] * w[j] - stribeck(friction[j], w[j])
     torque = coupling_torques(e, half, stiffness, damping, q, w)
     for j in range(n):
-        for c in range(n - 1):
+        for c in range(e.shape[0]):
             force[j] -= e[c, j] * torque[c]
     dz = np.zeros(z.size)
     for k in range(inputs.size):
@@ -338,7 +385,7 @@ def not_acting(t, states):
     offsets), a play whose coupling never leaves contact on one side (the coupling is then
     linear, the play a constant twist). No record can show such an effect; the survey scores
     the record without it."""
-    n = len(t["line"]["inertia"])
+    n = Line(t).n  # the states' bodies (a split body adds one)
     elong = elongations(t["line"])
     found = []
     for i, e in enumerate(t["effects"]):
@@ -481,16 +528,19 @@ def describe(t, report):
 
 
 def main():
-    args = arguments(__doc__).parse_args()
+    ap = arguments(__doc__)
+    ap.add_argument("--only", choices=KINDS + ["compliance"],
+                    help="every record one effect of this kind (its own tuning and held-out seeds)")
+    args = ap.parse_args()
     os.makedirs(args.out, exist_ok=True)
     seeds = parse_seeds(args.seeds)
-    truths = [truth_of(seed) for seed in seeds]
+    truths = [truth_of(seed, args.only) for seed in seeds]
     bundles = bundles_of(args, truths, write_bundle, lambda seed: f"line_{seed:04d}.toml")
     for t, bundle in zip(truths, bundles):
         t["not_acting"] = effects_not_acting(t, bundle)
     rows = diagnose_all(args.rigtwin, seeds, truths, bundles, score, describe)
     groups = [("none", lambda t: not t["effects"])]
-    groups += [(k, lambda t, k=k: [e["effect"] for e in t["effects"]] == [k]) for k in KINDS]
+    groups += [(k, lambda t, k=k: [e["effect"] for e in t["effects"]] == [k]) for k in KINDS + ["compliance"]]
     groups.append(("pairs", lambda t: len(t["effects"]) == 2))
     print(table(rows, groups))
     if args.summary:
