@@ -39,6 +39,8 @@ DURATION_S = 10.0
 # what each seed's record holds, in turn: nothing, each effect alone, and pairs
 PLAN = ["none", "time_delay", "actuator_lag", "backlash", "coulomb_friction", "pair", "pair"]
 KINDS = ["time_delay", "actuator_lag", "backlash", "coulomb_friction"]
+# the kinds `--only` may ask for: those of the plan, and the compliance, drawn only so
+ONLY_KINDS = KINDS + ["compliance"]
 # the parameter each effect is scored on (rigtwin's report key)
 SCORED = {"time_delay": "delay_s", "actuator_lag": "time_constant_s", "backlash": "backlash_rad",
           "coulomb_friction": "friction_Nm", "compliance": "compliance_stiffness_Nm_per_rad"}
@@ -385,8 +387,9 @@ def not_acting(t, states):
     offsets), a play whose coupling never leaves contact on one side (the coupling is then
     linear, the play a constant twist). No record can show such an effect; the survey scores
     the record without it."""
-    n = Line(t).n  # the states' bodies (a split body adds one)
-    elong = elongations(t["line"])
+    # the states' bodies and couplings (a split body adds one of each, after the line's own)
+    line = Line(t)
+    n, elong = line.n, line.e
     found = []
     for i, e in enumerate(t["effects"]):
         if e["effect"] == "coulomb_friction":
@@ -529,7 +532,7 @@ def describe(t, report):
 
 def main():
     ap = arguments(__doc__)
-    ap.add_argument("--only", choices=KINDS + ["compliance"],
+    ap.add_argument("--only", choices=ONLY_KINDS,
                     help="every record one effect of this kind (its own tuning and held-out seeds)")
     args = ap.parse_args()
     os.makedirs(args.out, exist_ok=True)
@@ -540,7 +543,7 @@ def main():
         t["not_acting"] = effects_not_acting(t, bundle)
     rows = diagnose_all(args.rigtwin, seeds, truths, bundles, score, describe)
     groups = [("none", lambda t: not t["effects"])]
-    groups += [(k, lambda t, k=k: [e["effect"] for e in t["effects"]] == [k]) for k in KINDS + ["compliance"]]
+    groups += [(k, lambda t, k=k: [e["effect"] for e in t["effects"]] == [k]) for k in ONLY_KINDS]
     groups.append(("pairs", lambda t: len(t["effects"]) == 2))
     print(table(rows, groups))
     if args.summary:
