@@ -246,11 +246,11 @@ def score(t, report):
     return "right", abs(value - truth) / truth, covered
 
 
-def diagnose(rigtwin, bundle, out):
-    """`rigtwin diagnose` of `bundle`, its JSON written to `out`: (the report, or None where
-    rigtwin failed; seconds; what failed)."""
+def diagnose(rigtwin, bundle, out, flags=()):
+    """`rigtwin diagnose` of `bundle` (with `flags`), its JSON written to `out`: (the report, or
+    None where rigtwin failed; seconds; what failed)."""
     start = time.time()
-    p = subprocess.run([rigtwin, "diagnose", bundle, "--json", out], capture_output=True, text=True)
+    p = subprocess.run([rigtwin, "diagnose", bundle, "--json", out, *flags], capture_output=True, text=True)
     elapsed = time.time() - start
     if p.returncode not in (0, 3) or not os.path.exists(out):
         return None, elapsed, f"rigtwin failed ({p.returncode}): {p.stderr.strip()[:300]}"
@@ -258,14 +258,15 @@ def diagnose(rigtwin, bundle, out):
         return json.load(f), elapsed, None
 
 
-def diagnose_all(rigtwin, seeds, truths, bundles, score, describe):
-    """Diagnoses each bundle (its JSON beside it), scores the report against its truth with
+def diagnose_all(rigtwin, seeds, truths, bundles, score, describe, flags=()):
+    """Diagnoses each bundle (its JSON beside it; `rigtwin diagnose` with `flags`), scores the
+    report against its truth with
     `score`, and tells each on standard error (`describe(truth, report)`: what it held and what
     rigtwin said). The rows (truth, outcome, parameter error, seconds, interval holds, whether the
     report gives an interval beside folds whose fit did not move — which it must not)."""
     rows = []
     for seed, t, bundle in zip(seeds, truths, bundles):
-        report, elapsed, failure = diagnose(rigtwin, bundle, os.path.splitext(bundle)[0] + ".json")
+        report, elapsed, failure = diagnose(rigtwin, bundle, os.path.splitext(bundle)[0] + ".json", flags)
         if report is None:
             rows.append((t, "error", None, elapsed, None, False))
             print(f"seed {seed}: {failure}", file=sys.stderr)

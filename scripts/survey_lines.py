@@ -16,7 +16,8 @@ speed), about a set point near or far from zero.
 writes one `drive_test` bundle per seed, diagnoses it, and prints the verdict matrix, the
 parameter errors and run times as the markdown of docs/validation.md. `--only KIND` gives every
 record one effect of that kind (`compliance` is drawn only so: the plan of the other records
-stays as it was). An effect of the truth
+stays as it was); `--search-compliance` diagnoses with `rigtwin diagnose --search-compliance`.
+An effect of the truth
 that cannot act on its record (a friction whose body never turns slower than 0.25 rad/s, a play
 whose coupling never leaves contact: `not_acting`, judged on the true states and kept beside the
 bundle as `.truth.json`) is scored as absent and marked "(cannot act)" in the log. Seeds 0-999 are the
@@ -534,6 +535,8 @@ def main():
     ap = arguments(__doc__)
     ap.add_argument("--only", choices=ONLY_KINDS,
                     help="every record one effect of this kind (its own tuning and held-out seeds)")
+    ap.add_argument("--search-compliance", action="store_true",
+                    help="diagnose with `rigtwin diagnose --search-compliance`")
     args = ap.parse_args()
     os.makedirs(args.out, exist_ok=True)
     seeds = parse_seeds(args.seeds)
@@ -541,7 +544,8 @@ def main():
     bundles = bundles_of(args, truths, write_bundle, lambda seed: f"line_{seed:04d}.toml")
     for t, bundle in zip(truths, bundles):
         t["not_acting"] = effects_not_acting(t, bundle)
-    rows = diagnose_all(args.rigtwin, seeds, truths, bundles, score, describe)
+    flags = ["--search-compliance"] if args.search_compliance else []
+    rows = diagnose_all(args.rigtwin, seeds, truths, bundles, score, describe, flags)
     groups = [("none", lambda t: not t["effects"])]
     groups += [(k, lambda t, k=k: [e["effect"] for e in t["effects"]] == [k]) for k in ONLY_KINDS]
     groups.append(("pairs", lambda t: len(t["effects"]) == 2))

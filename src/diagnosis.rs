@@ -161,10 +161,19 @@ impl Diagnosis {
 
 /// Diagnoses the bundle `file`; `progress` is told each candidate as it is fitted.
 pub fn diagnose(file: &Path, progress: &(dyn Fn(&str) + Sync)) -> anyhow::Result<Diagnosis> {
+    diagnose_with(file, progress, &ident::diagnose::drive::SearchSettings::default())
+}
+
+/// [`diagnose`], a `drive_test` bundle's search widened by `search`.
+pub fn diagnose_with(
+    file: &Path,
+    progress: &(dyn Fn(&str) + Sync),
+    search: &ident::diagnose::drive::SearchSettings,
+) -> anyhow::Result<Diagnosis> {
     match crate::bundle::kind_of(file)?.as_str() {
         "torsional_sweep" => torsional(file, progress),
         "bearing_shake" => bearing(file, progress),
-        "drive_test" => drive(file, progress),
+        "drive_test" => drive(file, progress, search),
         other => anyhow::bail!(
             "{}: `kind` = \"{other}\": expected torsional_sweep, bearing_shake or drive_test",
             file.display()
@@ -630,7 +639,11 @@ pub fn effect_name(effect: &str) -> &str {
     }
 }
 
-fn drive(file: &Path, progress: &(dyn Fn(&str) + Sync)) -> anyhow::Result<Diagnosis> {
+fn drive(
+    file: &Path,
+    progress: &(dyn Fn(&str) + Sync),
+    search: &ident::diagnose::drive::SearchSettings,
+) -> anyhow::Result<Diagnosis> {
     let b = crate::bundle::load_drive_test(file)?;
     let model = &b.model;
     let outputs: Vec<(plant::Quantity, usize)> =
@@ -642,7 +655,8 @@ fn drive(file: &Path, progress: &(dyn Fn(&str) + Sync)) -> anyhow::Result<Diagno
         measured: &b.output_data,
         dt_s: b.dt_s,
     };
-    let d = ident::diagnose::drive::diagnose(rec, progress).map_err(|e| anyhow::anyhow!("{}: {e}", file.display()))?;
+    let d = ident::diagnose::drive::diagnose_with(rec, progress, search)
+        .map_err(|e| anyhow::anyhow!("{}: {e}", file.display()))?;
     let model_toml = drive_model_toml(&d.model, &b)?;
     // each output with its SI unit (the record's own units were converted on reading)
     let domain = b.model.line.domain;

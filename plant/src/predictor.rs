@@ -57,8 +57,11 @@ impl DriveModel {
         measured: &[Vec<f64>],
         noise: &Noise,
     ) -> Result<Vec<f64>> {
-        let d = Dynamics::new(self)?;
-        let p = Predictor::of(self, &d, dt_s, outputs, noise)?;
+        // a structural effect (a compliance splitting a body) written into the line: the
+        // predictor's disturbances and outputs are over the bodies the dynamics have
+        let m = self.resolved()?;
+        let d = Dynamics::new(&m)?;
+        let p = Predictor::of(&m, &d, dt_s, outputs, noise)?;
         let signals: Vec<&[f64]> = inputs.iter().map(Vec::as_slice).collect();
         let measured: Vec<&[f64]> = measured.iter().map(Vec::as_slice).collect();
         d.predict_flat_from(d.record_start(inputs, initial_speed), &signals, dt_s, outputs, &measured, &p.gain)
@@ -68,7 +71,8 @@ impl DriveModel {
 impl Predictor {
     /// The gain of model `m` sampled every `dt_s` for `outputs` and `noise`.
     pub fn new(m: &DriveModel, dt_s: f64, outputs: &[(Quantity, usize)], noise: &Noise) -> Result<Predictor> {
-        Predictor::of(m, &Dynamics::new(m)?, dt_s, outputs, noise)
+        let m = m.resolved()?;
+        Predictor::of(&m, &Dynamics::new(&m)?, dt_s, outputs, noise)
     }
 
     /// [`Predictor::new`] with `d` the dynamics of `m`.
@@ -266,6 +270,60 @@ mod tests {
         let predicted = d.predict_flat_from(x0, &[&u], 1e-3, &outputs, &[&y, &y], &quiet.gain).unwrap();
         for (a, b) in simulated.iter().zip(&predicted) {
             assert!((a - b).abs() <= 1e-9 * a.abs().max(1.0), "{a} against {b}");
+        }
+    }
+
+    /// A compliance inside a body is structure: its predictor is that of the same line split by
+    /// hand — the body's part that its coupling joins, the motor part (appended last) that the
+    /// input drives, a spring between them on φ_motor − φ_body — gain for gain, and its
+    /// predictions over a record are the hand-split line's. (The predictor once counted the
+    /// bodies of the line as declared, one short of the dynamics' states.)
+    #[test]
+    fn a_compliance_is_predicted_as_the_line_split_by_hand() {
+        let (jm, jl, k1, k2, share, d2) = (0.02, 0.5, 3000.0, 900.0, 0.3, 0.4);
+        let motor = |inertia| LineBody { name: "motor".into(), inertia, drag: 1e-3 };
+        let load = LineBody { name: "load".into(), inertia: jl, drag: 2e-3 };
+        let declared = DriveModel {
+            line: Line {
+                domain: Domain::Rotational,
+                bodies: vec![motor(jm), load.clone()],
+                couplings: vec![Coupling::new(k1, 0.6, 1.0)],
+            },
+            inputs: vec![0],
+            effects: vec![crate::Compliance { body: 0, stiffness: k2, motor_share: share, damping: Some(d2) }.into()],
+        };
+        let split = DriveModel {
+            line: Line {
+                domain: Domain::Rotational,
+                bodies: vec![
+                    motor((1.0 - share) * jm),
+                    load,
+                    LineBody { name: "motor_motor".into(), inertia: share * jm, drag: 0.0 },
+                ],
+                couplings: vec![
+                    Coupling { elongation: Some(vec![1.0, -1.0, 0.0]), ..Coupling::new(k1, 0.6, 1.0) },
+                    Coupling { elongation: Some(vec![-1.0, 0.0, 1.0]), ..Coupling::new(k2, d2, 1.0) },
+                ],
+            },
+            inputs: vec![2],
+            effects: vec![],
+        };
+        let outputs = [(Quantity::Speed, 0), (Quantity::Speed, 1)];
+        let n = noise(&[0.5], 0.01, &[1e-3, 2e-3]);
+        let (a, b) = (
+            Predictor::new(&declared, 1e-3, &outputs, &n).unwrap(),
+            Predictor::new(&split, 1e-3, &outputs, &n).unwrap(),
+        );
+        assert_eq!(a.gain.shape(), (6, 2));
+        approx::assert_relative_eq!(a.gain, b.gain, max_relative = 1e-9, epsilon = 1e-12);
+        let u: Vec<f64> = (0..500).map(|k| (k as f64 * 0.03).sin()).collect();
+        let y: Vec<f64> = (0..500).map(|k| 0.2 * (k as f64 * 0.011).cos()).collect();
+        let run = |m: &DriveModel| {
+            m.predict_flat(std::slice::from_ref(&u), 1e-3, 0.0, &outputs, &[y.clone(), y.clone()], &n).unwrap()
+        };
+        let (pa, pb) = (run(&declared), run(&split));
+        for (p, q) in pa.iter().zip(&pb) {
+            assert!((p - q).abs() <= 1e-9 * p.abs().max(1e-3), "{p} against {q}");
         }
     }
 }

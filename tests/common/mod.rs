@@ -115,8 +115,14 @@ impl Drop for Scratch {
 /// writes to the file given with `result_flag`; its log is printed, and a failed run fails the
 /// test with it.
 pub fn survey_script(script: &str, seeds: &str, result_flag: &str) -> serde_json::Value {
+    survey_script_with(script, seeds, result_flag, &[])
+}
+
+/// [`survey_script`] with the script's further arguments `extra` (`["--only", "compliance"]`).
+pub fn survey_script_with(script: &str, seeds: &str, result_flag: &str, extra: &[&str]) -> serde_json::Value {
     // one folder per call: two tests of one script run at once
-    let dir = scratch(script.trim_end_matches(".py"), &format!("records-{}", seeds.replace([',', '-'], "_")));
+    let name = format!("records-{}{}", seeds.replace([',', '-'], "_"), extra.concat().replace('-', "_"));
+    let dir = scratch(script.trim_end_matches(".py"), &name);
     let result = dir.join("result.json");
     let out = Command::new(python())
         .arg(Path::new(env!("CARGO_MANIFEST_DIR")).join("scripts").join(script))
@@ -124,6 +130,7 @@ pub fn survey_script(script: &str, seeds: &str, result_flag: &str) -> serde_json
         .arg(&dir)
         .arg(result_flag)
         .arg(&result)
+        .args(extra)
         .output()
         .unwrap();
     let log = String::from_utf8_lossy(&out.stdout).to_string() + &String::from_utf8_lossy(&out.stderr);

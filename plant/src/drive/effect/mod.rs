@@ -365,16 +365,16 @@ impl Effect {
     }
 
     /// One of each effect of the vocabulary, at element 0 and of size 0: what the diagnosis
-    /// places at every element where the record can show it. A [`Compliance`] is not among
-    /// them yet: a model file declares it, and the paper rig's torsional diagnosis searches the
-    /// drive's; a drive record's search for it at every body waits for a survey of compliant
-    /// lines.
-    pub fn vocabulary() -> [Effect; 4] {
+    /// places at every element where the record can show it. A [`Compliance`] is searched with
+    /// its motor share at one half, and only where asked (`ident::diagnose::drive::SearchSettings`);
+    /// the diagnosis profiles the share and damping of an answer that holds one.
+    pub fn vocabulary() -> [Effect; 5] {
         [
             CoulombFriction { body: 0, friction: 0.0, smoothing_speed: 1.0 }.into(),
             Backlash { coupling: 0, backlash: 0.0 }.into(),
             TimeDelay { input: 0, delay_s: 0.0 }.into(),
             ActuatorLag { input: 0, time_constant_s: 0.0 }.into(),
+            Compliance { body: 0, stiffness: 0.0, motor_share: 0.5, damping: None }.into(),
         ]
     }
 
@@ -462,8 +462,7 @@ mod tests {
     use super::*;
 
     /// The vocabulary holds every effect once: a new variant fails to compile here until it has
-    /// its position, and fails the test until [`Effect::vocabulary`] lists it (the compliance,
-    /// position 4, deliberately not yet).
+    /// its position, and fails the test until [`Effect::vocabulary`] lists it.
     #[test]
     fn the_vocabulary_has_every_effect_once() {
         let position = |e: &Effect| match e {
@@ -475,7 +474,7 @@ mod tests {
         };
         let mut seen: Vec<usize> = Effect::vocabulary().iter().map(position).collect();
         seen.sort();
-        assert_eq!(seen, [0, 1, 2, 3]);
+        assert_eq!(seen, [0, 1, 2, 3, 4]);
     }
 
     /// An effect of a size has that size as its first parameter, at the element it was placed
