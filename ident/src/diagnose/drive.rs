@@ -917,11 +917,12 @@ fn gear_to(m: &DriveModel, b: usize) -> f64 {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub struct SearchSettings {
     /// A compliance inside every body (`rigtwin diagnose --search-compliance`; default off). On
-    /// the drive-line survey's compliant lines (tuning seeds 0–19) the search finds it at its
-    /// body in 12 of 20 records, where the default search explains none; on the survey's other
-    /// records (tuning seeds 0–34) it also names a compliance beside a play that the record does
-    /// not hold (seed 3: its mode takes up what the play model misses), so it is not yet part of
-    /// the default search (docs/validation.md, step 32).
+    /// the drive-line survey's compliant lines it finds the compliance at its body in 12 of 20
+    /// tuning records and 9 of 20 held-out ones, where the default search explains none, but
+    /// answers 9 of the held-out ones wrongly (a friction or a play beside it, the wrong body);
+    /// on the survey's other records it names a compliance beside a play that the record does
+    /// not hold (seed 3: its mode takes up what the play model misses). So it is not part of the
+    /// default search (docs/validation.md, step 32).
     pub compliance: bool,
 }
 
