@@ -260,9 +260,8 @@ def diagnose(rigtwin, bundle, out, flags=()):
 
 def diagnose_all(rigtwin, seeds, truths, bundles, score, describe, flags=()):
     """Diagnoses each bundle (its JSON beside it; `rigtwin diagnose` with `flags`), scores the
-    report against its truth with
-    `score`, and tells each on standard error (`describe(truth, report)`: what it held and what
-    rigtwin said). The rows (truth, outcome, parameter error, seconds, interval holds, whether the
+    report against its truth with `score`, and tells each on standard error (`describe(truth,
+    report)`: what it held and what rigtwin said). The rows (truth, outcome, parameter error, seconds, interval holds, whether the
     report gives an interval beside folds whose fit did not move — which it must not)."""
     rows = []
     for seed, t, bundle in zip(seeds, truths, bundles):

@@ -159,13 +159,9 @@ impl Diagnosis {
     }
 }
 
-/// Diagnoses the bundle `file`; `progress` is told each candidate as it is fitted.
-pub fn diagnose(file: &Path, progress: &(dyn Fn(&str) + Sync)) -> anyhow::Result<Diagnosis> {
-    diagnose_with(file, progress, &ident::diagnose::drive::SearchSettings::default())
-}
-
-/// [`diagnose`], a `drive_test` bundle's search widened by `search`.
-pub fn diagnose_with(
+/// Diagnoses the bundle `file`, a `drive_test` bundle's search widened by `search`; `progress` is
+/// told each candidate as it is fitted.
+pub fn diagnose(
     file: &Path,
     progress: &(dyn Fn(&str) + Sync),
     search: &ident::diagnose::drive::SearchSettings,

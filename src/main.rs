@@ -677,7 +677,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
                 busy.say(&format!("{n} fits done, last: {name}"));
             };
             let search = ident::diagnose::drive::SearchSettings { compliance: search_compliance };
-            let d = rigtwin::diagnosis::diagnose_with(&bundle, &progress, &search)?;
+            let d = rigtwin::diagnosis::diagnose(&bundle, &progress, &search)?;
             drop(busy);
             let explained = d.report.verdict != ident::diagnose::verdict::Verdict::NotExplained;
             match &write_model {

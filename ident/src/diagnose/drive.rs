@@ -205,9 +205,12 @@ impl Candidate {
         }
     }
 
-    /// Whether it holds a compliance.
-    fn has_compliance(self) -> bool {
-        self.effects().iter().any(|e| matches!(e, Effect::Compliance(_)))
+    /// The body of its compliance (`None`: it holds none).
+    fn compliance_body(self) -> Option<usize> {
+        self.effects().into_iter().find_map(|e| match e {
+            Effect::Compliance(k) => Some(k.body),
+            _ => None,
+        })
     }
 }
 
@@ -1521,20 +1524,23 @@ fn diagnose_scored(
         let cost = |s: &Scored| s.0.error_after.powi(2);
         let ratios: Vec<Option<f64>> =
             std::iter::once(None).chain(COMPLIANCE_DAMPING_RATIOS.iter().map(|&z| Some(z))).collect();
+        // the index of the fit of least cost among `fits` (None: none fitted)
+        let least = |fits: &[Option<(f64, Scored)>]| {
+            (0..fits.len())
+                .filter_map(|k| fits[k].as_ref().map(|p| (k, cost(&p.1))))
+                .min_by(|a, b| a.1.total_cmp(&b.1))
+                .map(|p| p.0)
+        };
         let by_damping = super::on_two_workers(ratios.len(), &|k| fit_at(found.motor_share, ratios[k]));
-        let zeta = (0..ratios.len())
-            .filter(|&k| by_damping[k].is_some())
-            .min_by(|&a, &b| {
-                let c = |k: usize| by_damping[k].as_ref().map_or(f64::INFINITY, |p| cost(&p.1));
-                c(a).total_cmp(&c(b))
-            })
-            .and_then(|k| ratios[k]);
-        let grid = super::on_two_workers(COMPLIANCE_SHARES.len(), &|k| fit_at(COMPLIANCE_SHARES[k], zeta));
+        let damped = least(&by_damping);
+        let zeta = damped.and_then(|k| ratios[k]);
+        // the share the search held was fitted at that damping already
+        let grid = super::on_two_workers(COMPLIANCE_SHARES.len(), &|k| match damped {
+            Some(d) if COMPLIANCE_SHARES[k] == found.motor_share => by_damping[d].clone(),
+            _ => fit_at(COMPLIANCE_SHARES[k], zeta),
+        });
         let mut profile: Vec<(f64, Scored)> = grid.iter().flatten().cloned().collect();
-        let k = (0..grid.len()).filter(|&k| grid[k].is_some()).min_by(|&a, &b| {
-            let c = |k: usize| grid[k].as_ref().map_or(f64::INFINITY, |p| cost(&p.1));
-            c(a).total_cmp(&c(b))
-        })?;
+        let k = least(&grid)?;
         if let (Some(Some(lo)), Some(mid), Some(Some(hi))) =
             (k.checked_sub(1).map(|j| &grid[j]), &grid[k], grid.get(k + 1))
         {
@@ -1597,19 +1603,9 @@ fn diagnose_scored(
     // answer's are profiled before anything is added beside it (a friction beside a compliance
     // whose damping is off stands in for that damping).
     let mut share_profile: Option<ShareProfile> = None;
-    let compliance_body = |c: Candidate| {
-        c.effects().into_iter().find_map(|e| match e {
-            Effect::Compliance(k) => Some(k.body),
-            _ => None,
-        })
-    };
     let mut profile = |best: &mut usize, scored: &mut Vec<Scored>, search_notes: &mut Vec<String>| {
-        let body = compliance_body(scored[*best].3);
-        if *best == none
-            || !scored[*best].5
-            || body.is_none()
-            || share_profile.as_ref().map(|p| Some(p.body)) == Some(body)
-        {
+        let body = scored[*best].3.compliance_body();
+        if *best == none || !scored[*best].5 || body.is_none() || share_profile.as_ref().map(|p| p.body) == body {
             return;
         }
         if let Some((i, p)) = profile_share(*best, scored) {
@@ -1809,7 +1805,7 @@ fn diagnose_scored(
     intervals.retain(|k, _| !held_at_declared.contains(k));
     // the folds held the compliance's motor share: its interval is the profile's, and what the
     // shares the profile accepts leave open of the stiffness widens the stiffness's
-    if let Some(p) = share_profile.as_ref().filter(|_| chosen_candidate.has_compliance()) {
+    if let Some(p) = share_profile.as_ref().filter(|p| chosen_candidate.compliance_body() == Some(p.body)) {
         intervals.insert(p.share_key.clone(), p.share_interval);
         if let Some([lo, hi]) = intervals.get(&p.stiffness_key).copied() {
             intervals.insert(p.stiffness_key.clone(), [lo.min(p.stiffness_range[0]), hi.max(p.stiffness_range[1])]);
