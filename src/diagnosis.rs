@@ -544,10 +544,13 @@ pub fn human(r: &DiagnosisReport) -> String {
         // no parameter of an unexplained record is shown as a finding
     } else if r.effects.len() > 1 {
         for e in &r.effects {
+            // what the record leaves open of the effect: its sizes', and what the answer's
+            // profile left open beside them (a compliance's motor share)
+            let loose: Vec<String> = e.not_determined.iter().chain(&r.not_determined).cloned().collect();
             s += &format!(
                 "  {}: {}\n",
                 named(&e.effect, e.at.as_ref()),
-                show(&mut e.parameters.iter(), &e.intervals, &e.not_determined)
+                show(&mut e.parameters.iter(), &e.intervals, &loose)
             );
         }
         let of_effects = |k: &String| r.effects.iter().any(|e| e.parameters.contains_key(k));
@@ -825,4 +828,65 @@ pub fn drive_model_toml(m: &plant::DriveModel, b: &crate::bundle::DriveTestBundl
         b.file.display(),
         toml::to_string(&out)?
     ))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use ident::diagnose::torsional::FoundEffect;
+    use ident::diagnose::verdict::Verdict;
+
+    /// A pair whose compliance's motor share the profile leaves open (its interval reaching 1):
+    /// the share is in the answer's `not_determined`, not in the effect's (a share is no size,
+    /// so it does not make the effect no finding), and the effect's own line must say so
+    /// rather than print the profile's best share as a value.
+    #[test]
+    fn a_pairs_effect_line_says_what_the_answer_leaves_open() {
+        let share = "compliance_motor_share_1".to_string();
+        let stiffness = "compliance_stiffness_Nm_per_rad".to_string();
+        let friction = "friction_Nm".to_string();
+        let effect = |name: &str, keys: &[(&String, f64, [f64; 2])]| FoundEffect {
+            effect: name.into(),
+            at: Some("body b2".into()),
+            parameters: keys.iter().map(|(k, v, _)| ((*k).clone(), *v)).collect(),
+            intervals: keys.iter().map(|(k, _, i)| ((*k).clone(), *i)).collect(),
+            error_without: 0.5,
+            not_determined: vec![],
+        };
+        let effects = vec![
+            effect("compliance", &[(&stiffness, 1500.0, [1400.0, 1600.0]), (&share, 0.6, [0.3, 1.0])]),
+            effect("coulomb_friction", &[(&friction, 0.4, [0.38, 0.42])]),
+        ];
+        let parameters: BTreeMap<String, f64> = effects.iter().flat_map(|e| e.parameters.clone()).collect();
+        let intervals = effects.iter().flat_map(|e| e.intervals.clone()).collect();
+        let r = DiagnosisReport {
+            verdict: Verdict::Explained,
+            verdict_reasons: vec![],
+            effect: "compliance".into(),
+            at: Some("body b2".into()),
+            parameters,
+            intervals,
+            not_determined: vec![share.clone()],
+            held_out: None,
+            equivalents: vec![],
+            effects,
+            path: vec![],
+            search: vec![],
+            error_before: 1.0,
+            error_after: 0.1,
+            candidates: vec![],
+            kind: "drive_test".into(),
+            error_definition: String::new(),
+            structured_residual: false,
+            evidence: serde_json::Value::Null,
+            notes: vec![],
+            conversions: vec![],
+        };
+        let text = human(&r);
+        let line = text.lines().find(|l| l.contains("compliance_motor_share")).expect(&text);
+        assert!(line.contains("not determined"), "{text}");
+        assert!(!line.contains("0.6"), "the share's best value is printed as a finding: {line}");
+        // the sizes the record determines keep their values
+        assert!(text.lines().any(|l| l.contains("friction") && l.contains("0.4")), "{text}");
+    }
 }

@@ -96,9 +96,19 @@ fn clearly_beats(
 }
 
 /// Whether candidate `c` is effect `e` alone: of its kind at its place (a compliance's profiled
-/// motor share aside).
+/// motor share and damping aside).
 fn is_alone(c: Candidate, e: Effect) -> bool {
     matches!(c, Candidate::Effect(a) if a.name() == e.name() && a.at() == e.at())
+}
+
+/// The best-scoring entry of `scored` that is effect `e` alone (`plausible`: among those whose
+/// mechanics moved only where the effect may move them). A profiled compliance is entered beside
+/// its screen at the search's share and damping: the effect alone is its best fit, not the first
+/// one found.
+fn best_alone(scored: &[Scored], e: Effect, plausible: bool) -> Option<usize> {
+    (0..scored.len())
+        .filter(|&i| is_alone(scored[i].3, e) && !(plausible && scored[i].0.implausible))
+        .min_by(|&a, &b| scored[a].0.score.total_cmp(&scored[b].0.score))
 }
 
 /// Whether the pair `first` + `second` in `m0` is stepped whole (`plant::Dynamics::has_exact_steps`):
@@ -202,6 +212,27 @@ impl Candidate {
             Candidate::Effect(e) => Candidate::Effect(set(e)),
             Candidate::Pair(a, b) => Candidate::Pair(set(a), set(b)),
             other => other,
+        }
+    }
+
+    /// The choices a profile made for it beside its searched sizes, counted as fitted
+    /// parameters by the information criterion: 2 where it holds a compliance re-fitted at a
+    /// damping and motor share of the profile's grids ([`ShareProfile`]), not the search's own
+    /// (the vocabulary's share, the body's proportional damping). Where the profile keeps the
+    /// search's own share and damping law, the candidate is the search's and counted as such.
+    fn profiled_choices(self) -> usize {
+        let searched = Effect::vocabulary().into_iter().find_map(|e| match e {
+            Effect::Compliance(k) => Some(k),
+            _ => None,
+        });
+        let profiled = self.effects().into_iter().any(|e| match (e, searched) {
+            (Effect::Compliance(k), Some(s)) => k.damping != s.damping || k.motor_share != s.motor_share,
+            _ => false,
+        });
+        if profiled {
+            2
+        } else {
+            0
         }
     }
 
@@ -354,14 +385,30 @@ impl DriveDiagnosis {
             duration_s: rec.inputs[0].len() as f64 * rec.dt_s,
             sample_time_s: rec.dt_s,
         };
+        let settings = super::verdict::BoundSettings::default();
+        let beyond = self.dampings_beyond_critical(&settings);
         super::verdict::judge(
             &self.effect,
             self.structured_residual,
             std::iter::once(&self.parameters),
             &scales,
-            self.distorted.iter().chain(&self.unsupported).chain(&self.undetermined),
-            &super::verdict::BoundSettings::default(),
+            self.distorted.iter().chain(&self.unsupported).chain(&self.undetermined).chain(&beyond),
+            &settings,
         )
+    }
+
+    /// The re-fitted couplings' dampings at or beyond their bound
+    /// ([`super::verdict::BoundSettings::damping_ratio_max`] of the coupling's own critical
+    /// damping, [`critical_damping`], in the answer's model), each as a sentence.
+    fn dampings_beyond_critical(&self, s: &super::verdict::BoundSettings) -> Vec<String> {
+        let rotational = self.model.line.domain == Domain::Rotational;
+        (0..self.model.line.couplings.len())
+            .filter_map(|i| {
+                let key = damping_key(i, rotational);
+                let d = *self.parameters.get(&key)?;
+                super::verdict::damping_beyond_critical(&key, d, critical_damping(&self.model, i), s)
+            })
+            .collect()
     }
 }
 
@@ -767,7 +814,6 @@ impl Problem<'_> {
     /// its own.
     fn report(&self, c: Candidate, m: &DriveModel) -> BTreeMap<String, f64> {
         let rotational = m.line.domain == Domain::Rotational;
-        let d_unit = Dimension::Damping.key_unit(rotational);
         let mut b = BTreeMap::new();
         let quantities = m.line.bodies.iter().map(|b| b.inertia).chain(m.line.couplings.iter().map(|c| c.stiffness));
         for (i, value) in quantities.enumerate() {
@@ -775,10 +821,10 @@ impl Problem<'_> {
         }
         if matches!(c, Candidate::Damping) {
             for body in &m.line.bodies {
-                b.insert(format!("drag_{}_{d_unit}", body.name.replace(' ', "_")), body.drag);
+                b.insert(drag_key(&body.name, rotational), body.drag);
             }
             for (i, c) in m.line.couplings.iter().enumerate() {
-                b.insert(format!("damping_coupling{}_{d_unit}", i + 1), c.damping);
+                b.insert(damping_key(i, rotational), c.damping);
             }
         }
         let own = c.effects().len();
@@ -907,6 +953,24 @@ fn mechanics_box(c: Candidate, nbase: usize, len: usize) -> Vec<f64> {
 fn tolerance_box(nbase: usize, len: usize) -> Vec<f64> {
     let inside = DeclaredSettings::default().tolerance_factor.ln() * (1.0 - 1e-9);
     (0..len).map(|i| if i < nbase { inside } else { f64::INFINITY }).collect()
+}
+
+/// The report's key of body `name`'s drag.
+fn drag_key(name: &str, rotational: bool) -> String {
+    format!("drag_{}_{}", name.replace(' ', "_"), Dimension::Damping.key_unit(rotational))
+}
+
+/// The report's key of coupling `i`'s damping (0-based; 1-based in the key).
+fn damping_key(i: usize, rotational: bool) -> String {
+    format!("damping_coupling{}_{}", i + 1, Dimension::Damping.key_unit(rotational))
+}
+
+/// The critical damping of coupling `i` of `m` on its own: 2√(k·J) with J = 1/Σ e_j²/J_j, the
+/// inertia its twist sees (two neighbours through a gear: seen from the load side).
+fn critical_damping(m: &DriveModel, i: usize) -> f64 {
+    let c = &m.line.couplings[i];
+    let j = 1.0 / c.terms(i).iter().map(|&(b, e)| e * e / m.line.bodies[b].inertia).sum::<f64>();
+    2.0 * (c.stiffness * j).sqrt()
 }
 
 /// Speed of body `b` per speed of body 0 (the gear stages between them).
@@ -1060,10 +1124,8 @@ fn diagnose_scored(
             if c.damping > 0.0 {
                 c.damping
             } else {
-                // 1 % of critical for the inertia the coupling's twist sees, 1/Σ e_j²/J_j (two
-                // neighbours through a gear: seen from the load side)
-                let j = 1.0 / c.terms(i).iter().map(|&(b, e)| e * e / m0.line.bodies[b].inertia).sum::<f64>();
-                0.02 * (c.stiffness * j).sqrt()
+                // 1 % of critical for the inertia the coupling's twist sees
+                0.01 * critical_damping(m0, i)
             }
         })
         .collect();
@@ -1234,11 +1296,11 @@ fn diagnose_scored(
 
     // (score, model, lag-1 autocorrelation of its residual, candidate, parameters, base fitted);
     // residuals are already normalised. Every candidate is scored as the re-fit of everything
-    // (k = all its parameters): one only screened is scored at its screen's cost, which its
+    // (k = all its parameters, and the choices a profile made for it: `profiled_choices`): one only screened is scored at its screen's cost, which its
     // re-fit could only lower, so its score is an upper bound of that re-fit's — candidates
     // compare like with like, and none wins by the parameters it did not fit
     let score_fit = |c: Candidate, x: Vec<f64>, cost: f64, base_fitted: bool| -> Option<Scored> {
-        let fitted = x.len();
+        let fitted = x.len() + c.profiled_choices();
         if !cost.is_finite() {
             return None;
         }
@@ -1769,9 +1831,7 @@ fn diagnose_scored(
     // out by the record — its gain on the fitted data is the fit's own freedom — and that effect
     // alone is the answer.
     let rivals: Vec<usize> = match scored[best].3 {
-        Candidate::Pair(a, b) => {
-            [a, b].iter().filter_map(|e| scored.iter().position(|s| is_alone(s.3, *e) && !s.0.implausible)).collect()
-        }
+        Candidate::Pair(a, b) => [a, b].iter().filter_map(|e| best_alone(&scored, *e, true)).collect(),
         _ => Vec::new(),
     };
     let mut check = check_of(best, &rivals);
@@ -1841,9 +1901,9 @@ fn diagnose_scored(
     let mut no_finding = problem.unbounded_above(chosen_candidate, &chosen_x, chosen_cost, n_eff, min_evidence);
     no_finding.extend(problem.one_way_offsets(chosen_candidate, &model));
     // each effect found, with what it explains: the error without it (the other of a pair
-    // alone, as the first step fitted it; the re-fitted declared model for a single effect)
+    // alone, its best fit; the re-fitted declared model for a single effect)
     let own = chosen_candidate.effects();
-    let error_alone = |e: Effect| scored.iter().find(|s| is_alone(s.3, e)).map(|s| s.0.error_after);
+    let error_alone = |e: Effect| best_alone(&scored, e, false).map(|i| scored[i].0.error_after);
     let effects: Vec<FoundEffect> = model.effects[model.effects.len() - own.len()..]
         .iter()
         .zip(&own)
@@ -1919,4 +1979,32 @@ fn diagnose_scored(
     d.notes = d.notes_in_words();
     (d.verdict, d.verdict_reasons) = d.judged(&rec);
     Ok(d)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use plant::line::{Coupling, Line, LineBody};
+
+    /// The damping bound's critical damping of a coupling, 2√(k·J) with J the inertia its twist
+    /// sees through its gear, against the eigenvalues of the two-mass line damped at a tenth of
+    /// it: the mode's damping ratio is then 0.1 (one elastic mode, no drag).
+    #[test]
+    fn a_couplings_critical_damping_is_its_modes() {
+        let body = |name: &str, inertia: f64| LineBody { name: name.into(), inertia, drag: 0.0 };
+        let mut m = DriveModel {
+            line: Line {
+                domain: Domain::Rotational,
+                bodies: vec![body("motor", 0.02), body("load", 0.5)],
+                couplings: vec![Coupling::new(800.0, 0.0, 3.0)],
+            },
+            inputs: vec![0],
+            effects: vec![],
+        };
+        let critical = critical_damping(&m, 0);
+        m.line.couplings[0].damping = 0.1 * critical;
+        let poles = m.line.model().unwrap().state_space(&[]).unwrap().damp().unwrap();
+        let elastic = poles.iter().find(|p| p.natural_hz > 1.0).expect("an elastic mode");
+        assert!((elastic.damping_ratio.unwrap() - 0.1).abs() < 1e-9, "{poles:?}");
+    }
 }

@@ -54,18 +54,44 @@ pub struct BoundSettings {
     /// A dead time or time constant is at most this fraction of the record (default 0.1: a
     /// longer one leaves too little of the record to show it).
     pub time_per_record: f64,
+    /// A re-fitted damping is at most this fraction of critical damping: a coupling's of its own
+    /// mode (its stiffness on the inertia its twist sees), the rig's shaft damping as the ratio
+    /// of its shuffle mode (default 1: shafts, gear meshes and elastic couplings are damped at a
+    /// few per cent of critical, rubber elements at up to a few tenths; a "damping" beyond
+    /// critical makes the coupling a rigid link that stands in for a missing effect). A body's
+    /// drag is bounded as a friction is: its force at the record's RMS speed is at most
+    /// `friction_per_force` times the record's largest force.
+    pub damping_ratio_max: f64,
 }
 
 impl Default for BoundSettings {
     fn default() -> Self {
-        BoundSettings { friction_per_force: 1.0, smoothing_per_speed: 0.25, time_per_record: 0.1 }
+        BoundSettings {
+            friction_per_force: 1.0,
+            smoothing_per_speed: 0.25,
+            time_per_record: 0.1,
+            damping_ratio_max: 1.0,
+        }
     }
+}
+
+/// A re-fitted damping `d` of report key `key` at or beyond `s.damping_ratio_max` of
+/// `critical`, the critical damping of its own mode, as a sentence (`None`: within it).
+pub fn damping_beyond_critical(key: &str, d: f64, critical: f64, s: &BoundSettings) -> Option<String> {
+    let bound = s.damping_ratio_max * critical;
+    (!d.is_finite() || d >= bound).then(|| {
+        format!(
+            "{key} = {d:.4e} is at or beyond its bound {bound:.4e} ({} of the critical damping of the coupling's own mode: a rigid link in disguise)",
+            s.damping_ratio_max
+        )
+    })
 }
 
 /// Which of `parameters` (report keys with units) lie at or beyond their physical bounds, each
 /// as a sentence for the report; a dead time or time constant also at or below (within 1 %) the
 /// floor of its search ([`plant::drive::INPUT_TIME_FLOOR_SAMPLES`] of a sample). Keys without a
-/// bound here (re-fitted inertias, stiffnesses, dampings, plays) are not judged.
+/// bound here (re-fitted inertias, stiffnesses, plays; a coupling's damping, whose bound needs its
+/// model: [`damping_beyond_critical`]) are not judged.
 pub fn out_of_bounds(parameters: &BTreeMap<String, f64>, scales: &RecordScales, s: &BoundSettings) -> Vec<String> {
     let mut out = Vec::new();
     for (key, &v) in parameters {
@@ -76,6 +102,15 @@ pub fn out_of_bounds(parameters: &BTreeMap<String, f64>, scales: &RecordScales, 
             (s.smoothing_per_speed * scales.rms_speed, "a quarter of the record's RMS speed")
         } else if time {
             (s.time_per_record * scales.duration_s, "a tenth of the record")
+        } else if key == "damping_ratio" {
+            (s.damping_ratio_max, "critical damping")
+        } else if key.starts_with("drag_") {
+            // no speed measured (an infinite RMS speed): not judged
+            let per_speed = if scales.rms_speed.is_finite() { scales.rms_speed } else { 0.0 };
+            (
+                s.friction_per_force * scales.max_force / per_speed,
+                "the drag whose force at the record's RMS speed is the largest force (torque) the record applies",
+            )
         } else {
             continue;
         };
@@ -416,6 +451,33 @@ mod tests {
         let v = out_of_bounds(&p, &scales(), &BoundSettings::default());
         assert!(v.is_empty(), "{v:?}");
         assert_eq!(verdict("coulomb_friction", true, &v), Verdict::Explained);
+    }
+
+    /// A held-out compliant line (survey seed 1028) was answered "damping" with a coupling's
+    /// damping of 6.4e5 N·m·s/rad on 1160 N·m/rad: 10^5 times its critical damping, a rigid link
+    /// standing in for the compliance, reported as a finding.
+    #[test]
+    fn a_damping_beyond_critical_or_a_drag_beyond_the_force_is_no_finding() {
+        let s = BoundSettings::default();
+        // two bodies of 0.0047 and 0.0118 kg m² on 1160 N m/rad: J = 1/(1/0.0047 + 1/0.0118),
+        // critical damping 2 √(k J) = 3.95 N m s/rad
+        let critical = 2.0 * (1160.0f64 / (1.0 / 0.0047 + 1.0 / 0.0118)).sqrt();
+        assert!((critical - 3.949).abs() < 1e-3, "{critical}");
+        assert!(damping_beyond_critical("damping_coupling2_Nms_per_rad", 6.44e5, critical, &s).is_some());
+        assert!(damping_beyond_critical("d", 1.01 * critical, critical, &s).is_some());
+        assert!(damping_beyond_critical("d", f64::NAN, critical, &s).is_some());
+        // 5 % of critical, a shaft's, is a finding
+        assert_eq!(damping_beyond_critical("d", 0.05 * critical, critical, &s), None);
+        // the rig's shaft damping as a ratio, and a drag against the record's force: at 20 rad/s
+        // RMS and 2 N m at most, a drag of 0.1 N m s/rad takes all of it
+        let p = |k: &str, v: f64| BTreeMap::from([(k.to_string(), v)]);
+        assert_eq!(out_of_bounds(&p("damping_ratio", 1.2), &scales(), &s).len(), 1);
+        assert!(out_of_bounds(&p("damping_ratio", 0.05), &scales(), &s).is_empty());
+        assert_eq!(out_of_bounds(&p("drag_b1_Nms_per_rad", 0.1), &scales(), &s).len(), 1);
+        assert!(out_of_bounds(&p("drag_b1_Nms_per_rad", 0.01), &scales(), &s).is_empty());
+        // without a measured speed a drag is not judged
+        let blind = RecordScales { rms_speed: f64::INFINITY, ..scales() };
+        assert!(out_of_bounds(&p("drag_b1_Nms_per_rad", 1e6), &blind, &s).is_empty());
     }
 
     #[test]
