@@ -158,7 +158,7 @@ struct ShareProfile {
     share_interval: [f64; 2],
     /// The report's key of the stiffness.
     stiffness_key: String,
-    /// The stiffnesses fitted at the shares the profile accepts.
+    /// The stiffnesses fitted at the shares of the share's interval, its ends included.
     stiffness_range: [f64; 2],
     /// The profile in words.
     note: String,
@@ -1625,11 +1625,12 @@ fn diagnose_scored(
         let (chosen_share, chosen) = profile.iter().find(|p| cost(&p.1) == best_cost)?.clone();
         let keys: Vec<String> = Effect::Compliance(found).parameters(&chosen.1).into_iter().map(|p| p.0).collect();
         let (stiffness_key, share_key) = (keys.first()?.clone(), keys.get(1)?.clone());
-        let stiffnesses: Vec<f64> = profile[first..=last]
-            .iter()
-            .filter(|p| accepted(p))
-            .filter_map(|p| p.1 .0.parameters.get(&stiffness_key).copied())
-            .collect();
+        // the stiffness over the shares the share's interval spans, its ends (the nearest
+        // shares rejected) included as they are in that interval: the split's mode fixes
+        // k/(s(1 − s)), so a share the interval holds moves the stiffness with it
+        let ends = first.saturating_sub(1)..=(last + 1).min(profile.len() - 1);
+        let stiffnesses: Vec<f64> =
+            profile[ends].iter().filter_map(|p| p.1 .0.parameters.get(&stiffness_key).copied()).collect();
         let stiffness_range = [
             stiffnesses.iter().copied().fold(f64::INFINITY, f64::min),
             stiffnesses.iter().copied().fold(f64::NEG_INFINITY, f64::max),
@@ -1645,7 +1646,7 @@ fn diagnose_scored(
             }
         };
         let note = format!(
-            "the compliance {}: its motor share, held at one half by the search, profiled at {} shares from {} to {} {damped}: best {chosen_share:.3} (error {:.4}); the record gives it between {:.2} and {:.2} (the nearest shares whose information criterion rises by more than {PROFILE_CHI2_95}), and the stiffness {:.4e} … {:.4e} over the shares it accepts, which its interval includes",
+            "the compliance {}: its motor share, held at one half by the search, profiled at {} shares from {} to {} {damped}: best {chosen_share:.3} (error {:.4}); the record gives it between {:.2} and {:.2} (the nearest shares whose information criterion rises by more than {PROFILE_CHI2_95}), and the stiffness {:.4e} … {:.4e} over the shares of that interval, its ends included, which the stiffness's interval includes",
             Element::Body(found.body).phrase(m0),
             profile.len(),
             COMPLIANCE_SHARES[0],
