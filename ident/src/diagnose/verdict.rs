@@ -81,7 +81,7 @@ pub fn damping_beyond_critical(key: &str, d: f64, critical: f64, s: &BoundSettin
     let bound = s.damping_ratio_max * critical;
     (!d.is_finite() || d >= bound).then(|| {
         format!(
-            "{key} = {d:.4e} is at or beyond its bound {bound:.4e} ({} of the critical damping of the coupling's own mode: a rigid link in disguise)",
+            "{key} = {d:.4e} is at or beyond its bound {bound:.4e} ({} × the critical damping of its own mode: a rigid link in disguise)",
             s.damping_ratio_max
         )
     })
