@@ -95,6 +95,34 @@ fn a_friction_that_never_meets_a_reversal_at_an_input_is_no_finding() {
     assert_eq!(v["wrong"], 0, "a friction the record cannot tell from an input's offset is a finding again: {v}");
 }
 
+/// Seed 3322 (4 bodies, multisine; 0.011 N·m of friction at b2, which no input drives and which
+/// turns at 0.37–13 rad/s throughout). A friction of a body that turns one way is a constant
+/// force: the record shows it only as offsets, which the high-pass removes, and through the state
+/// the simulation is assumed to start in. It was reported as found; it is no finding now, as at a
+/// body an input drives (docs/validation.md, step 34; the record was held out until then).
+#[test]
+fn a_friction_that_never_meets_a_reversal_is_no_finding() {
+    let v = common::survey_script("survey_lines.py", "3322", "--summary");
+    assert_eq!(v["records"], 1, "{v}");
+    assert_eq!(v["wrong"], 0, "a constant friction force is a finding again: {v}");
+}
+
+/// `--only compliance --search-compliance` seed 1028 (3 bodies and a gear stage, closed loop; a
+/// compliance inside b3): answered `damping` with coupling 2's damping about 10⁵ times the
+/// critical damping of its own mode, a rigid link standing in for the compliance. A damping at or
+/// beyond critical is no finding (docs/validation.md, step 33; the record was held out until then).
+#[test]
+fn a_damping_beyond_critical_is_no_finding() {
+    let v = common::survey_script_with(
+        "survey_lines.py",
+        "1028",
+        "--summary",
+        &["--only", "compliance", "--search-compliance"],
+    );
+    assert_eq!(v["records"], 1, "{v}");
+    assert_eq!(v["wrong"], 0, "a damping beyond critical is a finding again: {v}");
+}
+
 /// Seeds 3087 (8 bodies and two gear stages, steps) and 3136 (7 bodies and two gear stages,
 /// steps): no effect, the declared inertias and stiffnesses a few per cent off. The declared
 /// model's re-fit within its tolerance started from its free re-fit, which had moved quantities

@@ -588,14 +588,17 @@ impl Problem<'_> {
         out
     }
 
-    /// Why effects of candidate `c` in its fitted model `m` are no finding as an input's offset
-    /// ([`plant::drive::Search::offset_where_one_way`], a friction): one at a body an input
-    /// drives, which turns one way throughout the record — as measured where the record
-    /// measures its speed, else in `m`'s simulation. There it is a constant force against the
-    /// motion, exactly as an offset of that input's measured force is, and the record cannot
-    /// tell the two apart (a motor held at a speed by a closed loop). The key of each such
-    /// effect's size, and why (none: every such effect of the answer meets a reversal, or acts
-    /// where no input does).
+    /// Why effects of candidate `c` in its fitted model `m` are no finding as a constant force
+    /// ([`plant::drive::Search::offset_where_one_way`], a friction): one at a body that turns
+    /// one way throughout the record — as measured where the record measures its speed, else in
+    /// `m`'s simulation. There it is a constant force against the motion. The line being linear
+    /// beside it, its response is that of a force switched on where the simulation starts: a
+    /// step to constant offsets of the speeds and twists, which the high-pass removes, reached
+    /// through a transient that only the state the record is assumed to start in makes (a real
+    /// record starts with the friction already acting). At a body an input drives it is, in
+    /// addition, exactly an offset of that input's measured force (a motor held at a speed by a
+    /// closed loop). The key of each such effect's size, and why (none: every such effect of
+    /// the answer meets a reversal).
     fn one_way_offsets(&self, c: Candidate, m: &DriveModel) -> Vec<(String, String)> {
         // a speed's least and largest value; NaN where one is not finite, which tells nothing
         // of its sign
@@ -613,7 +616,6 @@ impl Problem<'_> {
             if !e.search().offset_where_one_way {
                 continue;
             }
-            let Some(input) = m.inputs.iter().position(|&b| b == body) else { continue };
             let measured = self
                 .rec
                 .outputs
@@ -630,11 +632,17 @@ impl Problem<'_> {
             if lo > 0.0 || hi < 0.0 {
                 let Some((key, size)) = e.parameters(m).into_iter().next() else { continue };
                 let unit = if m.line.domain == Domain::Rotational { "rad/s" } else { "m/s" };
+                let offset = match m.inputs.iter().position(|&b| b == body) {
+                    Some(input) => format!(
+                        ", and an input acts on it (input {}), whose offset the record cannot tell from such a force",
+                        input + 1
+                    ),
+                    None => String::new(),
+                };
                 let why = format!(
-                    "{key} = {size:.4e} of the {} {} is a constant force there: its body turns one way throughout the record ({lo:.4e} to {hi:.4e} {unit}, {source}), and an input acts on it (input {}), whose offset the record cannot tell from such a force: no finding",
+                    "{key} = {size:.4e} of the {} {} is a constant force there: its body turns one way throughout the record ({lo:.4e} to {hi:.4e} {unit}, {source}), so the record shows it only as offsets, which the high-pass removes, and through the state the simulation is assumed to start in{offset}: no finding",
                     e.name(),
                     e.at().phrase(m),
-                    input + 1,
                 );
                 out.push((key, why));
             }
@@ -1896,7 +1904,7 @@ fn diagnose_scored(
         after,
     };
     // a size the record bounds only from below (a play wider than every twist it meets), or a
-    // friction it cannot tell from an input's offset, is no finding either
+    // friction that is a constant force (its body turns one way throughout), is no finding either
     let chosen_cost = chosen.error_after.powi(2);
     let min_evidence = PlaceSettings::default().min_evidence;
     let mut no_finding = problem.unbounded_above(chosen_candidate, &chosen_x, chosen_cost, n_eff, min_evidence);

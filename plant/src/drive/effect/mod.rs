@@ -141,9 +141,10 @@ pub struct Search {
     /// not go below it.
     pub floor: f64,
     /// Where its body turns one way throughout the record it is a constant force against the
-    /// motion; at a body an input drives that is exactly an offset of the input's measured
-    /// force, which the record cannot tell from it, so there it is no finding (a friction
-    /// under a motor held at speed).
+    /// motion, which a record shows only as offsets (removed with the record's own) and through
+    /// the state its simulation is assumed to start in — and at a body an input drives, exactly
+    /// as an offset of the input's measured force (a friction under a motor held at speed) — so
+    /// there it is no finding.
     pub offset_where_one_way: bool,
 }
 
