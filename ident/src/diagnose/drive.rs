@@ -1264,15 +1264,28 @@ fn diagnose_scored(
         let i = refit[k];
         let (_, x_screen, cost_screen) = screened.iter().find(|s| s.0 == i).expect("screened");
         let mut start = x_screen.clone();
+        let bounds = mechanics_box(cands[i], nbase, x_screen.len());
         if !base_refitted && matches!(cands[i], Candidate::Effect(_)) {
             let mut beside: Vec<f64> = [&declared_refit.0[..], &x_screen[nbase..]].concat();
-            lm::into_box(&mut beside, &mechanics_box(cands[i], nbase, x_screen.len()));
+            lm::into_box(&mut beside, &bounds);
             let cost = problem.cost(cands[i], &beside);
             if cost < *cost_screen {
                 start = beside;
             }
         }
         let (x, cost) = fit_all(cands[i], &start);
+        // a re-fit started beside the declared model's re-fit that ends on the box's edge may
+        // have stayed in that re-fit's basin, which the missing effect bent there (a lag's
+        // time constant standing in for a dead time along a ridge of an inertia and a
+        // stiffness: validation.md, step 34): the re-fit from the screen, at the declared
+        // mechanics, too, and the better kept
+        let on_edge = (0..nbase).any(|k| super::verdict::at_edge(x[k].abs(), bounds[k]));
+        if start != *x_screen && on_edge {
+            let (x_declared, cost_declared) = fit_all(cands[i], x_screen);
+            if cost_declared < cost {
+                return (i, x_declared, cost_declared);
+            }
+        }
         (i, x, cost)
     };
     // the re-fits longest first: a nonlinear effect's simulations take many short steps (a
