@@ -229,11 +229,7 @@ impl Candidate {
             (Effect::Compliance(k), Some(s)) => k.damping != s.damping || k.motor_share != s.motor_share,
             _ => false,
         });
-        if profiled {
-            2
-        } else {
-            0
-        }
+        2 * usize::from(profiled)
     }
 
     /// The body of its compliance (`None`: it holds none).
@@ -904,9 +900,6 @@ fn hold_edges_at_declared(
     let within = |x: &[f64]| problem.residual(Candidate::None, x);
     let accepted =
         |h: &Scored| !super::verdict::moved_by_the_record(free_score, h.0.score, &DeclaredSettings::default());
-    let at_edge = |x: &[f64], b: &[f64]| -> Vec<usize> {
-        (0..b.len()).filter(|&i| b[i] > 0.0 && super::verdict::at_edge(x[i].abs(), b[i])).collect()
-    };
     let refit = |start: &[f64], b: &[f64]| {
         let (x, cost) = lm::minimise(&within, start, lm::Fit::new(20, LM_REL_TOL).within(TRUST_RADIUS).boxed(b));
         score(x, cost)
@@ -914,7 +907,7 @@ fn hold_edges_at_declared(
     let mut held_box = bounds.to_vec();
     let mut held = Vec::new();
     loop {
-        let edge = at_edge(&fit.4, &held_box);
+        let edge = on_box_edge(&fit.4, &held_box);
         if edge.is_empty() {
             break;
         }
@@ -922,7 +915,8 @@ fn hold_edges_at_declared(
         for &i in &edge {
             start[i] = 0.0;
         }
-        if let Some(restarted) = refit(&start, &held_box).filter(|r| accepted(r) && at_edge(&r.4, &held_box).is_empty())
+        if let Some(restarted) =
+            refit(&start, &held_box).filter(|r| accepted(r) && on_box_edge(&r.4, &held_box).is_empty())
         {
             *fit = restarted;
             break;
@@ -939,6 +933,11 @@ fn hold_edges_at_declared(
         }
     }
     held.iter().map(|&i| problem.base_key(i)).collect()
+}
+
+/// The indices of `x` on the edge of the box `bounds` (a bound of 0 holds its parameter, no edge).
+fn on_box_edge(x: &[f64], bounds: &[f64]) -> Vec<usize> {
+    (0..bounds.len()).filter(|&i| bounds[i] > 0.0 && super::verdict::at_edge(x[i].abs(), bounds[i])).collect()
 }
 
 /// The box an effect's re-fit keeps the declared inertias and stiffnesses in (the first `nbase`
@@ -1277,10 +1276,9 @@ fn diagnose_scored(
         // a re-fit started beside the declared model's re-fit that ends on the box's edge may
         // have stayed in that re-fit's basin, which the missing effect bent there (a lag's
         // time constant standing in for a dead time along a ridge of an inertia and a
-        // stiffness: validation.md, step 34): the re-fit from the screen, at the declared
+        // stiffness: validation.md, step 35): the re-fit from the screen, at the declared
         // mechanics, too, and the better kept
-        let on_edge = (0..nbase).any(|k| super::verdict::at_edge(x[k].abs(), bounds[k]));
-        if start != *x_screen && on_edge {
+        if start != *x_screen && !on_box_edge(&x, &bounds).is_empty() {
             let (x_declared, cost_declared) = fit_all(cands[i], x_screen);
             if cost_declared < cost {
                 return (i, x_declared, cost_declared);
@@ -1317,9 +1315,10 @@ fn diagnose_scored(
 
     // (score, model, lag-1 autocorrelation of its residual, candidate, parameters, base fitted);
     // residuals are already normalised. Every candidate is scored as the re-fit of everything
-    // (k = all its parameters, and the choices a profile made for it: `profiled_choices`): one only screened is scored at its screen's cost, which its
-    // re-fit could only lower, so its score is an upper bound of that re-fit's — candidates
-    // compare like with like, and none wins by the parameters it did not fit
+    // (k = all its parameters, and the choices a profile made for it: `profiled_choices`): one
+    // only screened is scored at its screen's cost, which its re-fit could only lower, so its
+    // score is an upper bound of that re-fit's — candidates compare like with like, and none
+    // wins by the parameters it did not fit
     let score_fit = |c: Candidate, x: Vec<f64>, cost: f64, base_fitted: bool| -> Option<Scored> {
         let fitted = x.len() + c.profiled_choices();
         if !cost.is_finite() {
@@ -1885,8 +1884,8 @@ fn diagnose_scored(
     let mut intervals = super::fold_intervals(&chosen.parameters, &fold_parameters);
     // a quantity held at its declared value was not fitted: its folds' spread is no interval
     intervals.retain(|k, _| !held_at_declared.contains(k));
-    // the folds held the compliance's motor share: its interval is the profile's, and what the
-    // shares the profile accepts leave open of the stiffness widens the stiffness's
+    // the folds held the compliance's motor share: its interval is the profile's, and the
+    // stiffnesses over the shares of that interval widen the stiffness's
     if let Some(p) = share_profile.as_ref().filter(|p| chosen_candidate.compliance_body() == Some(p.body)) {
         intervals.insert(p.share_key.clone(), p.share_interval);
         if let Some([lo, hi]) = intervals.get(&p.stiffness_key).copied() {
